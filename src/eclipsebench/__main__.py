@@ -1,0 +1,7 @@
+"""``python -m eclipsebench``."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,1 @@
+"""astro stage of eclipsebench."""

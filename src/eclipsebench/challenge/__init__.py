@@ -1,0 +1,1 @@
+"""challenge stage of eclipsebench."""

@@ -1,0 +1,130 @@
+"""The ``eclipsebench`` command: parses arguments, calls the API, prints.
+
+Each subcommand is a module in :mod:`eclipsebench.commands` that defines
+``NAME``, ``HELP``, ``add_arguments(parser)``, ``run(args) -> dict`` and,
+optionally, ``format_text(result) -> str``. Commands return a plain dict of
+numbers; ``--json`` prints it as one JSON object on stdout, otherwise
+``format_text`` (or a key: value listing) is printed.
+
+Exit codes: 0 success; 2 bad input or usage (one line on stderr naming the
+file, key or option and what was expected); 1 unexpected internal error
+(``--debug`` shows the traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import sys
+from collections.abc import Sequence
+
+from . import __version__
+from .errors import InputError
+from .progress import configure
+
+# Listed in the order ``--help`` shows them.
+COMMAND_MODULES = (
+    "run",
+    "simulate",
+    "photometry",
+    "reduce",
+    "stats",
+    "lightcurve",
+    "photon_limit",
+    "config_cmd",
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose usage errors are one line and exit code 2."""
+
+    def error(self, message: str) -> None:  # noqa: D401 - argparse API
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _commands():
+    for name in COMMAND_MODULES:
+        try:
+            yield importlib.import_module(f"{__package__}.commands.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__package__}.commands.{name}":
+                raise
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand."""
+    parser = _Parser(prog="eclipsebench",
+                     description="Simulate, reduce and score Spitzer/IRAC eclipse photometry "
+                                 "(Ingalls et al. 2016, AJ 152, 44).")
+    parser.add_argument("--version", action="version", version=f"eclipsebench {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for module in _commands():
+        p = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP,
+                           formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+        module.add_arguments(p)
+        p.add_argument("--json", action="store_true",
+                       help="print one JSON object with the results on stdout")
+        p.add_argument("--quiet", action="store_true", help="no progress bars or log messages")
+        p.add_argument("--debug", action="store_true",
+                       help="show the full traceback of an internal error")
+        p.set_defaults(_module=module)
+    return parser
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if hasattr(obj, "item") and callable(obj.item) and getattr(obj, "ndim", 1) == 0:
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if hasattr(obj, "tolist"):
+        return _jsonable(obj.tolist())
+    return obj
+
+
+def _format_default(result: dict) -> str:
+    width = max((len(str(k)) for k in result), default=0)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in result.items())
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``eclipsebench`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    module = args._module
+    configure(quiet=args.quiet or args.json)
+    try:
+        result = module.run(args)
+    except InputError as exc:
+        print(f"eclipsebench {module.NAME}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"eclipsebench {module.NAME}: interrupted; rerun the same command to resume",
+              file=sys.stderr)
+        return 130
+    except Exception as exc:  # the one place that turns a bug into exit code 1
+        if args.debug:
+            raise
+        print(f"eclipsebench {module.NAME}: internal error: {type(exc).__name__}: {exc} "
+              "(rerun with --debug for the traceback)", file=sys.stderr)
+        return 1
+    if result is None:
+        return 0
+    if args.json:
+        print(json.dumps(_jsonable(result), sort_keys=False))
+    else:
+        formatter = getattr(module, "format_text", _format_default)
+        print(formatter(result))
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

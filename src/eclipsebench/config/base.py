@@ -1,0 +1,237 @@
+"""TOML to frozen dataclasses, validated at the edge.
+
+A configuration *section* is a frozen dataclass. :func:`from_mapping` builds
+one from a parsed TOML table and rejects unknown keys, wrong types and
+out-of-range values with a :class:`~eclipsebench.errors.ConfigError` that
+names the dotted key. Range checks live in each section's ``validate`` method
+(called after construction) and use :func:`check`.
+
+``--set section.key=value`` overrides are parsed by :func:`parse_override`:
+the value is read as a TOML literal (``3``, ``2.5``, ``true``, ``"text"``,
+``[1, 2]``); anything that is not a TOML literal is taken as a bare string.
+Nothing is ever passed to ``eval``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+import types
+import typing
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal, get_args, get_origin, get_type_hints
+
+from ..errors import ConfigError, InputError
+
+__all__ = ["from_mapping", "to_mapping", "check", "parse_override", "apply_overrides",
+           "load_toml", "dump_toml"]
+
+
+def check(condition: bool, key: str, expected: str) -> None:
+    """Raise :class:`ConfigError` for ``key`` unless ``condition`` holds."""
+    if not condition:
+        raise ConfigError(key, f"expected {expected}")
+
+
+def _type_name(tp: Any) -> str:
+    origin = get_origin(tp)
+    if origin is Literal:
+        return "one of " + ", ".join(repr(a) for a in get_args(tp))
+    if origin in (list, tuple):
+        args = get_args(tp)
+        inner = _type_name(args[0]) if args else "value"
+        return f"a list of {inner}"
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_type_name(a) for a in get_args(tp) if a is not type(None))
+    return {int: "an integer", float: "a number", str: "a string", bool: "true or false"}.get(
+        tp, getattr(tp, "__name__", str(tp)))
+
+
+def _coerce(value: Any, tp: Any, key: str) -> Any:
+    origin = get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        args = get_args(tp)
+        if value is None and type(None) in args:
+            return None
+        for arg in args:
+            if arg is type(None):
+                continue
+            try:
+                return _coerce(value, arg, key)
+            except ConfigError:
+                continue
+        raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
+    if origin is Literal:
+        if value not in get_args(tp):
+            raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
+        return value
+    if origin in (list, tuple):
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
+        args = get_args(tp)
+        inner = args[0] if args else Any
+        return tuple(_coerce(v, inner, f"{key}[{i}]") for i, v in enumerate(value))
+    if dataclasses.is_dataclass(tp):
+        if not isinstance(value, Mapping):
+            raise ConfigError(key, f"expected a table, got {value!r}")
+        return from_mapping(tp, value, prefix=key)
+    if tp is Any:
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(key, f"expected true or false, got {value!r}")
+        return value
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(key, f"expected an integer, got {value!r}")
+        return value
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(key, f"expected a number, got {value!r}")
+        return float(value)
+    if tp is str:
+        if not isinstance(value, str):
+            raise ConfigError(key, f"expected a string, got {value!r}")
+        return value
+    raise ConfigError(key, f"unsupported type {tp!r}")
+
+
+def from_mapping(cls: type, mapping: Mapping[str, Any], prefix: str = "") -> Any:
+    """Build the frozen dataclass ``cls`` from ``mapping``, validating every key.
+
+    Parameters
+    ----------
+    cls : type
+        A dataclass whose fields carry type annotations and defaults.
+    mapping : Mapping
+        Parsed TOML; missing keys take the field defaults.
+    prefix : str
+        Dotted path of this section, used in error messages.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown key, a value of the wrong type, or a value that the
+        class's ``validate`` method rejects.
+    """
+    hints = get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    for key in mapping:
+        if key not in fields:
+            dotted = f"{prefix}.{key}" if prefix else key
+            raise ConfigError(dotted, "unknown key (known: " + ", ".join(sorted(fields)) + ")")
+    kwargs = {}
+    for name, field in fields.items():
+        if name in mapping:
+            dotted = f"{prefix}.{name}" if prefix else name
+            kwargs[name] = _coerce(mapping[name], hints[name], dotted)
+    obj = cls(**kwargs)
+    validate = getattr(obj, "validate", None)
+    if callable(validate):
+        try:
+            validate()
+        except ConfigError as exc:
+            if prefix and not exc.key.startswith(prefix + "."):
+                raise ConfigError(f"{prefix}.{exc.key}", exc.problem) from None
+            raise
+    return obj
+
+
+def to_mapping(obj: Any) -> dict[str, Any]:
+    """The plain-dict form of a config dataclass (tuples become lists)."""
+    def plain(v: Any) -> Any:
+        if dataclasses.is_dataclass(v):
+            return {f.name: plain(getattr(v, f.name)) for f in dataclasses.fields(v)}
+        if isinstance(v, tuple):
+            return [plain(x) for x in v]
+        return v
+    return plain(obj)
+
+
+def parse_override(text: str) -> tuple[list[str], Any]:
+    """Split ``section.key=value`` into the key path and the parsed value.
+
+    Examples
+    --------
+    >>> parse_override("simulation.noise_model=iracsim2015")
+    (['simulation', 'noise_model'], 'iracsim2015')
+    >>> parse_override("pointing.x0=15.1")
+    (['pointing', 'x0'], 15.1)
+    """
+    if "=" not in text:
+        raise InputError(f"--set {text!r}: expected section.key=value")
+    key, raw = text.split("=", 1)
+    key = key.strip()
+    if not key or any(not part for part in key.split(".")):
+        raise InputError(f"--set {text!r}: expected section.key=value")
+    raw = raw.strip()
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key.split("."), value
+
+
+def apply_overrides(mapping: Mapping[str, Any], overrides: list[str]) -> dict[str, Any]:
+    """Return a deep copy of ``mapping`` with each ``--set`` override applied."""
+    import copy
+
+    result = copy.deepcopy(dict(mapping))
+    for text in overrides:
+        path, value = parse_override(text)
+        node = result
+        for part in path[:-1]:
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise ConfigError(".".join(path), f"'{part}' is not a table")
+            node = child
+        node[path[-1]] = value
+    return result
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file, turning any failure into one line naming the file."""
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"{p}: no such configuration file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{p}: not valid TOML ({exc})") from None
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read ({exc.strerror})") from None
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} as TOML")
+
+
+def dump_toml(mapping: Mapping[str, Any]) -> str:
+    """Write a two-level mapping (sections of scalars and lists) as TOML."""
+    lines: list[str] = []
+    scalars = {k: v for k, v in mapping.items() if not isinstance(v, Mapping)}
+    for k, v in scalars.items():
+        if v is not None:
+            lines.append(f"{k} = {_toml_value(v)}")
+    for section, table in mapping.items():
+        if not isinstance(table, Mapping):
+            continue
+        if lines:
+            lines.append("")
+        lines.append(f"[{section}]")
+        for k, v in table.items():
+            if isinstance(v, Mapping):
+                raise TypeError("nested tables deeper than one level are not written")
+            if v is not None:
+                lines.append(f"{k} = {_toml_value(v)}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,35 @@
+"""``[system]``: which planet, and how its light curve is made."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from .base import check
+
+
+@dataclass(frozen=True)
+class SystemSection:
+    """The planetary system and the thermal phase-curve model.
+
+    The defaults are the 2015 data challenge's choices (Section 2.3 of the
+    paper): XO-3b, Bond albedo 0, radiative time 1 day, rotation rate 1 (in
+    units of the orbital angular velocity at periastron), a monochromatic
+    4.5095 um ratio of blackbodies, and the eclipse depth fixed to 1875 ppm.
+    """
+
+    name: str = "XO-3b"
+    catalogue: str = ""  # optional TOML file of user systems; empty: the built-in catalogue
+    albedo: float = 0.0
+    tau_rad_days: float = 1.0
+    omega_rot: float = 1.0
+    flux_ratio_model: Literal["monochromatic", "bandpass", "blackbody"] = "monochromatic"
+    wavelength_um: float = 4.5095
+    fix_depth_ppm: float = 1875.0  # 0 leaves the depth to the phase-curve model
+
+    def validate(self) -> None:
+        check(bool(self.name.strip()), "name", "a planet name")
+        check(0.0 <= self.albedo < 1.0, "albedo", "0 <= albedo < 1")
+        check(self.tau_rad_days >= 0.0, "tau_rad_days", "a non-negative number of days")
+        check(self.wavelength_um > 0.0, "wavelength_um", "a positive wavelength in micron")
+        check(self.fix_depth_ppm >= 0.0, "fix_depth_ppm", "0 (not fixed) or a positive depth in ppm")

@@ -1,0 +1,1 @@
+"""Package data: the system catalogue, the default challenge, fitted gain-map coefficients."""

@@ -1,0 +1,1 @@
+"""Imports every finished method module so that each registers itself."""

@@ -1,0 +1,1 @@
+"""Files in and out: BCD cubes and headers, tables, atomic writes."""

@@ -1,0 +1,1 @@
+"""photometry stage of eclipsebench."""

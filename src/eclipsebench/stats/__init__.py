@@ -1,0 +1,1 @@
+"""Statistics: the photon limit, ensemble statistics, method comparisons."""
