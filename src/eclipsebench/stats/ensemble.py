@@ -1,0 +1,199 @@
+"""Ensemble statistics of one method's eclipse depths over many epochs.
+
+Pure functions on arrays (Section 3.2 and 3.4 of Ingalls et al. 2016): the
+weighted mean and its uncertainty, the dispersion factor ``f_dis`` with its
+68% interval, the repeatability ``R``, the reliability ``r`` and, given the
+true depth, the RMSE, bias and accuracy ``a``. Every column of the paper's
+Tables 3 and 4 (``eclipse_depth_stats``, ``eclipse_depth_stats_sim``) except
+the closest match, which needs the other methods (:mod:`.compare`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import stats as _sps
+
+from ..errors import InputError
+from .bootstrap import bootstrap_intervals
+
+__all__ = ["validate_depths", "weighted_mean", "dispersion_factor", "dispersion_interval",
+           "pairwise_differences", "repeatability", "method_statistics", "STAT_KEYS"]
+
+#: The keys of :func:`method_statistics`, in the order of the paper's Table 4.
+STAT_KEYS = ("N", "D_mean", "sigma_mean", "SD", "sigma_orig", "f_dis", "f_dis_raw", "f_dis_lo",
+             "f_dis_hi", "sigma_tot", "R", "r", "RMSE", "bias", "a", "mean_ppm", "chi2",
+             "coverage", "sigma_phot_ppm", "truth_ppm", "R_lo", "R_hi", "r_lo", "r_hi", "a_lo",
+             "a_hi")
+
+
+def validate_depths(depth_ppm, error_ppm, *, name: str = "depths") -> tuple[np.ndarray, np.ndarray]:
+    """Check and return the depths and errors as float arrays.
+
+    Raises
+    ------
+    InputError
+        Fewer than two epochs, different lengths, non-finite values or
+        non-positive errors (named by ``name``).
+    """
+    d = np.asarray(depth_ppm, dtype=float).ravel()
+    e = np.asarray(error_ppm, dtype=float).ravel()
+    if d.shape != e.shape:
+        raise InputError(f"{name}: expected as many errors as depths, got {e.size} and {d.size}")
+    if d.size < 2:
+        raise InputError(f"{name}: expected at least 2 epochs, got {d.size}")
+    if not (np.all(np.isfinite(d)) and np.all(np.isfinite(e))):
+        raise InputError(f"{name}: expected finite depth_ppm and error_ppm (found NaN or inf)")
+    if np.any(e <= 0):
+        raise InputError(f"{name}: expected positive error_ppm values")
+    return d, e
+
+
+def weighted_mean(depth_ppm, error_ppm) -> tuple[float, float]:
+    """Inverse-variance weighted mean and its original uncertainty.
+
+    Eq. ``weighted_mean`` with ``w_i = 1 / sigma_i^2`` (``f_dis`` cancels in
+    the mean); ``sigma_orig^2 = 1 / sum(w_i)``.
+
+    Returns
+    -------
+    tuple of float
+        ``(D_mean, sigma_orig)`` in the units of the inputs.
+    """
+    d, e = validate_depths(depth_ppm, error_ppm)
+    w = 1.0 / e**2
+    return float(np.sum(w * d) / np.sum(w)), float(1.0 / math.sqrt(np.sum(w)))
+
+
+def dispersion_factor(depth_ppm, error_ppm) -> float:
+    """The raw dispersion factor (Eq. ``f_dis``), not floored.
+
+    ``f_dis^2 = sum((D_i - D_mean)^2 / sigma_i^2) / (N - 1)``, which makes the
+    chi-square of Eq. ``chisquared`` equal to N - 1.
+    """
+    d, e = validate_depths(depth_ppm, error_ppm)
+    mean, _ = weighted_mean(d, e)
+    return float(math.sqrt(np.sum((d - mean) ** 2 / e**2) / (d.size - 1)))
+
+
+def dispersion_interval(f_dis: float, n: int, level: float = 0.68) -> tuple[float, float]:
+    """The ``level`` confidence interval on ``f_dis`` (Section 3.2).
+
+    The sum of Eq. ``chisquared`` with the true factor ``f`` follows a
+    chi-square distribution with ``N - 1`` degrees of freedom, and that sum
+    equals ``(N - 1) f_dis^2 / f^2``; the bounds are the ``f`` at which it
+    reaches the (1 + level)/2 and (1 - level)/2 quantiles (84% and 16%).
+    For N = 10 and f_dis = 1.5 this is 1.25-2.03, i.e. +0.5/-0.3 (Table 3).
+
+    Returns
+    -------
+    tuple of float
+        ``(f_lo, f_hi)``, absolute bounds (not offsets).
+    """
+    if n < 2:
+        raise InputError(f"dispersion interval: expected N >= 2, got {n}")
+    dof = n - 1
+    q_hi = _sps.chi2.ppf(0.5 + level / 2.0, dof)
+    q_lo = _sps.chi2.ppf(0.5 - level / 2.0, dof)
+    return float(f_dis * math.sqrt(dof / q_hi)), float(f_dis * math.sqrt(dof / q_lo))
+
+
+def pairwise_differences(depth_ppm) -> np.ndarray:
+    """All differences ``D_i - D_j`` for ``i != j``, each pair in both orders.
+
+    Section 3.4.1: "each pair must be counted twice, with the order of the
+    indices reversed", so there are ``N (N - 1)`` differences with mean zero.
+    """
+    d = np.asarray(depth_ppm, dtype=float).ravel()
+    diff = d[:, None] - d[None, :]
+    return diff[~np.eye(d.size, dtype=bool)]
+
+
+def repeatability(depth_ppm) -> float:
+    """Repeatability ``R = SD(Delta_ij)`` (Section 3.4.1), sample SD (M - 1).
+
+    Over the ``M = N (N - 1)`` ordered differences, ``R / SD = sqrt(2 M / (M - 1))``
+    exactly; for N = 10 that is ``sqrt(2 * 90 / 89)``.
+    """
+    diffs = pairwise_differences(depth_ppm)
+    if diffs.size < 2:
+        raise InputError(f"repeatability: expected at least 2 epochs, got {np.size(depth_ppm)}")
+    return float(np.std(diffs, ddof=1))
+
+
+def method_statistics(depth_ppm, error_ppm, *, sigma_phot_ppm: float | None = None,
+                      truth_ppm: float | None = None, seed: int = 0,
+                      n_bootstrap: int = 2000) -> dict:
+    """Every per-method statistic of the paper's Tables 3 and 4.
+
+    Parameters
+    ----------
+    depth_ppm, error_ppm : array_like, shape (N,)
+        One method's eclipse depths and reported 1-sigma errors, N >= 2.
+    sigma_phot_ppm : float, optional
+        Photon-noise limit of one depth (Eq. ``photon_noise``); gives ``r``
+        and, with ``truth_ppm``, ``a``.
+    truth_ppm : float, optional
+        The true depth; gives ``RMSE`` (Eq. ``mse``), ``bias`` and ``coverage``.
+    seed : int
+        Seed of the bootstrap resampling (:mod:`eclipsebench.seeding`).
+    n_bootstrap : int
+        Bootstrap resamples for the intervals on R, r and a (0: none).
+
+    Returns
+    -------
+    dict
+        ``N``; ``D_mean`` (Eq. ``weighted_mean``); ``sigma_mean`` (mean
+        reported error); ``SD`` (sample SD, N - 1); ``sigma_orig``;
+        ``f_dis`` (Eq. ``f_dis`` floored at 1), ``f_dis_raw``, ``f_dis_lo``,
+        ``f_dis_hi`` (68% interval on ``f_dis_raw``); ``sigma_tot = f_dis
+        sigma_orig``; ``R``; ``r = sigma_phot / SD``; ``RMSE``; ``bias =
+        D_mean - truth``; ``a = sigma_phot / RMSE``; ``mean_ppm`` (unweighted
+        mean); ``chi2`` (Eq. ``chisquared`` with f_dis = 1); ``coverage``
+        (fraction of epochs with ``|D_i - truth| <= sigma_i``); bootstrap
+        68% intervals ``R_lo``.. ``a_hi``. Values that need an input not
+        given are ``None``. All in ppm except the ratios.
+    """
+    d, e = validate_depths(depth_ppm, error_ppm)
+    n = d.size
+    d_mean, sigma_orig = weighted_mean(d, e)
+    chi2 = float(np.sum((d - d_mean) ** 2 / e**2))
+    f_raw = math.sqrt(chi2 / (n - 1))
+    f_lo, f_hi = dispersion_interval(f_raw, n)
+    f_dis = max(1.0, f_raw)
+    sd = float(np.std(d, ddof=1))
+    out: dict = {
+        "N": int(n),
+        "D_mean": d_mean,
+        "sigma_mean": float(np.mean(e)),
+        "SD": sd,
+        "sigma_orig": sigma_orig,
+        "f_dis": f_dis,
+        "f_dis_raw": f_raw,
+        "f_dis_lo": f_lo,
+        "f_dis_hi": f_hi,
+        "sigma_tot": f_dis * sigma_orig,
+        "R": repeatability(d),
+        "r": None, "RMSE": None, "bias": None, "a": None,
+        "mean_ppm": float(np.mean(d)),
+        "chi2": chi2,
+        "coverage": None,
+        "sigma_phot_ppm": None if sigma_phot_ppm is None else float(sigma_phot_ppm),
+        "truth_ppm": None if truth_ppm is None else float(truth_ppm),
+    }
+    if sigma_phot_ppm is not None:
+        out["r"] = float(sigma_phot_ppm) / sd if sd > 0 else math.inf
+    if truth_ppm is not None:
+        rmse = float(math.sqrt(np.mean((d - truth_ppm) ** 2)))  # Eq. mse
+        out["RMSE"] = rmse
+        out["bias"] = d_mean - float(truth_ppm)
+        out["coverage"] = float(np.mean(np.abs(d - truth_ppm) <= e))
+        if sigma_phot_ppm is not None:
+            out["a"] = float(sigma_phot_ppm) / rmse if rmse > 0 else math.inf
+    boot = bootstrap_intervals(d, sigma_phot_ppm=sigma_phot_ppm, truth_ppm=truth_ppm, seed=seed,
+                               n_resamples=n_bootstrap)
+    for name in ("R", "r", "a"):
+        lo, hi = boot.get(name, (None, None))
+        out[f"{name}_lo"], out[f"{name}_hi"] = lo, hi
+    return out
