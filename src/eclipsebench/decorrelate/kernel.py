@@ -1,0 +1,333 @@
+"""Kernel regression: KR/Data and KR/Pmap (paper Appendix B.4).
+
+KR/Data (Ballard et al. 2010; Knutson et al. 2012; Lewis et al. 2013; Wong et
+al. 2014) uses the science frames as their own training set: the sensitivity
+at frame i is the Gaussian-kernel weighted mean of ``flux / astro`` over its k
+nearest neighbours (k = 50) in centroid space, the frame itself excluded::
+
+    w_ij = exp(-(x_i-x_j)^2 / 2 s_x^2 - (y_i-y_j)^2 / 2 s_y^2 [- (sqrt b_i - sqrt b_j)^2 / 2 s_b^2])
+    model_i = astro_i * sum_j w_ij (flux_j / astro_j) / sum_j w_ij
+
+with the scale lengths ``s_x, s_y, s_b`` the standard deviations of x, y and
+sqrt(noise pixels) over the epoch (Knutson et al. 2012; Lewis et al. 2013).
+The neighbour lists and normalised weights depend only on the centroids, so
+they are built once (:func:`knn_weights`) into a sparse matrix; evaluating the
+model is one sparse matrix-vector product.
+
+KR/Pmap (Krick et al. 2016) trains the same regression on a separate
+calibration star: for each science frame the k nearest calibration frames in
+(x, y, beta) give the kernel-weighted calibration flux, normalised by the
+calibration flux averaged over the pixel, so the gain map is fixed and only a
+flux scale ``F0`` is fitted (in closed form): ``model = F0 * astro * gain``.
+For the real gridded SSC pmap (500x500 cells, itself a kernel-regression
+product) the gain is the bilinear interpolation of the map at (x, y), as the
+IRSA correction code does.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+from ..errors import InputError
+from .base import EpochData, Systematics, register
+from .pmap import CalibrationSet, GriddedPmap, find_pmap_path, interpolate_grid, load_pmap
+
+__all__ = ["scale_lengths", "knn_weights", "smoother_trace", "KernelRegressionData",
+           "KernelRegressionPmap", "pmap_gain"]
+
+
+def scale_lengths(x: np.ndarray, y: np.ndarray,
+                  noise_pixels: np.ndarray | None = None) -> np.ndarray:
+    """Kernel scale lengths: standard deviations of x, y [and sqrt(noise pixels)].
+
+    Returns
+    -------
+    ndarray, shape (2,) or (3,)
+    """
+    cols = [np.asarray(x, float), np.asarray(y, float)]
+    if noise_pixels is not None:
+        cols.append(np.sqrt(np.asarray(noise_pixels, float)))
+    return np.array([np.std(c) for c in cols])
+
+
+def _coords(x, y, noise_pixels, scales: np.ndarray) -> np.ndarray:
+    cols = [np.asarray(x, float), np.asarray(y, float)]
+    if noise_pixels is not None:
+        cols.append(np.sqrt(np.asarray(noise_pixels, float)))
+    return np.column_stack(cols) / scales
+
+
+def knn_weights(query: np.ndarray, train: np.ndarray, *, k: int,
+                exclude_self: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Neighbour indices and normalised Gaussian weights in scaled coordinates.
+
+    Parameters
+    ----------
+    query : ndarray, shape (n, d)
+        Points to estimate, already divided by the scale lengths.
+    train : ndarray, shape (m, d)
+        Training points, in the same scaled coordinates.
+    k : int
+        Neighbours per point.
+    exclude_self : bool
+        When query and train are the same set: drop each point from its own
+        neighbour list (KR/Data's leave-one-out average).
+
+    Returns
+    -------
+    index : ndarray of int, shape (n, k)
+    weight : ndarray, shape (n, k)
+        ``exp(-d^2/2)`` normalised to sum to 1 along axis 1.
+    """
+    n = len(query)
+    kk = k + 1 if exclude_self else k
+    dist, idx = cKDTree(train).query(query, k=kk)
+    dist = np.asarray(dist).reshape(n, kk)
+    idx = np.asarray(idx).reshape(n, kk)
+    if exclude_self:
+        # The point itself is normally first; with exact duplicates it may not be,
+        # so remove it wherever it appears, else drop the farthest neighbour.
+        own = idx == np.arange(n)[:, None]
+        drop = np.where(own.any(axis=1), own.argmax(axis=1), kk - 1)
+        keep = np.ones_like(own)
+        keep[np.arange(n), drop] = False
+        dist = dist[keep].reshape(n, k)
+        idx = idx[keep].reshape(n, k)
+    # Shift by the nearest distance before exponentiating so the weights never
+    # underflow to all zeros; normalisation removes the shift exactly.
+    d2 = dist**2
+    w = np.exp(-0.5 * (d2 - d2[:, :1]))
+    w /= w.sum(axis=1, keepdims=True)
+    return idx, w
+
+
+def smoother_trace(query: np.ndarray, train: np.ndarray, index: np.ndarray) -> float:
+    """Effective number of parameters of a kernel smoother that includes each point.
+
+    ``tr(S)`` of the smoother whose weights are the k-neighbour Gaussian plus
+    the point itself at distance 0 (the usual effective degrees of freedom of
+    a linear smoother; the leave-one-out form used for the fit has trace 0).
+    """
+    d2 = np.sum((train[index] - query[:, None, :]) ** 2, axis=2)
+    return float(np.sum(1.0 / (1.0 + np.exp(-0.5 * d2).sum(axis=1))))
+
+
+def _check_finite(name: str, method: str, *arrays) -> None:
+    for a in arrays:
+        if a is not None and not np.all(np.isfinite(np.asarray(a, float))):
+            raise InputError(f"method '{method}': column(s) {name} must be finite")
+
+
+def _int_option(options: dict, key: str, default: int, method: str, minimum: int = 1) -> int:
+    v = options.get(key, default)
+    if isinstance(v, bool) or int(v) != v or v < minimum:
+        raise InputError(f"method '{method}': option {key} expected an integer >= {minimum}, got {v!r}")
+    return int(v)
+
+
+def _bool_option(options: dict, key: str, default: bool, method: str) -> bool:
+    v = options.get(key, default)
+    if not isinstance(v, (bool, np.bool_)):
+        raise InputError(f"method '{method}': option {key} expected true or false, got {v!r}")
+    return bool(v)
+
+
+@register
+class KernelRegressionData(Systematics):
+    """KR/Data: leave-one-out Gaussian kernel regression on the science frames.
+
+    Options
+    -------
+    k : int, default 50
+        Nearest neighbours (Wong et al. 2014).
+    use_noise_pixels : bool, default False
+        Add sqrt(noise pixels) as a third coordinate (Lewis et al. 2013); Wong
+        et al. used x and y only.
+    """
+
+    name: ClassVar[str] = "kr-data"
+    requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    description: ClassVar[str] = "k-nearest-neighbour Gaussian kernel regression of flux/astro"
+
+    def __init__(self, data: EpochData, **options: Any) -> None:
+        super().__init__(data, **options)
+        unknown = set(self.options) - {"k", "use_noise_pixels"}
+        if unknown:
+            raise InputError(f"method 'kr-data': unknown option(s) {', '.join(sorted(unknown))} "
+                             "(known: k, use_noise_pixels)")
+        k = _int_option(self.options, "k", 50, self.name)
+        use_np = _bool_option(self.options, "use_noise_pixels", False, self.name)
+        if use_np and data.noise_pixels is None:
+            raise InputError("method 'kr-data' with use_noise_pixels: needs the column "
+                             "noise_pixels in the photometry table")
+        n = len(data)
+        if n < k + 1:
+            raise InputError(f"method 'kr-data': {n} frames, fewer than k+1 = {k + 1}")
+        beta = data.noise_pixels if use_np else None
+        _check_finite("x, y" + (", noise_pixels" if use_np else ""), self.name, data.x, data.y, beta)
+        if use_np and np.any(np.asarray(beta) <= 0):
+            raise InputError("method 'kr-data': noise_pixels must be positive")
+        self.scales = scale_lengths(data.x, data.y, beta)
+        if not np.all(self.scales > 0):
+            raise InputError("method 'kr-data': a kernel coordinate does not vary over the epoch "
+                             "(zero standard deviation)")
+        pts = _coords(data.x, data.y, beta, self.scales)
+        idx, w = knn_weights(pts, pts, k=k, exclude_self=True)
+        self.k = k
+        self.smoother = sp.csr_matrix((w.ravel(), idx.ravel(), np.arange(0, n * k + 1, k)),
+                                      shape=(n, n))
+        self._dof = smoother_trace(pts, pts, idx)
+        self._flux = np.asarray(data.flux, float)
+
+    def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """``astro * KR(flux / astro)`` (electrons)."""
+        astro = np.asarray(astro, float)
+        return astro * (self.smoother @ (self._flux / astro))
+
+    def n_effective_params(self) -> int:
+        """Effective degrees of freedom ``tr(S)`` of the smoother with the point included.
+
+        The leave-one-out smoother used in the fit has zero trace, which would
+        count the regression as free; ``tr(S)`` of the same kernel with each
+        point included (weight 1 at distance 0) is the usual count for a
+        linear smoother, about ``n / k_eff``.
+        """
+        return int(round(self._dof))
+
+
+def pmap_gain(pmap: CalibrationSet | GriddedPmap, x: np.ndarray, y: np.ndarray,
+              noise_pixels: np.ndarray | None, *, k: int, scales: np.ndarray | None):
+    """The fixed KR/Pmap gain at each science frame (mean about 1).
+
+    Parameters
+    ----------
+    pmap : CalibrationSet or GriddedPmap
+    x, y : ndarray, shape (n,)
+    noise_pixels : ndarray or None
+        Science noise pixels; used as a third coordinate with a calibration set
+        when given.
+    k : int
+        Neighbours (calibration set only).
+    scales : ndarray or None
+        Scale lengths of the coordinates (calibration set only).
+
+    Returns
+    -------
+    gain : ndarray, shape (n,)
+    """
+    if isinstance(pmap, GriddedPmap):
+        return interpolate_grid(pmap.gain, pmap.x_grid, pmap.y_grid, x, y)
+    beta_cal = pmap.noise_pixels if noise_pixels is not None else None
+    q = _coords(x, y, noise_pixels, scales)
+    t = _coords(pmap.x, pmap.y, beta_cal, scales)
+    idx, w = knn_weights(q, t, k=k, exclude_self=False)
+    # Krick et al.: kernel-weighted calibration flux over the calibration flux
+    # averaged over the pixel.
+    return np.sum(w * pmap.flux[idx], axis=1) / np.mean(pmap.flux)
+
+
+@register
+class KernelRegressionPmap(Systematics):
+    """KR/Pmap: kernel regression trained on a calibration star (Krick et al. 2016).
+
+    Options
+    -------
+    pmap : path, optional
+        A calibration-star table (FITS, columns x, y, noise_pixels, flux,
+        flux_err) or the gridded SSC pmap (its folder or ``pmap_*.fits``).
+        Default: ``SIMDIR/calibration/pmap_calibration.fits`` when the table
+        comes from a simulation.
+    k : int, default 50
+        Calibration neighbours per science frame.
+    use_noise_pixels : bool, default True
+        Use sqrt(noise pixels) as a third coordinate (the paper's KR/Pmap used
+        x, y and beta); needs noise pixels in both tables. Ignored for a
+        gridded map (x, y only).
+    max_distance_px : float, default 0.1
+        Frames whose nearest calibration point (gridded map: grid edge) is
+        farther than this in (x, y) raise InputError: the map does not
+        cover them.
+    min_occupancy : float, default 0
+        Gridded map only: frames where the interpolated occupancy is below
+        this raise InputError (the IRSA code's ``THRESHOLD_VAL``, 20 there,
+        marks the well-measured sweet spot). The count below 20 is always
+        kept in ``n_low_occupancy``.
+    """
+
+    name: ClassVar[str] = "kr-pmap"
+    requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    description: ClassVar[str] = "fixed gain from kernel regression on a calibration star"
+
+    def __init__(self, data: EpochData, **options: Any) -> None:
+        super().__init__(data, **options)
+        known = {"pmap", "k", "use_noise_pixels", "max_distance_px", "min_occupancy"}
+        unknown = set(self.options) - known
+        if unknown:
+            raise InputError(f"method 'kr-pmap': unknown option(s) {', '.join(sorted(unknown))} "
+                             f"(known: {', '.join(sorted(known))})")
+        k = _int_option(self.options, "k", 50, self.name)
+        use_np = _bool_option(self.options, "use_noise_pixels", True, self.name)
+        max_d = float(self.options.get("max_distance_px", 0.1))
+        if not max_d > 0:
+            raise InputError(f"method 'kr-pmap': option max_distance_px expected > 0, got {max_d}")
+        path = find_pmap_path(self.options.get("pmap"), data.meta)
+        self.pmap = load_pmap(path)
+        self.pmap_path = str(path)
+        x = np.asarray(data.x, float)
+        y = np.asarray(data.y, float)
+        _check_finite("x, y", self.name, x, y)
+        if isinstance(self.pmap, GriddedPmap):
+            g = self.pmap
+            out_x = np.maximum(g.x_grid[0] - x, x - g.x_grid[-1])
+            out_y = np.maximum(g.y_grid[0] - y, y - g.y_grid[-1])
+            far = np.hypot(np.maximum(out_x, 0), np.maximum(out_y, 0)) > max_d
+            beta = None
+            self.scales = None
+            occ = interpolate_grid(g.occupancy, g.x_grid, g.y_grid, x, y)
+            self.n_low_occupancy = int(np.sum(occ < 20.0))
+            min_occ = float(self.options.get("min_occupancy", 0.0))
+            if np.sum(occ < min_occ):
+                raise InputError(f"--pmap {path}: {int(np.sum(occ < min_occ))} of {len(x)} frames "
+                                 f"fall where the map's occupancy is below min_occupancy={min_occ}")
+        else:
+            if len(self.pmap) < k:
+                raise InputError(f"--pmap {path}: {len(self.pmap)} calibration rows, fewer than k = {k}")
+            beta = data.noise_pixels if use_np else None
+            if use_np and beta is None:
+                raise InputError("method 'kr-pmap' with use_noise_pixels: needs the column "
+                                 "noise_pixels in the photometry table (or use_noise_pixels=false)")
+            _check_finite("noise_pixels", self.name, beta)
+            self.scales = scale_lengths(x, y, beta)
+            if not np.all(self.scales > 0):
+                raise InputError("method 'kr-pmap': a kernel coordinate does not vary over the "
+                                 "epoch (zero standard deviation)")
+            dist, _ = cKDTree(np.column_stack([self.pmap.x, self.pmap.y])).query(
+                np.column_stack([x, y]), k=1)
+            far = dist > max_d
+            self.n_low_occupancy = 0
+        if far.any():
+            raise InputError(f"--pmap {path}: {int(far.sum())} of {len(x)} frames lie more than "
+                             f"{max_d} px from the calibration data (max_distance_px)")
+        self.k = k
+        self.gain = pmap_gain(self.pmap, x, y, beta, k=k, scales=self.scales)
+        self._flux = np.asarray(data.flux, float)
+        self._ivar = 1.0 / np.asarray(data.flux_err, float) ** 2
+
+    def flux_scale(self, astro: np.ndarray) -> float:
+        """Weighted least-squares ``F0`` of ``flux = F0 * astro * gain`` (electrons)."""
+        m = np.asarray(astro, float) * self.gain
+        return float(np.dot(self._ivar * m, self._flux) / np.dot(self._ivar * m, m))
+
+    def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """``F0 * astro * gain`` with ``F0`` solved in closed form (electrons)."""
+        m = np.asarray(astro, float) * self.gain
+        f0 = np.dot(self._ivar * m, self._flux) / np.dot(self._ivar * m, m)
+        return f0 * m
+
+    def n_effective_params(self) -> int:
+        """One: the flux scale F0 (the gain map is fixed by the calibration data)."""
+        return 1
