@@ -1,0 +1,382 @@
+"""The paper's figures as matplotlib :class:`~matplotlib.figure.Figure` objects.
+
+Each function takes arrays (or the statistics dict) and returns a Figure; it
+never touches files or the screen. :func:`save_figure` writes a Figure as PNG
+and PDF atomically. Figures are built with the object-oriented API on the Agg
+canvas (no pyplot, no display, no global state).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from ..io.atomic import atomic_path
+from ..stats.ensemble import pairwise_differences
+
+__all__ = ["save_figure", "bin_mean", "centroid_clouds", "photometry_vs_phase",
+           "decorrelated_lightcurves", "depths_per_epoch", "visit_differences",
+           "method_differences", "repeatability_vs_reliability", "accuracy_vs_reliability",
+           "accuracy_ratio_vs_bias", "fit_inverse", "fit_line"]
+
+
+def _figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _colors(n: int):
+    from matplotlib import colormaps
+    cmap = colormaps["tab10" if n <= 10 else "turbo"]
+    return [cmap(i if n <= 10 else i / max(n - 1, 1)) for i in range(n)]
+
+
+def save_figure(fig: Figure, dest_stem: str | Path, *, dpi: int = 120) -> list[Path]:
+    """Write ``dest_stem.png`` and ``dest_stem.pdf`` atomically (no timestamps)."""
+    stem = Path(dest_stem)
+    out = []
+    for fmt, meta in (("png", {"Software": None}), ("pdf", {"CreationDate": None, "Creator": None,
+                                                          "Producer": None})):
+        path = stem.with_suffix(f".{fmt}")
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format=fmt, dpi=dpi, metadata=meta)
+        out.append(path)
+    return out
+
+
+def bin_mean(values, size: int) -> np.ndarray:
+    """Means of consecutive groups of ``size`` values (a last partial group is dropped)."""
+    v = np.asarray(values, dtype=float)
+    n = (v.size // size) * size
+    if n == 0:
+        return v[:0]
+    return v[:n].reshape(-1, size).mean(axis=1)
+
+
+def fit_inverse(r, R) -> float:
+    """Least-squares ``k`` of ``R = k / r`` (the paper's dashed curves, Figs. 14-15)."""
+    u = 1.0 / np.asarray(r, dtype=float)
+    R = np.asarray(R, dtype=float)
+    return float(np.sum(u * R) / np.sum(u * u))
+
+
+def fit_line(x, y) -> tuple[float, float]:
+    """Least-squares slope and intercept of ``y = slope x + intercept``."""
+    slope, intercept = np.polyfit(np.asarray(x, float), np.asarray(y, float), 1)
+    return float(slope), float(intercept)
+
+
+def centroid_clouds(centroids: Mapping[object, tuple[np.ndarray, np.ndarray]], *,
+                    gain_map: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                    max_points: int = 4000, title: str = "Centroids") -> Figure:
+    """Centroid positions per epoch over the intra-pixel gain map (Figs. 1-2).
+
+    Parameters
+    ----------
+    centroids : mapping
+        ``{epoch: (x, y)}``, 0-based pixel coordinates.
+    gain_map : tuple, optional
+        ``(x, y, gain)`` with ``gain[j, i]`` at ``(x[i], y[j])``, shown as a
+        grey scale with contours.
+    max_points : int
+        Points drawn per epoch (evenly thinned).
+    """
+    fig = _figure(6.0, 5.4)
+    ax = fig.add_subplot()
+    if gain_map is not None:
+        gx, gy, gain = (np.asarray(a, dtype=float) for a in gain_map)
+        mesh = ax.pcolormesh(gx, gy, gain, cmap="Greys_r", shading="auto")
+        ax.contour(gx, gy, gain, levels=8, colors="k", linewidths=0.4)
+        fig.colorbar(mesh, ax=ax, label="relative gain")
+    for color, (epoch, (x, y)) in zip(_colors(len(centroids)), centroids.items(), strict=True):
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        step = max(1, x.size // max_points)
+        ax.plot(x[::step], y[::step], ".", ms=1.0, color=color, label=f"{epoch}", alpha=0.6)
+    ax.set_xlabel("x (pixel, 0-based)")
+    ax.set_ylabel("y (pixel, 0-based)")
+    ax.set_title(title)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(title="epoch", fontsize=6, markerscale=8, loc="upper right", ncols=2)
+    return fig
+
+
+def photometry_vs_phase(epochs: Mapping[object, Mapping[str, np.ndarray]], *, bin_size: int = 63,
+                        title: str = "Photometry vs phase") -> Figure:
+    """x, y, noise pixels, background and flux versus orbital phase (Figs. 3-4).
+
+    Parameters
+    ----------
+    epochs : mapping
+        ``{epoch: {"phase", "x", "y", "noise_pixels", "background", "flux"}}``.
+        Background and flux are normalised to their means over all epochs.
+    bin_size : int
+        Frames averaged per point (63: one subarray cube without its first frame).
+    """
+    panels = (("x", "x (px)", False), ("y", "y (px)", False),
+              ("noise_pixels", "noise pixels", False), ("background", "background (norm.)", True),
+              ("flux", "flux (norm.)", True))
+    norms = {}
+    for key, _, normalise in panels:
+        if normalise:
+            allv = np.concatenate([np.asarray(e[key], float) for e in epochs.values()])
+            norms[key] = float(np.nanmean(allv)) or 1.0
+    fig = _figure(7.0, 9.0)
+    axes = fig.subplots(len(panels), 1, sharex=True)
+    for color, (epoch, data) in zip(_colors(len(epochs)), epochs.items(), strict=True):
+        phase = bin_mean(data["phase"], bin_size)
+        for ax, (key, _, _) in zip(axes, panels, strict=True):
+            v = bin_mean(data[key], bin_size) / norms.get(key, 1.0)
+            ax.plot(phase, v, ".", ms=2, color=color, label=str(epoch))
+    for ax, (_, label, _) in zip(axes, panels, strict=True):
+        ax.set_ylabel(label, fontsize=8)
+    axes[-1].set_xlabel("orbital phase (since transit)")
+    axes[0].set_title(title)
+    axes[0].legend(title="epoch", fontsize=6, ncols=5, markerscale=3)
+    return fig
+
+
+def decorrelated_lightcurves(curves: Mapping[str, Mapping[str, np.ndarray]], *,
+                             truth: tuple[np.ndarray, np.ndarray] | None = None,
+                             bin_size: int = 64, title: str = "Decorrelated light curves") -> Figure:
+    """One panel per method: the decorrelated flux binned and the fitted model (Figs. 5-6).
+
+    Parameters
+    ----------
+    curves : mapping
+        ``{method: {"phase", "flux_corrected", "astro_model"}}``.
+    truth : tuple, optional
+        ``(phase, L)``: the input light curve, drawn as a blue line.
+    """
+    n = max(len(curves), 1)
+    fig = _figure(7.0, 1.6 * n + 0.8)
+    axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, sharey=True, squeeze=False)[:, 0])
+    for ax, (method, c) in zip(axes, curves.items(), strict=False):
+        ax.plot(bin_mean(c["phase"], bin_size), bin_mean(c["flux_corrected"], bin_size), ".",
+                ms=2, color="0.3")
+        ax.plot(c["phase"], c["astro_model"], "-", color="tab:red", lw=1, label="fit")
+        if truth is not None:
+            ax.plot(truth[0], truth[1], "-", color="tab:blue", lw=1, label="input")
+        ax.text(0.01, 0.05, method, transform=ax.transAxes, fontsize=8)
+        ax.set_ylabel("rel. flux", fontsize=8)
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[-1].set_xlabel("orbital phase")
+    axes[0].set_title(title)
+    return fig
+
+
+def depths_per_epoch(groups: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+                     summary: Mapping, *, truth_ppm: float | None = None,
+                     title: str = "Eclipse depths") -> Figure:
+    """Depths per epoch for every method and the weighted means (Figs. 7-8).
+
+    Parameters
+    ----------
+    groups : mapping
+        ``{method: (epoch, depth_ppm, error_ppm)}``.
+    summary : mapping
+        The statistics dict (``methods[m]["D_mean"]``, ``["sigma_tot"]``).
+    truth_ppm : float, optional
+        The input depth, drawn as a blue line.
+    """
+    fig = _figure(8.0, 4.5)
+    ax = fig.add_subplot()
+    names = list(groups)
+    width = 0.7 / max(len(names), 1)
+    epochs = sorted({int(e) for g in groups.values() for e in g[0]})
+    right = (max(epochs) if epochs else 0) + 1.5
+    means = []
+    for k, (color, name) in enumerate(zip(_colors(len(names)), names, strict=True)):
+        ep, d, e = (np.asarray(a, float) for a in groups[name])
+        off = (k - (len(names) - 1) / 2) * width
+        ax.errorbar(ep + off, d, yerr=e, fmt="o", ms=3, color=color, label=name, lw=0.8)
+        s = summary["methods"].get(name)
+        if s is not None:
+            ax.errorbar(right + 0.5 + k * 0.3, s["D_mean"], yerr=s["sigma_tot"], fmt="s", ms=4,
+                        color=color, lw=1.2)
+            means.append((s["D_mean"], s["sigma_tot"]))
+    ax.axvline(right, color="0.6")
+    if means:
+        grand = float(np.mean([m for m, _ in means]))
+        err = float(np.sqrt(np.sum([s**2 for _, s in means])) / len(means))
+        for v in (grand - err, grand, grand + err):
+            ax.axhline(v, color="tab:red", lw=0.8, ls="-" if v == grand else "--")
+    if truth_ppm is not None:
+        ax.axhline(truth_ppm, color="tab:blue", lw=1.2, label=f"input {truth_ppm:.0f} ppm")
+    ax.set_xticks(epochs + [right + 0.5 + 0.15 * (len(names) - 1)],
+                  [str(e) for e in epochs] + ["mean"])
+    ax.set_xlabel("epoch")
+    ax.set_ylabel("eclipse depth (ppm)")
+    ax.set_title(title)
+    ax.legend(fontsize=7, ncols=4)
+    return fig
+
+
+def _grid(n: int) -> tuple[int, int]:
+    cols = min(n, 4) if n <= 8 else 5
+    return math.ceil(n / cols), cols
+
+
+def visit_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], summary: Mapping, *,
+                      title: str = "Repeated visits: mean/difference") -> Figure:
+    """Mean/difference plots between visits, one panel per method (Figs. 10-11).
+
+    Every ordered pair of epochs (i, j), i != j: ``(D_i + D_j) / 2`` against
+    ``D_i - D_j``, labelled "i-j", with dashed lines at +-R.
+
+    Parameters
+    ----------
+    groups : mapping
+        ``{method: (epoch, depth_ppm)}``.
+    """
+    rows, cols = _grid(max(len(groups), 1))
+    fig = _figure(3.2 * cols, 2.8 * rows)
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
+    for ax, (name, (ep, d)) in zip(axes, groups.items(), strict=False):
+        d = np.asarray(d, float)
+        ep = np.asarray(ep)
+        n = d.size
+        ii, jj = np.nonzero(~np.eye(n, dtype=bool))
+        mean = (d[ii] + d[jj]) / 2.0
+        diff = pairwise_differences(d)
+        ax.plot(mean, diff, ".", ms=3)
+        if n <= 12:
+            for x, y, a, b in zip(mean, diff, ep[ii], ep[jj], strict=True):
+                ax.annotate(f"{a}-{b}", (x, y), fontsize=4, alpha=0.7)
+        R = summary["methods"][name]["R"]
+        ax.axhline(0.0, color="0.6", lw=0.8)
+        for v in (-R, R):
+            ax.axhline(v, color="k", ls="--", lw=0.8)
+        ax.text(0.02, 0.03, f"SD = {R:.0f} ppm", transform=ax.transAxes, fontsize=7)
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel("mean depth (ppm)", fontsize=7)
+        ax.set_ylabel("D1 - D2 (ppm)", fontsize=7)
+    for ax in axes[len(groups):]:
+        ax.set_visible(False)
+    fig.suptitle(title)
+    return fig
+
+
+def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttest_p: Mapping, *,
+                       title: str = "Methods: mean/difference") -> Figure:
+    """Mean/difference plots between every pair of methods (Figs. 16-17).
+
+    Per pair (a, b) and common epoch: ``(D_a + D_b) / 2`` against
+    ``D_a - D_b`` labelled by epoch; dashed lines at the mean difference and
+    +-1 SD; the unpaired t-test p value in the corner.
+    """
+    names = list(groups)
+    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+    rows, cols = _grid(max(len(pairs), 1))
+    fig = _figure(3.0 * cols, 2.6 * rows)
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
+    for ax, (a, b) in zip(axes, pairs, strict=False):
+        ea, da = (np.asarray(v) for v in groups[a])
+        eb, db = (np.asarray(v) for v in groups[b])
+        common, ia, ib = np.intersect1d(ea, eb, return_indices=True)
+        mean = (da[ia] + db[ib]) / 2.0
+        diff = da[ia].astype(float) - db[ib]
+        ax.plot(mean, diff, ".", ms=4)
+        for x, y, e in zip(mean, diff, common, strict=True):
+            ax.annotate(str(e), (x, y), fontsize=5)
+        ax.axhline(0.0, color="0.6", lw=0.8)
+        if diff.size >= 2:
+            m, s = float(diff.mean()), float(diff.std(ddof=1))
+            for v in (m - s, m, m + s):
+                ax.axhline(v, color="k", ls="--", lw=0.8)
+            ax.text(0.02, 0.03, f"{m:.0f} ± {s:.0f}", transform=ax.transAxes, fontsize=7)
+        p = ttest_p.get(a, {}).get(b)
+        if p is not None:
+            ax.text(0.98, 0.03, f"p = {p:.2f}", transform=ax.transAxes, fontsize=7, ha="right",
+                    color="tab:red" if p < 0.05 else "k")
+        ax.set_title(f"{a} - {b}", fontsize=8)
+        ax.tick_params(labelsize=6)
+    for ax in axes[len(pairs):]:
+        ax.set_visible(False)
+    fig.supxlabel("mean depth (ppm)", fontsize=8)
+    fig.supylabel("difference (ppm)", fontsize=8)
+    fig.suptitle(title)
+    return fig
+
+
+def _method_points(summary: Mapping, keys: Sequence[str]):
+    names, cols = [], [[] for _ in keys]
+    for name, s in summary["methods"].items():
+        vals = [s.get(k) for k in keys]
+        if all(v is not None and np.isfinite(v) for v in vals):
+            names.append(name)
+            for c, v in zip(cols, vals, strict=True):
+                c.append(float(v))
+    return names, [np.asarray(c) for c in cols]
+
+
+def _label_points(ax, names, x, y):
+    for name, a, b in zip(names, x, y, strict=True):
+        ax.annotate(name, (a, b), fontsize=7, xytext=(3, 3), textcoords="offset points")
+
+
+def repeatability_vs_reliability(summary: Mapping, sigma_phot_ppm: float, *,
+                                 title: str = "Repeatability vs reliability") -> Figure:
+    """R against r with ``R = sqrt(2) sigma_phot / r`` and the fit ``R = k / r`` (Figs. 12-13)."""
+    names, (r, R) = _method_points(summary, ("r", "R"))
+    fig = _figure(5.0, 4.0)
+    ax = fig.add_subplot()
+    ax.plot(r, R, "o")
+    _label_points(ax, names, r, R)
+    if r.size:
+        grid = np.linspace(0.8 * r.min(), min(1.2 * r.max(), 1.5), 200)
+        ax.plot(grid, math.sqrt(2) * sigma_phot_ppm / grid, "-", color="k",
+                label=f"R = √2 σ_phot / r = {math.sqrt(2) * sigma_phot_ppm:.1f} / r")
+        k = fit_inverse(r, R)
+        ax.plot(grid, k / grid, "--", color="tab:red", label=f"fit R = {k:.1f} / r")
+        ax.legend(fontsize=7)
+    ax.set_xlabel("reliability r")
+    ax.set_ylabel("repeatability R (ppm)")
+    ax.set_title(title)
+    return fig
+
+
+def accuracy_vs_reliability(summary: Mapping, *, title: str = "Accuracy vs reliability") -> Figure:
+    """a against r with the line a = r and a linear fit (Fig. 19)."""
+    names, (r, a) = _method_points(summary, ("r", "a"))
+    fig = _figure(5.0, 4.0)
+    ax = fig.add_subplot()
+    ax.plot(r, a, "o")
+    _label_points(ax, names, r, a)
+    if r.size:
+        top = float(max(r.max(), a.max()) * 1.15)
+        ax.plot([0, top], [0, top], ":", color="0.5", label="a = r")
+        if r.size >= 2 and np.ptp(r) > 0:
+            slope, icpt = fit_line(r, a)
+            ax.plot([0, top], [icpt, slope * top + icpt], "--", color="tab:red",
+                    label=f"fit a = {slope:.2f} r {icpt:+.2f}")
+        ax.legend(fontsize=7)
+    ax.set_xlabel("reliability r")
+    ax.set_ylabel("accuracy a")
+    ax.set_title(title)
+    return fig
+
+
+def accuracy_ratio_vs_bias(summary: Mapping, *, title: str = "a/r vs |bias|") -> Figure:
+    """a/r against the mean absolute bias with a linear fit (Fig. 20)."""
+    names, (r, a, bias) = _method_points(summary, ("r", "a", "bias"))
+    fig = _figure(5.0, 4.0)
+    ax = fig.add_subplot()
+    ratio, absb = a / r if r.size else r, np.abs(bias)
+    ax.plot(absb, ratio, "o")
+    _label_points(ax, names, absb, ratio)
+    if r.size >= 2 and np.ptp(absb) > 0:
+        slope, icpt = fit_line(absb, ratio)
+        grid = np.array([0.0, absb.max() * 1.1])
+        ax.plot(grid, slope * grid + icpt, "--", color="tab:red",
+                label=f"fit a/r = {icpt:.2f} {slope:+.4f} |B|")
+        ax.legend(fontsize=7)
+    ax.set_xlabel("|mean bias| (ppm)")
+    ax.set_ylabel("a / r")
+    ax.set_title(title)
+    return fig
