@@ -23,7 +23,9 @@ class SystemSection:
     albedo: float = 0.0
     tau_rad_days: float = 1.0
     omega_rot: float = 1.0
-    flux_ratio_model: Literal["monochromatic", "bandpass", "blackbody"] = "monochromatic"
+    # "monochromatic": Planck ratio at wavelength_um (IRACSIM's exoplanet wrapper);
+    # "tophat": photon-weighted average over a flat 4.0-5.0 um band
+    flux_ratio_model: Literal["monochromatic", "tophat"] = "monochromatic"
     wavelength_um: float = 4.5095
     fix_depth_ppm: float = 1875.0  # 0 leaves the depth to the phase-curve model
 
@@ -33,3 +35,5 @@ class SystemSection:
         check(self.tau_rad_days >= 0.0, "tau_rad_days", "a non-negative number of days")
         check(self.wavelength_um > 0.0, "wavelength_um", "a positive wavelength in micron")
         check(self.fix_depth_ppm >= 0.0, "fix_depth_ppm", "0 (not fixed) or a positive depth in ppm")
+        check(self.omega_rot == self.omega_rot and abs(self.omega_rot) < 1e3, "omega_rot",
+              "a finite rotation rate in units of the periastron orbital angular velocity")

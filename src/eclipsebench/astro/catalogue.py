@@ -1,0 +1,226 @@
+"""The system catalogue: planets with literature values and their references.
+
+The built-in catalogue is ``eclipsebench/data/systems.toml`` (one table per
+planet); a user catalogue is a TOML file of the same form, given by path.
+Names match case-insensitively, ignoring spaces, hyphens and underscores
+(``xo3b`` finds ``XO-3b``).
+
+Examples
+--------
+>>> s = get_system("XO-3b")
+>>> s.period_days, s.ecc
+(3.1915239, 0.2769)
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, fields
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from .orbit import BMJD_OFFSET, OrbitClock
+
+__all__ = ["PlanetSystem", "get_system", "list_systems", "load_catalogue", "system_from_mapping"]
+
+_REQUIRED = ("period_days", "t_transit_bjd", "ecc", "omega_deg", "inc_deg", "a_rs", "rp_rs",
+             "teff_star_k")
+
+
+@dataclass(frozen=True)
+class PlanetSystem:
+    """One star-planet system.
+
+    Attributes
+    ----------
+    name : str
+    period_days : float
+        Orbital period.
+    t_transit_bjd : float
+        An observed mid-transit time, BJD_TDB.
+    ecc, omega_deg : float
+        Eccentricity and argument of periastron of the planet's orbit (deg).
+    inc_deg : float
+        Orbital inclination (deg).
+    a_rs, rp_rs : float
+        Semi-major axis and planet radius in stellar radii.
+    teff_star_k : float
+        Stellar effective temperature (K); the star is a blackbody at this
+        temperature in the flux ratio.
+    r_star_rsun : float
+        Stellar radius in solar radii (sets the light-travel time only).
+    ld_quadratic : tuple of float
+        Quadratic limb-darkening coefficients (u1, u2) at 4.5 um for transits.
+    v_mag : float or None
+        V magnitude of the star.
+    references : dict
+        Source of each value, ``{field: "citation"}``.
+    """
+
+    name: str
+    period_days: float
+    t_transit_bjd: float
+    ecc: float
+    omega_deg: float
+    inc_deg: float
+    a_rs: float
+    rp_rs: float
+    teff_star_k: float
+    r_star_rsun: float = 1.0
+    ld_quadratic: tuple[float, float] = (0.1, 0.1)
+    v_mag: float | None = None
+    references: dict[str, str] = field(default_factory=dict, compare=False, hash=False)
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """Raise :class:`InputError` (one line naming the value) for an impossible system."""
+        def bad(key: str, expected: str) -> None:
+            value = getattr(self, key)
+            raise InputError(f"system {self.name!r}: {key} = {value!r}, expected {expected}")
+
+        for key in _REQUIRED + ("r_star_rsun",):
+            value = getattr(self, key)
+            if not isinstance(value, (int, float)) or isinstance(value, bool) \
+                    or not math.isfinite(value):
+                bad(key, "a finite number")
+        if not 0.0 <= self.ecc < 1.0:
+            bad("ecc", "0 <= e < 1")
+        if self.period_days <= 0:
+            bad("period_days", "a positive period")
+        if self.a_rs < 1.0:
+            bad("a_rs", "a/R* >= 1 (the planet orbits outside the star)")
+        if self.a_rs * (1.0 - self.ecc) <= 1.0 + self.rp_rs:
+            raise InputError(f"system {self.name!r}: periastron a(1-e) = "
+                             f"{self.a_rs * (1 - self.ecc):.3g} R*, expected > 1 + Rp/R* "
+                             "(the planet would graze the star)")
+        if self.rp_rs <= 0.0:
+            bad("rp_rs", "Rp/R* > 0")
+        if self.rp_rs >= 1.0:
+            bad("rp_rs", "Rp/R* < 1")
+        if not 0.0 < self.inc_deg <= 180.0:
+            bad("inc_deg", "0 < i <= 180 deg")
+        if self.teff_star_k <= 0:
+            bad("teff_star_k", "a positive temperature in K")
+        if self.r_star_rsun <= 0:
+            bad("r_star_rsun", "a positive radius in solar radii")
+        if len(self.ld_quadratic) != 2:
+            bad("ld_quadratic", "two coefficients [u1, u2]")
+
+    # -------------------------------------------------------------- derived values
+    @property
+    def t_transit_bmjd(self) -> float:
+        """The catalogue transit time as BMJD_TDB."""
+        return self.t_transit_bjd - BMJD_OFFSET
+
+    @property
+    def impact_parameter(self) -> float:
+        """Transit impact parameter ``b = a cos i (1 - e^2)/(1 + e sin omega)``."""
+        w = math.radians(self.omega_deg)
+        return (self.a_rs * math.cos(math.radians(self.inc_deg))
+                * (1 - self.ecc ** 2) / (1 + self.ecc * math.sin(w)))
+
+    @cached_property
+    def clock(self) -> OrbitClock:
+        """The orbit's geometric clock (built once per system)."""
+        return OrbitClock(self)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        out["ld_quadratic"] = list(self.ld_quadratic)
+        out["references"] = dict(self.references)
+        return out
+
+
+def _normalise(name: str) -> str:
+    return "".join(ch for ch in name.lower() if ch.isalnum())
+
+
+def system_from_mapping(name: str, table: dict[str, Any], *, source: str = "") -> PlanetSystem:
+    """Build a :class:`PlanetSystem` from one catalogue table, with one-line errors."""
+    where = f"{source}: " if source else ""
+    if not isinstance(table, dict):
+        raise InputError(f"{where}system {name!r}: expected a table of values")
+    known = {f.name for f in fields(PlanetSystem)} - {"name"}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise InputError(f"{where}system {name!r}: unknown key {unknown[0]!r} "
+                         f"(known: {', '.join(sorted(known))})")
+    missing = [k for k in _REQUIRED if k not in table]
+    if missing:
+        raise InputError(f"{where}system {name!r}: missing {', '.join(missing)}")
+    kwargs = dict(table)
+    if "ld_quadratic" in kwargs:
+        kwargs["ld_quadratic"] = tuple(float(u) for u in kwargs["ld_quadratic"])
+    if "references" in kwargs and not isinstance(kwargs["references"], dict):
+        raise InputError(f"{where}system {name!r}: references must be a table "
+                         "{field = \"citation\"}")
+    try:
+        return PlanetSystem(name=name, **kwargs)
+    except InputError as exc:
+        raise InputError(f"{where}{exc}") from None
+    except TypeError as exc:
+        raise InputError(f"{where}system {name!r}: {exc}") from None
+
+
+def load_catalogue(catalogue: str | Path | None = None) -> dict[str, dict[str, Any]]:
+    """The raw tables of a catalogue (built-in when ``catalogue`` is None or empty)."""
+    if catalogue in (None, ""):
+        text = resources.files("eclipsebench.data").joinpath("systems.toml").read_text("utf-8")
+        source = "built-in catalogue"
+    else:
+        path = Path(catalogue)
+        source = str(path)
+        try:
+            text = path.read_text("utf-8")
+        except FileNotFoundError:
+            raise InputError(f"{path}: no such catalogue file") from None
+        except OSError as exc:
+            raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: not valid TOML ({exc})") from None
+    systems = data.get("systems", data)
+    if not isinstance(systems, dict):
+        raise InputError(f"{source}: expected tables of systems")
+    return {k: v for k, v in systems.items() if isinstance(v, dict)}
+
+
+def list_systems(catalogue: str | Path | None = None) -> list[str]:
+    """Names of the systems in a catalogue (built-in by default)."""
+    return list(load_catalogue(catalogue))
+
+
+def get_system(name: str, catalogue: str | Path | None = None) -> PlanetSystem:
+    """Look a planet up by name.
+
+    Parameters
+    ----------
+    name : str
+        Planet name, e.g. ``"XO-3b"`` (case, spaces and hyphens ignored).
+    catalogue : str or Path, optional
+        A user TOML catalogue; searched first, then the built-in one.
+
+    Raises
+    ------
+    InputError
+        For an unknown name or impossible values (e >= 1, a/R* < 1,
+        Rp/R* <= 0, ...), with one line naming the problem.
+    """
+    sources = []
+    if catalogue not in (None, ""):
+        sources.append((str(catalogue), load_catalogue(catalogue)))
+    sources.append(("", load_catalogue(None)))
+    key = _normalise(name)
+    for source, tables in sources:
+        for sys_name, table in tables.items():
+            if _normalise(sys_name) == key:
+                return system_from_mapping(sys_name, table, source=source)
+    known = sorted({n for _, tables in sources for n in tables})
+    raise InputError(f"unknown planet {name!r} (known: {', '.join(known)})")
