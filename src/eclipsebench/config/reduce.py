@@ -13,16 +13,61 @@ class ReduceSection:
     """Options shared by every decorrelation method.
 
     One astrophysical model (eclipse, phase curve, optional ramp) is shared by
-    all methods so that they differ only in their systematics model.
+    all methods so that they differ only in their systematics model. See
+    ``docs/fitting.md`` for the equations and for how the depth error is chosen.
+
+    Attributes
+    ----------
+    phase : {"flat", "linear", "quadratic", "sinusoid"}
+        Out-of-eclipse phase-curve model (paper Section 4.2).
+    ramp : {"none", "linear", "exponential"}
+        Multiplicative detector ramp.
+    eclipse_shape : {"auto", "physical", "box"}
+        "auto" takes the method's ``default_eclipse_shape`` (the box for
+        ``segpoly``, the orbit's physical shape for the others).
+    sampler : {"leastsq", "mcmc"}
+        Least squares only, or least squares followed by emcee.
+    mcmc_walkers, mcmc_steps, mcmc_block_steps, mcmc_tau_factor
+        Ensemble size, step cap, steps between autocorrelation checks, and the
+        chain length (in autocorrelation times) that counts as converged.
+    prayer_bead_shifts : int
+        Cyclic residual shifts refitted for the prayer-bead error (0: none).
+    beta_bin_minutes : [float, float]
+        Range of bin widths over which the red-noise factor is averaged.
+    radius_px : float
+        Aperture radius whose flux column is fitted; 0 uses the table's
+        ``flux`` (the photometry default, 2.25 px).
+    stamp : {"stamp3", "stamp5"}
+        Pixel stamp handed to pixel-level methods (PLD, ICA).
+    max_nfev : int
+        Cap on function evaluations of one least-squares fit.
     """
 
     phase: Literal["flat", "linear", "quadratic", "sinusoid"] = "quadratic"
     ramp: Literal["none", "linear", "exponential"] = "none"
+    eclipse_shape: Literal["auto", "physical", "box"] = "auto"
     sampler: Literal["leastsq", "mcmc"] = "leastsq"
     mcmc_walkers: int = 32
     mcmc_steps: int = 2000
+    mcmc_block_steps: int = 250
+    mcmc_tau_factor: float = 50.0
+    prayer_bead_shifts: int = 16
+    beta_bin_minutes: tuple[float, ...] = (10.0, 30.0)
+    radius_px: float = 0.0
+    stamp: Literal["stamp3", "stamp5"] = "stamp3"
+    max_nfev: int = 200
 
     def validate(self) -> None:
         check(self.mcmc_walkers >= 4 and self.mcmc_walkers % 2 == 0, "mcmc_walkers",
               "an even number of walkers >= 4")
         check(self.mcmc_steps >= 100, "mcmc_steps", "at least 100 steps")
+        check(self.mcmc_block_steps >= 10, "mcmc_block_steps", "at least 10 steps")
+        check(self.mcmc_tau_factor > 0, "mcmc_tau_factor", "a positive number")
+        check(0 <= self.prayer_bead_shifts <= 10000, "prayer_bead_shifts",
+              "an integer between 0 (no prayer bead) and 10000")
+        check(len(self.beta_bin_minutes) == 2 and 0 < self.beta_bin_minutes[0]
+              <= self.beta_bin_minutes[1], "beta_bin_minutes",
+              "[shortest, longest] bin width in minutes, 0 < shortest <= longest")
+        check(self.radius_px == 0 or 0.5 <= self.radius_px <= 10.0, "radius_px",
+              "0 (the table's flux column) or an aperture radius in 0.5-10 px")
+        check(self.max_nfev >= 10, "max_nfev", "at least 10 evaluations")

@@ -111,6 +111,13 @@ class Systematics(ABC):
     #: Whether predict() returns the full flux model (True) or the method is a
     #: pre-processing detrend whose output the fitter models directly.
     description: ClassVar[str] = ""
+    #: The emcee move the fitter uses for this method's MCMC: "stretch" (the
+    #: affine-invariant default) or "de" (differential evolution, the DE-MC of
+    #: the BLISS team; ter Braak 2006).
+    preferred_move: ClassVar[str] = "stretch"
+    #: The eclipse shape the fitter uses when ``[reduce] eclipse_shape = "auto"``:
+    #: "physical" (the orbit's) or "box" (the faithful default of SP(K2)).
+    default_eclipse_shape: ClassVar[str] = "physical"
 
     def __init__(self, data: EpochData, **options: Any) -> None:
         missing = [c for c in self.requires if getattr(data, c, None) is None]
@@ -160,6 +167,17 @@ class Systematics(ABC):
         """The decorrelated light curve: ``flux / (model / astro)``, in units of the star."""
         systematic = self.predict(astro, theta) / astro
         return self.data.flux / systematic
+
+    def with_flux(self, flux: np.ndarray) -> Systematics:
+        """The same method (same options) rebuilt on ``data`` with ``flux`` replaced.
+
+        Used by the prayer bead, which refits the model plus shifted residuals.
+        ``flux`` has the length of ``self.data``. Methods whose ``__init__``
+        transforms the data (binning, say) override this so that the new
+        fluxes are not transformed twice.
+        """
+        from dataclasses import replace
+        return type(self)(replace(self.data, flux=np.asarray(flux, dtype=float)), **self.options)
 
     def n_effective_params(self) -> int:
         """Free parameters that the systematics model adds, for BIC and AIC."""
