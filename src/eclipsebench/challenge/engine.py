@@ -1,0 +1,299 @@
+"""Run a graph of file-producing tasks on Dask, resuming from what is on disk.
+
+A :class:`Task` is a module-level function, its arguments, the files it
+writes (atomically) and the tasks it needs. A task whose output files all
+exist is done and is never run again, so rerunning the same graph after an
+interruption (Ctrl-C, a killed worker, a killed process) redoes only what is
+missing. Results pass between tasks through those files, never through
+memory, so the outcome cannot depend on where or in which order tasks ran.
+
+Executors:
+
+* ``workers == 1`` and no scheduler: in-process and synchronous (tasks run
+  one after another in dependency order in this process; what Dask's
+  synchronous scheduler would do, without its overhead; the debugging mode).
+* ``workers >= 2``: a :class:`distributed.LocalCluster` of ``workers``
+  single-threaded processes.
+* ``scheduler="tcp://host:port"``: an existing Dask cluster (its workers
+  must see the same file system).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import InputError
+from ..progress import get_logger, progress
+
+__all__ = ["Task", "RunReport", "TaskFailed", "run_tasks"]
+
+log = get_logger("challenge")
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of work whose result is a set of files.
+
+    Attributes
+    ----------
+    key : str
+        Unique name, e.g. ``"reduce/bliss/epoch_03"``.
+    stage : str
+        Progress-bar group (``simulate``, ``photometry``, ``reduce``...).
+    func : callable
+        A module-level (picklable) function called as ``func(*args)``; it
+        must write every path of ``outputs`` atomically, the last one last.
+    args : tuple
+        Picklable arguments.
+    outputs : tuple of Path
+        The task is done when all of them exist.
+    deps : tuple of str
+        Keys of the tasks that must be done first.
+    """
+
+    key: str
+    stage: str
+    func: Callable[..., object]
+    args: tuple = ()
+    outputs: tuple[Path, ...] = ()
+    deps: tuple[str, ...] = ()
+
+    def done(self) -> bool:
+        """Whether every output file exists."""
+        return bool(self.outputs) and all(Path(p).exists() for p in self.outputs)
+
+
+@dataclass
+class RunReport:
+    """What a run did: the keys it ran, the keys it found done, the wall time."""
+
+    ran: list[str] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    wall_s: float = 0.0
+    executor: str = ""
+
+
+class TaskFailed(RuntimeError):
+    """One or more tasks raised; the others completed and their files are kept."""
+
+    def __init__(self, failures: dict[str, BaseException]):
+        self.failures = failures
+        first_key, first = next(iter(failures.items()))
+        super().__init__(f"{len(failures)} task(s) failed; first {first_key}: "
+                         f"{type(first).__name__}: {first}")
+
+
+def _check_graph(tasks: Sequence[Task]) -> dict[str, Task]:
+    by_key: dict[str, Task] = {}
+    for t in tasks:
+        if t.key in by_key:
+            raise ValueError(f"duplicate task key {t.key}")
+        if not t.outputs:
+            raise ValueError(f"task {t.key} declares no output files")
+        by_key[t.key] = t
+    for t in tasks:
+        for d in t.deps:
+            if d not in by_key:
+                raise ValueError(f"task {t.key} depends on unknown task {d}")
+    return by_key
+
+
+def _order(by_key: dict[str, Task]) -> list[str]:
+    """Topological order (Kahn), stable in the given order."""
+    indeg = {k: len(t.deps) for k, t in by_key.items()}
+    users: dict[str, list[str]] = {k: [] for k in by_key}
+    for k, t in by_key.items():
+        for d in t.deps:
+            users[d].append(k)
+    ready = [k for k in by_key if indeg[k] == 0]
+    out = []
+    while ready:
+        k = ready.pop(0)
+        out.append(k)
+        for u in users[k]:
+            indeg[u] -= 1
+            if indeg[u] == 0:
+                ready.append(u)
+    if len(out) != len(by_key):
+        raise ValueError("the task graph has a cycle")
+    return out
+
+
+def _call(func: Callable[..., object], args: tuple) -> None:
+    func(*args)
+
+
+class _Bars:
+    def __init__(self, tasks: Iterable[Task]):
+        totals: dict[str, int] = {}
+        for t in tasks:
+            totals[t.stage] = totals.get(t.stage, 0) + 1
+        self.bars = {s: progress(total=n, desc=s, unit="task", leave=True)
+                     for s, n in totals.items()}
+
+    def update(self, stage: str) -> None:
+        self.bars[stage].update(1)
+
+    def close(self) -> None:
+        for b in self.bars.values():
+            b.close()
+
+
+def _worker_env() -> dict[str, str]:
+    # One thread per worker process: the parallelism is across tasks.
+    return {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+            "NUMBA_NUM_THREADS": "1"}
+
+
+def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None = None,
+              keep_going: bool = True) -> RunReport:
+    """Run every task that is not done, respecting dependencies.
+
+    Parameters
+    ----------
+    tasks : sequence of Task
+        The whole graph (done tasks included; they are skipped).
+    workers : int
+        1: in-process synchronous; N >= 2: a local Dask cluster of N processes.
+    scheduler : str, optional
+        Address of an existing Dask scheduler (overrides ``workers``).
+    keep_going : bool
+        After a failure, keep running the tasks that do not depend on it.
+
+    Returns
+    -------
+    RunReport
+
+    Raises
+    ------
+    TaskFailed
+        If any task raised (after the others finished when ``keep_going``).
+        A task that raised an :class:`~eclipsebench.errors.InputError` is
+        re-raised as that error (it is the user's to fix).
+    """
+    by_key = _check_graph(tasks)
+    order = _order(by_key)
+    report = RunReport()
+    done = {k for k in order if by_key[k].done()}
+    report.skipped = [k for k in order if k in done]
+    todo = [k for k in order if k not in done]
+    t0 = time.perf_counter()
+    if not todo:
+        report.executor = "none (all outputs exist)"
+        return report
+    bars = _Bars(by_key[k] for k in todo)
+    try:
+        if scheduler is None and workers <= 1:
+            report.executor = "in-process (synchronous)"
+            failures = _run_sync(by_key, todo, done, bars, report, keep_going)
+        else:
+            failures = _run_dask(by_key, todo, done, bars, report, keep_going,
+                                 workers=workers, scheduler=scheduler)
+    finally:
+        bars.close()
+        report.wall_s = time.perf_counter() - t0
+    if failures:
+        for exc in failures.values():
+            if isinstance(exc, InputError):
+                raise exc
+        raise TaskFailed(failures)
+    return report
+
+
+def _blocked(task: Task, failed: set[str]) -> bool:
+    return any(d in failed for d in task.deps)
+
+
+def _finish(task: Task) -> None:
+    missing = [str(p) for p in task.outputs if not Path(p).exists()]
+    if missing:
+        raise RuntimeError(f"task {task.key} finished without writing {', '.join(missing)}")
+
+
+def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseException]:
+    failures: dict[str, BaseException] = {}
+    for key in todo:
+        task = by_key[key]
+        if _blocked(task, set(failures)) or not all(d in done for d in task.deps):
+            continue  # a dependency failed: not run
+        try:
+            task.func(*task.args)
+            _finish(task)
+        except Exception as exc:  # collected and re-raised after the others ran
+            failures[key] = exc
+            log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
+            if not keep_going:
+                break
+            continue
+        done.add(key)
+        report.ran.append(key)
+        bars.update(task.stage)
+    return failures
+
+
+def _open_client(workers: int, scheduler: str | None):
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="20s"), None, f"dask scheduler {scheduler}"
+        except OSError as exc:
+            raise InputError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
+    env = _worker_env()
+    for k, v in env.items():  # inherited by the worker processes
+        os.environ.setdefault(k, v)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=40)
+    return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"
+
+
+def _run_dask(by_key, todo, done, bars, report, keep_going, *, workers,
+              scheduler) -> dict[str, BaseException]:
+    from distributed import as_completed
+
+    client, cluster, report.executor = _open_client(workers, scheduler)
+    failures: dict[str, BaseException] = {}
+    waiting = list(todo)
+    futures = {}
+    try:
+        ac = as_completed()
+
+        def submit_ready() -> None:
+            for key in list(waiting):
+                task = by_key[key]
+                if _blocked(task, set(failures)):
+                    waiting.remove(key)
+                    continue
+                if all(d in done for d in task.deps):
+                    waiting.remove(key)
+                    fut = client.submit(_call, task.func, task.args, key=f"{key}#{time.time_ns()}",
+                                        pure=False, retries=1)
+                    futures[fut.key] = key
+                    ac.add(fut)
+
+        submit_ready()
+        for fut in ac:
+            key = futures.pop(fut.key)
+            task = by_key[key]
+            try:
+                fut.result()
+                _finish(task)
+            except Exception as exc:  # collected and re-raised after the others ran
+                failures[key] = exc
+                log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
+                if not keep_going:
+                    break
+            else:
+                done.add(key)
+                report.ran.append(key)
+                bars.update(task.stage)
+            submit_ready()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return failures

@@ -1,0 +1,118 @@
+"""The task engine: dependencies, resume from disk, atomic outputs, 1 vs 2 workers."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import cloudpickle
+import numpy as np
+import pytest
+
+from eclipsebench.challenge.engine import Task, TaskFailed, run_tasks
+from eclipsebench.errors import InputError
+from eclipsebench.io.atomic import write_json
+from eclipsebench.seeding import rng
+
+# Dask workers cannot import test modules: ship this module's functions by value.
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
+
+
+def make_numbers(path: str, seed: int, epoch: int) -> None:
+    write_json(path, {"x": rng(seed, "toy", epoch).normal(size=3).tolist()})
+
+
+def total(path: str, inputs: list[str], log: str) -> None:
+    with open(log, "a") as fh:  # side channel: which tasks really ran
+        fh.write(f"total {path}\n")
+    values = [v for p in inputs for v in json.loads(Path(p).read_text())["x"]]
+    write_json(path, {"sum": float(np.sum(values))})
+
+
+def logged_numbers(path: str, seed: int, epoch: int, log: str) -> None:
+    with open(log, "a") as fh:
+        fh.write(f"numbers {epoch}\n")
+    make_numbers(path, seed, epoch)
+
+
+def fail(path: str) -> None:
+    raise ValueError("boom")
+
+
+def fail_input(path: str) -> None:
+    raise InputError("option --x: expected y")
+
+
+def forget(path: str) -> None:
+    """Finishes without writing its output."""
+
+
+def graph(root: Path, seed: int = 7, n: int = 4, log: Path | None = None):
+    log = log or root / "log.txt"
+    tasks = [Task(f"n/{e}", "numbers", logged_numbers, (str(root / f"n{e}.json"), seed, e, str(log)),
+                  (root / f"n{e}.json",)) for e in range(n)]
+    tasks.append(Task("total", "total", total,
+                      (str(root / "total.json"), [str(root / f"n{e}.json") for e in range(n)],
+                       str(log)), (root / "total.json",), tuple(f"n/{e}" for e in range(n))))
+    return tasks
+
+
+def test_sync_runs_in_dependency_order_and_resumes(tmp_path):
+    tasks = graph(tmp_path)
+    rep = run_tasks(list(reversed(tasks)), workers=1)
+    assert rep.ran[-1] == "total" and len(rep.ran) == 5
+    first = (tmp_path / "total.json").read_bytes()
+    # interruption: two outputs lost; only those and their dependants rerun
+    (tmp_path / "n2.json").unlink()
+    (tmp_path / "total.json").unlink()
+    (tmp_path / "log.txt").unlink()
+    rep2 = run_tasks(tasks, workers=1)
+    assert sorted(rep2.ran) == ["n/2", "total"]
+    assert (tmp_path / "log.txt").read_text().splitlines() == ["numbers 2",
+                                                               f"total {tmp_path / 'total.json'}"]
+    assert (tmp_path / "total.json").read_bytes() == first
+    rep3 = run_tasks(tasks, workers=1)
+    assert rep3.ran == [] and len(rep3.skipped) == 5
+
+
+def test_failure_keeps_other_outputs_and_blocks_dependants(tmp_path):
+    tasks = graph(tmp_path, n=2)
+    tasks[1] = Task("n/1", "numbers", fail, (str(tmp_path / "n1.json"),), (tmp_path / "n1.json",))
+    with pytest.raises(TaskFailed, match="n/1: ValueError: boom"):
+        run_tasks(tasks, workers=1)
+    assert (tmp_path / "n0.json").exists() and not (tmp_path / "total.json").exists()
+
+
+def test_input_error_reaches_the_user(tmp_path):
+    t = Task("bad", "x", fail_input, (str(tmp_path / "a"),), (tmp_path / "a",))
+    with pytest.raises(InputError, match="--x"):
+        run_tasks([t])
+
+
+def test_task_that_writes_nothing_fails(tmp_path):
+    t = Task("lazy", "x", forget, (str(tmp_path / "a"),), (tmp_path / "a",))
+    with pytest.raises(TaskFailed, match="without writing"):
+        run_tasks([t])
+
+
+def test_graph_errors(tmp_path):
+    a = Task("a", "x", forget, (), (tmp_path / "a",), ("missing",))
+    with pytest.raises(ValueError, match="unknown task"):
+        run_tasks([a])
+    b = Task("b", "x", forget, (), (tmp_path / "b",), ("c",))
+    c = Task("c", "x", forget, (), (tmp_path / "c",), ("b",))
+    with pytest.raises(ValueError, match="cycle"):
+        run_tasks([b, c])
+
+
+@pytest.mark.slow
+def test_two_dask_workers_give_the_same_bytes(tmp_path):
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir()
+    two.mkdir()
+    run_tasks(graph(one), workers=1)
+    rep = run_tasks(graph(two), workers=2)
+    assert "LocalCluster (2 processes)" in rep.executor and len(rep.ran) == 5
+    for name in ["total.json", *[f"n{e}.json" for e in range(4)]]:
+        assert (one / name).read_bytes() == (two / name).read_bytes()
