@@ -20,6 +20,8 @@ the value of its nearest well-populated knot.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -181,6 +183,17 @@ def bliss_gain(grid: BlissGrid, ratio: np.ndarray) -> np.ndarray:
     return w[0] * k[c[0]] + w[1] * k[c[1]] + w[2] * k[c[2]] + w[3] * k[c[3]]
 
 
+def _with_flux(model: Systematics, flux: np.ndarray) -> Systematics:
+    """A shallow copy of ``model`` whose data (and cached flux) are ``flux``."""
+    flux = np.asarray(flux, dtype=float)
+    if flux.shape != model.data.flux.shape:
+        raise InputError(f"with_flux: expected {model.data.flux.shape[0]} fluxes, got {flux.shape}")
+    new = copy.copy(model)
+    new.data = dataclasses.replace(model.data, flux=flux)
+    new._flux = flux
+    return new
+
+
 @register
 class Bliss(Systematics):
     """BLISS mapping (Stevenson et al. 2012; paper Appendix B.1).
@@ -233,6 +246,10 @@ class Bliss(Systematics):
         """``astro * BLISS(flux / astro)`` (electrons)."""
         astro = np.asarray(astro, float)
         return astro * bliss_gain(self.grid, self._flux / astro)
+
+    def with_flux(self, flux: np.ndarray) -> Bliss:
+        """The same knot grid on new fluxes (the grid depends only on the centroids)."""
+        return _with_flux(self, flux)
 
     def n_effective_params(self) -> int:
         """The number of knots whose value is fitted (the live knots)."""

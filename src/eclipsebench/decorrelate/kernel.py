@@ -34,6 +34,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from .base import EpochData, Systematics, register
+from .bliss import _with_flux
 from .pmap import CalibrationSet, GriddedPmap, find_pmap_path, interpolate_grid, load_pmap
 
 __all__ = ["scale_lengths", "knn_weights", "smoother_trace", "KernelRegressionData",
@@ -188,6 +189,10 @@ class KernelRegressionData(Systematics):
         astro = np.asarray(astro, float)
         return astro * (self.smoother @ (self._flux / astro))
 
+    def with_flux(self, flux: np.ndarray) -> KernelRegressionData:
+        """The same neighbours and weights on new fluxes (they depend only on the centroids)."""
+        return _with_flux(self, flux)
+
     def n_effective_params(self) -> int:
         """Effective degrees of freedom ``tr(S)`` of the smoother with the point included.
 
@@ -327,6 +332,10 @@ class KernelRegressionPmap(Systematics):
         m = np.asarray(astro, float) * self.gain
         f0 = np.dot(self._ivar * m, self._flux) / np.dot(self._ivar * m, m)
         return f0 * m
+
+    def with_flux(self, flux: np.ndarray) -> KernelRegressionPmap:
+        """The same fixed gain on new fluxes."""
+        return _with_flux(self, flux)
 
     def n_effective_params(self) -> int:
         """One: the flux scale F0 (the gain map is fixed by the calibration data)."""

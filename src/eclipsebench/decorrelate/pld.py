@@ -25,6 +25,8 @@ the fit of the binned model), then applied to the unbinned frames.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 from typing import Any, ClassVar
 
 import numpy as np
@@ -113,6 +115,13 @@ class PldDesign:
             self.b_ivar_sqrt = 1.0 / np.sqrt(var)
         self.b_target = self.b_flux * self.b_ivar_sqrt
 
+    def with_flux(self, flux: np.ndarray) -> PldDesign:
+        """A copy whose target is ``flux`` (same regressors, errors and bins)."""
+        new = copy.copy(self)
+        new.b_flux = self._binned(np.asarray(flux, float))
+        new.b_target = new.b_flux * self.b_ivar_sqrt
+        return new
+
     def _binned(self, a: np.ndarray) -> np.ndarray:
         if self.starts is None:
             return a
@@ -194,6 +203,16 @@ class PixelLevelDecorrelation(Systematics):
         """``astro * (P_hat c [+ poly])`` with ``c`` solved by weighted least squares."""
         astro = np.asarray(astro, float)
         return astro * (self.design.design @ pld_solve(self.design, astro))
+
+    def with_flux(self, flux: np.ndarray) -> PixelLevelDecorrelation:
+        """The same design on new fluxes."""
+        flux = np.asarray(flux, dtype=float)
+        if flux.shape != self.data.flux.shape:
+            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, got {flux.shape}")
+        new = copy.copy(self)
+        new.data = dataclasses.replace(self.data, flux=flux)
+        new.design = self.design.with_flux(flux)
+        return new
 
     def n_effective_params(self) -> int:
         """The number of linear regressors (pixels plus time terms)."""
