@@ -16,7 +16,7 @@ from eclipsebench.challenge.photon import (
 
 def test_analytic_reproduces_the_papers_simulated_numbers():
     # Section 3.3, simulated: F_ap-bg = 73246 e, F_ap = 73358 e, F_bg = 881 e, N = 15232,
-    # D = 1875 ppm, f_in = 1/3 -> S/N = 268 and sigma_phot = 53 ppm.
+    # D = 1875 ppm, f_in = 1/3 -> S/N = 268 and (quoted) sigma_phot = 53 ppm.
     b = 7.0  # e/px: 112 e in the 2.25 px aperture, 880 e in the 3-7 px annulus
     flux = [np.full(15232, 73246.0)]
     bkg = [np.full(15232, b)]
@@ -36,7 +36,8 @@ def test_analytic_reproduces_the_papers_simulated_numbers():
     d = 1875e-6
     sig = math.sqrt((1 + d) ** 2 / (15232 * snr**2) * (1 / ((2 / 3) * (1 + d)) + 3)) * 1e6
     assert out["sigma_phot_ppm"] == pytest.approx(sig)
-    assert round(out["sigma_phot_ppm"]) == 53
+    # the paper quotes 53 ppm, but its Eq. photon_noise with its own inputs gives 64.5 ppm
+    assert out["sigma_phot_ppm"] == pytest.approx(64.5, abs=0.1)
 
 
 def test_frames_is_mean_per_epoch():
