@@ -1,0 +1,572 @@
+"""Per-frame measurement kernels, compiled with numba and run over all frames.
+
+Each ``_frame_*`` function measures one frame; :func:`measure_frames` runs the
+whole measurement set over a stack of frames in parallel (``numba.prange``).
+The public, documented entry points are in :mod:`.centroids`,
+:mod:`.background`, :mod:`.apertures` and :mod:`.measure`; this module holds
+the compiled pieces they share.
+
+Conventions: ``frames[k, j, i]`` is frame ``k``, row ``y = j``, column
+``x = i``; a pixel's centre is at integer coordinates (0-based) and it covers
+``[i - 0.5, i + 0.5] x [j - 0.5, j + 0.5]``. Values are electrons per pixel.
+Non-finite pixels make the quantities that use them NaN (the frame is then
+flagged by the caller), except in the background annulus, where they are
+skipped.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .overlap import pixel_overlap
+
+# Columns of the scalar output array of measure_frames.
+COLUMNS = ("peak_x", "peak_y", "bg0", "x_col", "y_col", "noise_pixels", "x_gauss", "y_gauss",
+           "width_x", "width_y", "amp_gauss", "offset_gauss", "ok_gauss", "x_gfix", "y_gfix",
+           "ok_gfix", "x_lsq", "y_lsq", "ok_lsq", "x", "y", "bg_mean", "bg_median", "bg_std",
+           "bg_npix")
+IDX = {name: k for k, name in enumerate(COLUMNS)}
+N_COLUMNS = len(COLUMNS)
+
+CENTROID_CODES = {"col": 0, "gauss": 1, "gauss-fixed": 2, "lsq-asym": 3}
+_SQRT2 = math.sqrt(2.0)
+_INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
+
+
+# ----------------------------------------------------------------------------- peak, background
+@njit(cache=True)
+def _frame_peak(img, gx, gy, half):
+    """Brightest finite pixel within ``half`` px of (gx, gy); (-1, -1) if none."""
+    ny, nx = img.shape
+    best = -np.inf
+    bx = -1
+    by = -1
+    for j in range(max(gy - half, 0), min(gy + half + 1, ny)):
+        for i in range(max(gx - half, 0), min(gx + half + 1, nx)):
+            v = img[j, i]
+            if v > best:  # False for NaN
+                best = v
+                bx = i
+                by = j
+    return bx, by
+
+
+@njit(cache=True)
+def _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters, buf):
+    """Annulus statistics about (xc, yc) over pixels whose centres lie in [r_in, r_out].
+
+    Returns (mean, sigma-clipped median, clipped standard deviation, number of
+    pixels used by the mean). Non-finite pixels are skipped. ``buf`` is scratch
+    space at least as large as the number of pixels in the annulus.
+    """
+    ny, nx = img.shape
+    n = 0
+    total = 0.0
+    ri2 = r_in * r_in
+    ro2 = r_out * r_out
+    j0 = max(int(math.floor(yc - r_out)), 0)
+    j1 = min(int(math.ceil(yc + r_out)), ny - 1)
+    i0 = max(int(math.floor(xc - r_out)), 0)
+    i1 = min(int(math.ceil(xc + r_out)), nx - 1)
+    for j in range(j0, j1 + 1):
+        dy2 = (j - yc) * (j - yc)
+        for i in range(i0, i1 + 1):
+            d2 = (i - xc) * (i - xc) + dy2
+            if d2 >= ri2 and d2 <= ro2:
+                v = img[j, i]
+                if math.isfinite(v):
+                    buf[n] = v
+                    total += v
+                    n += 1
+    if n == 0:
+        return np.nan, np.nan, np.nan, 0
+    mean = total / n
+    vals = np.sort(buf[:n])
+    lo = 0
+    hi = n  # current sample is vals[lo:hi]
+    med = 0.0
+    std = 0.0
+    for _ in range(max(clip_iters, 1)):
+        m = hi - lo
+        if m % 2 == 1:
+            med = vals[lo + m // 2]
+        else:
+            med = 0.5 * (vals[lo + m // 2 - 1] + vals[lo + m // 2])
+        s = 0.0
+        s2 = 0.0
+        for k in range(lo, hi):
+            s += vals[k]
+            s2 += vals[k] * vals[k]
+        var = s2 / m - (s / m) ** 2
+        std = math.sqrt(var) if var > 0 else 0.0
+        if clip_sigma <= 0 or std == 0.0:
+            break
+        new_lo = lo
+        while new_lo < hi and vals[new_lo] < med - clip_sigma * std:
+            new_lo += 1
+        new_hi = hi
+        while new_hi > new_lo and vals[new_hi - 1] > med + clip_sigma * std:
+            new_hi -= 1
+        if new_lo == lo and new_hi == hi or new_hi - new_lo < 3:
+            break
+        lo = new_lo
+        hi = new_hi
+    return mean, med, std, n
+
+
+# ----------------------------------------------------------------------------- centroids
+@njit(cache=True)
+def _frame_col(img, px, py, h, bg):
+    """Center of light and noise pixels over the (2h+1)^2 box about (px, py).
+
+    Paper Eqs. ``x_centroid``, ``y_centroid`` and ``noise_pixels`` on the
+    background-subtracted values. Returns (x, y, beta); NaN if the box leaves
+    the image, holds a non-finite value, or has no positive net flux.
+    """
+    ny, nx = img.shape
+    if px - h < 0 or py - h < 0 or px + h >= nx or py + h >= ny:
+        return np.nan, np.nan, np.nan
+    s = 0.0
+    sx = 0.0
+    sy = 0.0
+    s2 = 0.0
+    for j in range(py - h, py + h + 1):
+        for i in range(px - h, px + h + 1):
+            f = img[j, i] - bg
+            s += f
+            sx += i * f
+            sy += j * f
+            s2 += f * f
+    if not (s > 0.0) or not math.isfinite(s2):
+        return np.nan, np.nan, np.nan
+    return sx / s, sy / s, s * s / s2
+
+
+@njit(cache=True, inline="always")
+def _pixel_integrals(lo, n, c, s, e, de_dc, de_ds):
+    """Integrated unit Gaussian over pixels lo..lo+n-1 and its derivatives."""
+    inv_s = 1.0 / s
+    u_prev = (lo - 0.5 - c) * inv_s
+    cdf_prev = 0.5 * (1.0 + math.erf(u_prev / _SQRT2))
+    pdf_prev = _INV_SQRT2PI * math.exp(-0.5 * u_prev * u_prev)
+    for k in range(n):
+        u = (lo + k + 0.5 - c) * inv_s
+        cdf = 0.5 * (1.0 + math.erf(u / _SQRT2))
+        pdf = _INV_SQRT2PI * math.exp(-0.5 * u * u)
+        e[k] = cdf - cdf_prev
+        de_dc[k] = -(pdf - pdf_prev) * inv_s
+        de_ds[k] = -(u * pdf - u_prev * pdf_prev) * inv_s
+        u_prev = u
+        cdf_prev = cdf
+        pdf_prev = pdf
+
+
+@njit(cache=True)
+def _solve_small(a, b, n):
+    """Solve a x = b in place (Gaussian elimination, partial pivoting); False if singular."""
+    for col in range(n):
+        piv = col
+        big = abs(a[col, col])
+        for r in range(col + 1, n):
+            if abs(a[r, col]) > big:
+                big = abs(a[r, col])
+                piv = r
+        if not (big > 0.0):
+            return False
+        if piv != col:
+            for k in range(n):
+                t = a[col, k]
+                a[col, k] = a[piv, k]
+                a[piv, k] = t
+            t = b[col]
+            b[col] = b[piv]
+            b[piv] = t
+        for r in range(col + 1, n):
+            f = a[r, col] / a[col, col]
+            for k in range(col, n):
+                a[r, k] -= f * a[col, k]
+            b[r] -= f * b[col]
+    for r in range(n - 1, -1, -1):
+        s = b[r]
+        for k in range(r + 1, n):
+            s -= a[r, k] * b[k]
+        b[r] = s / a[r, r]
+    return True
+
+
+@njit(cache=True)
+def _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys):
+    sx = width if fixed else p[3]
+    sy = width if fixed else p[4]
+    _pixel_integrals(x_lo, n, p[1], sx, ex, dex, dexs)
+    _pixel_integrals(y_lo, n, p[2], sy, ey, dey, deys)
+    c = p[3] if fixed else p[5]
+    chi2 = 0.0
+    for j in range(n):
+        for i in range(n):
+            r = d[j, i] - (p[0] * ex[i] * ey[j] + c)
+            chi2 += r * r
+    return chi2
+
+
+@njit(cache=True)
+def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
+    """Least-squares fit of a pixel-integrated 2-D Gaussian plus a constant.
+
+    The model of pixel (i, j) is ``A * Ex_i * Ey_j + C`` with
+    ``Ex_i = Phi((i + 1/2 - x0) / sx) - Phi((i - 1/2 - x0) / sx)`` (the
+    Gaussian integrated over the pixel), fitted by Levenberg-Marquardt to the
+    background-subtracted (2h+1)^2 box about (px, py). With ``fixed`` the
+    widths are held at ``width``. Returns (x0, y0, sx, sy, A, C, ok).
+    """
+    ny, nx = img.shape
+    nan = np.nan
+    if px - h < 0 or py - h < 0 or px + h >= nx or py + h >= ny or not (
+            math.isfinite(x0) and math.isfinite(y0)):
+        return nan, nan, nan, nan, nan, nan, 0.0
+    n = 2 * h + 1
+    x_lo = px - h
+    y_lo = py - h
+    d = np.empty((n, n))
+    total = 0.0
+    for j in range(n):
+        for i in range(n):
+            v = img[y_lo + j, x_lo + i] - bg
+            if not math.isfinite(v):
+                return nan, nan, nan, nan, nan, nan, 0.0
+            d[j, i] = v
+            total += v
+    npar = 4 if fixed else 6
+    p = np.empty(npar)
+    p[0] = total
+    p[1] = x0
+    p[2] = y0
+    if fixed:
+        p[3] = 0.0
+    else:
+        p[3] = width
+        p[4] = width
+        p[5] = 0.0
+    ex = np.empty(n)
+    ey = np.empty(n)
+    dex = np.empty(n)
+    dey = np.empty(n)
+    dexs = np.empty(n)
+    deys = np.empty(n)
+    jac = np.empty(npar)
+    jtj = np.empty((npar, npar))
+    jtr = np.empty(npar)
+    a = np.empty((npar, npar))
+    step = np.empty(npar)
+    trial = np.empty(npar)
+    chi2 = _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
+    lam = 1e-3
+    converged = False
+    fresh = True  # ex, ey and their derivatives hold the values at p
+    for _ in range(max_iter):
+        if not fresh:  # a rejected trial overwrote them
+            chi2 = _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
+        for q in range(npar):
+            jtr[q] = 0.0
+            for k in range(npar):
+                jtj[q, k] = 0.0
+        c = p[3] if fixed else p[5]
+        for j in range(n):
+            for i in range(n):
+                r = d[j, i] - (p[0] * ex[i] * ey[j] + c)
+                jac[0] = ex[i] * ey[j]
+                jac[1] = p[0] * dex[i] * ey[j]
+                jac[2] = p[0] * ex[i] * dey[j]
+                if fixed:
+                    jac[3] = 1.0
+                else:
+                    jac[3] = p[0] * dexs[i] * ey[j]
+                    jac[4] = p[0] * ex[i] * deys[j]
+                    jac[5] = 1.0
+                for q in range(npar):
+                    jtr[q] += jac[q] * r
+                    for k in range(q, npar):
+                        jtj[q, k] += jac[q] * jac[k]
+        for q in range(npar):
+            for k in range(q):
+                jtj[q, k] = jtj[k, q]
+        improved = False
+        fresh = False
+        while lam < 1e12:
+            for q in range(npar):
+                for k in range(npar):
+                    a[q, k] = jtj[q, k]
+                a[q, q] += lam * max(jtj[q, q], 1e-300)
+                step[q] = jtr[q]
+            if _solve_small(a, step, npar):
+                for q in range(npar):
+                    trial[q] = p[q] + step[q]
+                ok_w = fixed or (trial[3] > 0.05 and trial[4] > 0.05
+                                 and trial[3] < 10.0 and trial[4] < 10.0)
+                if ok_w and abs(trial[1] - x0) < h and abs(trial[2] - y0) < h:
+                    c2 = _gauss_chi2(d, x_lo, y_lo, n, trial, fixed, width, ex, ey, dex, dey,
+                                     dexs, deys)
+                    if c2 <= chi2:
+                        for q in range(npar):
+                            p[q] = trial[q]
+                        chi2_old = chi2
+                        chi2 = c2
+                        lam = max(lam * 0.1, 1e-9)
+                        improved = True
+                        fresh = True
+                        if (abs(step[1]) < 1e-6 and abs(step[2]) < 1e-6) or (
+                                chi2_old - chi2 <= 1e-14 * chi2_old):
+                            converged = True
+                        break
+            lam *= 10.0
+        if not improved:
+            # no downhill step: p is a (numerical) minimum unless the first try failed
+            converged = lam >= 1e12 and math.isfinite(chi2)
+            break
+        if converged:
+            break
+    if fixed:
+        return p[1], p[2], width, width, p[0], p[3], 1.0 if converged else 0.0
+    return p[1], p[2], p[3], p[4], p[0], p[5], 1.0 if converged else 0.0
+
+
+@njit(cache=True)
+def _frame_lsq_asym(img, px, py, bg, grid_h, win_r):
+    """Least-asymmetry centroid (Lust et al. 2014) about the peak pixel.
+
+    For each integer candidate centre within ``grid_h`` px of (px, py), the
+    asymmetry is the sum over rings of equal distance (pixels within
+    ``win_r`` px) of the squared deviations from the ring mean. The centre is
+    the vertex of the parabola through the smallest asymmetry and its two
+    neighbours along each axis (no fit when the minimum lies on the grid edge).
+    Returns (x, y, ok).
+    """
+    ny, nx = img.shape
+    reach = grid_h + win_r
+    if px - reach < 0 or py - reach < 0 or px + reach >= nx or py + reach >= ny:
+        return np.nan, np.nan, 0.0
+    ng = 2 * grid_h + 1
+    asym = np.empty((ng, ng))
+    nring = win_r * win_r + 1  # ring index = d^2 (integer offsets)
+    s1 = np.empty(nring)
+    s2 = np.empty(nring)
+    cnt = np.empty(nring)
+    for gj in range(ng):
+        cy = py - grid_h + gj
+        for gi in range(ng):
+            cx = px - grid_h + gi
+            for k in range(nring):
+                s1[k] = 0.0
+                s2[k] = 0.0
+                cnt[k] = 0.0
+            for dy in range(-win_r, win_r + 1):
+                for dx in range(-win_r, win_r + 1):
+                    d2 = dx * dx + dy * dy
+                    if d2 <= win_r * win_r:
+                        v = img[cy + dy, cx + dx] - bg
+                        s1[d2] += v
+                        s2[d2] += v * v
+                        cnt[d2] += 1.0
+            a = 0.0
+            for k in range(nring):
+                if cnt[k] > 1.0:
+                    a += s2[k] - s1[k] * s1[k] / cnt[k]
+            asym[gj, gi] = a
+    gi0 = 0
+    gj0 = 0
+    amin = np.inf
+    for gj in range(ng):
+        for gi in range(ng):
+            if asym[gj, gi] < amin:
+                amin = asym[gj, gi]
+                gi0 = gi
+                gj0 = gj
+    if not math.isfinite(amin) or gi0 == 0 or gj0 == 0 or gi0 == ng - 1 or gj0 == ng - 1:
+        return np.nan, np.nan, 0.0
+    # vertex of the parabola through the minimum and its two neighbours, per axis
+    cx = asym[gj0, gi0 - 1] - 2.0 * amin + asym[gj0, gi0 + 1]
+    cy = asym[gj0 - 1, gi0] - 2.0 * amin + asym[gj0 + 1, gi0]
+    if not (cx > 0.0 and cy > 0.0):
+        return np.nan, np.nan, 0.0
+    ox = 0.5 * (asym[gj0, gi0 - 1] - asym[gj0, gi0 + 1]) / cx
+    oy = 0.5 * (asym[gj0 - 1, gi0] - asym[gj0 + 1, gi0]) / cy
+    return px - grid_h + gi0 + ox, py - grid_h + gj0 + oy, 1.0
+
+
+# ----------------------------------------------------------------------------- apertures
+@njit(cache=True)
+def _frame_apertures(img, xc, yc, radii, sums, areas):
+    """Exact-overlap aperture sums for each radius (``sums[k] = sum w f``, ``areas[k] = sum w``).
+
+    Pixels outside the image contribute nothing (as in photutils); a
+    non-finite pixel with non-zero weight makes that radius's sum NaN.
+    """
+    ny, nx = img.shape
+    nr = radii.shape[0]
+    for k in range(nr):
+        sums[k] = 0.0
+        areas[k] = 0.0
+    if not (math.isfinite(xc) and math.isfinite(yc)):
+        for k in range(nr):
+            sums[k] = np.nan
+            areas[k] = np.nan
+        return
+    rmax = 0.0
+    for k in range(nr):
+        if radii[k] > rmax:
+            rmax = radii[k]
+    if not (rmax > 0.0):
+        for k in range(nr):
+            sums[k] = np.nan
+            areas[k] = np.nan
+        return
+    j0 = max(int(math.floor(yc - rmax - 0.5)), 0)
+    j1 = min(int(math.ceil(yc + rmax + 0.5)), ny - 1)
+    i0 = max(int(math.floor(xc - rmax - 0.5)), 0)
+    i1 = min(int(math.ceil(xc + rmax + 0.5)), nx - 1)
+    for j in range(j0, j1 + 1):
+        y0 = j - 0.5 - yc
+        y1 = j + 0.5 - yc
+        ady = max(abs(j - yc) - 0.5, 0.0)
+        fdy = abs(j - yc) + 0.5
+        for i in range(i0, i1 + 1):
+            x0 = i - 0.5 - xc
+            x1 = i + 0.5 - xc
+            adx = max(abs(i - xc) - 0.5, 0.0)
+            fdx = abs(i - xc) + 0.5
+            dmin2 = adx * adx + ady * ady
+            dmax2 = fdx * fdx + fdy * fdy
+            v = img[j, i]
+            for k in range(nr):
+                r = radii[k]
+                r2 = r * r
+                if dmin2 >= r2:
+                    continue
+                if dmax2 <= r2:
+                    w = 1.0
+                else:
+                    w = pixel_overlap(x0, x1, y0, y1, r)
+                if w > 0.0:
+                    sums[k] += w * v
+                    areas[k] += w
+
+
+# ----------------------------------------------------------------------------- the whole set
+@njit(cache=True, parallel=True)
+def measure_frames(frames, guess_x, guess_y, stamp_x, stamp_y, search_half, box_half,
+                   r_in, r_out, clip_sigma, clip_iters, radii, var_a, var_b, fixed_width,
+                   centroid_code, use_median, max_iter, want_lsq, out, ap_sums, ap_areas,
+                   var_sums, var_areas, var_radii, stamp3, stamp5):
+    """Run every per-frame measurement on ``frames`` (n, ny, nx), in parallel.
+
+    Inputs per frame: ``guess_x/guess_y`` (int, the pixel about which the
+    brightest pixel is searched within ``search_half``), ``stamp_x/stamp_y``
+    (int, the centre pixel of the 3x3 and 5x5 stamps). Outputs are written
+    into the preallocated arrays: ``out`` (n, N_COLUMNS) in the order of
+    :data:`COLUMNS`, ``ap_sums/ap_areas`` (n, len(radii)) raw aperture sums
+    (not background-subtracted) and areas, ``var_*`` (n, len(var_a)) for the
+    variable apertures ``r = a sqrt(beta) + b``, and the background-subtracted
+    stamps ``stamp3`` (n, 3, 3) and ``stamp5`` (n, 5, 5).
+    """
+    n = frames.shape[0]
+    ny = frames.shape[1]
+    nx = frames.shape[2]
+    nbuf = int((2 * r_out + 3) * (2 * r_out + 3)) + 1
+    nvar = var_a.shape[0]
+    for f in prange(n):
+        img = frames[f]
+        buf = np.empty(nbuf)
+        for c in range(N_COLUMNS):
+            out[f, c] = np.nan
+        px, py = _frame_peak(img, guess_x[f], guess_y[f], search_half)
+        if px < 0:
+            for k in range(radii.shape[0]):
+                ap_sums[f, k] = np.nan
+                ap_areas[f, k] = np.nan
+            for k in range(nvar):
+                var_sums[f, k] = np.nan
+                var_areas[f, k] = np.nan
+                var_radii[f, k] = np.nan
+            for a in range(3):
+                for b in range(3):
+                    stamp3[f, a, b] = np.nan
+            for a in range(5):
+                for b in range(5):
+                    stamp5[f, a, b] = np.nan
+            continue
+        out[f, 0] = px
+        out[f, 1] = py
+        bg0, _m, _s, _n = _frame_annulus(img, float(px), float(py), r_in, r_out, 0.0, 1, buf)
+        out[f, 2] = bg0
+        xcol, ycol, beta = _frame_col(img, px, py, box_half, bg0)
+        out[f, 3] = xcol
+        out[f, 4] = ycol
+        out[f, 5] = beta
+        xg, yg, sxg, syg, ag, cg, okg = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol, 0.7,
+                                                     False, max_iter)
+        out[f, 6] = xg
+        out[f, 7] = yg
+        out[f, 8] = sxg
+        out[f, 9] = syg
+        out[f, 10] = ag
+        out[f, 11] = cg
+        out[f, 12] = okg
+        if fixed_width > 0.0:
+            xf, yf, _a, _b, _c, _d, okf = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol,
+                                                       fixed_width, True, max_iter)
+            out[f, 13] = xf
+            out[f, 14] = yf
+            out[f, 15] = okf
+        if want_lsq:
+            xl, yl, okl = _frame_lsq_asym(img, px, py, bg0, 2, 3)
+            out[f, 16] = xl
+            out[f, 17] = yl
+            out[f, 18] = okl
+        if centroid_code == 0:
+            xc, yc = xcol, ycol
+        elif centroid_code == 1:
+            xc, yc = xg, yg
+        elif centroid_code == 2:
+            xc, yc = out[f, 13], out[f, 14]
+        else:
+            xc, yc = out[f, 16], out[f, 17]
+        out[f, 19] = xc
+        out[f, 20] = yc
+        if math.isfinite(xc) and math.isfinite(yc):
+            mean, med, std, nb = _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters,
+                                                buf)
+        else:
+            mean, med, std, nb = np.nan, np.nan, np.nan, 0
+        out[f, 21] = mean
+        out[f, 22] = med
+        out[f, 23] = std
+        out[f, 24] = nb
+        bg = med if use_median else mean
+        _frame_apertures(img, xc, yc, radii, ap_sums[f], ap_areas[f])
+        if nvar > 0:
+            vr = np.empty(nvar)
+            for k in range(nvar):
+                vr[k] = var_a[k] * math.sqrt(beta) + var_b[k]
+                var_radii[f, k] = vr[k]
+            if math.isfinite(beta):
+                _frame_apertures(img, xc, yc, vr, var_sums[f], var_areas[f])
+            else:
+                for k in range(nvar):
+                    var_sums[f, k] = np.nan
+                    var_areas[f, k] = np.nan
+        sx0 = stamp_x[f]
+        sy0 = stamp_y[f]
+        for a in range(5):
+            for b in range(5):
+                j = sy0 - 2 + a
+                i = sx0 - 2 + b
+                if 0 <= j < ny and 0 <= i < nx:
+                    v = img[j, i] - bg
+                else:
+                    v = np.nan
+                stamp5[f, a, b] = v
+                if 1 <= a <= 3 and 1 <= b <= 3:
+                    stamp3[f, a - 1, b - 1] = v
