@@ -128,3 +128,27 @@ def kit():
                            design=design, make_epoch_table=make_epoch_table, pointing=pointing,
                            TRUE_DEPTH=TRUE_DEPTH, TRUE_C1=TRUE_C1, TRUE_C2=TRUE_C2,
                            CADENCE_D=CADENCE_D, F0=F0)
+
+
+@pytest.fixture(scope="session")
+def xo3_epoch():
+    """A synthetic XO-3b epoch built with the astro package's eclipse shape.
+
+    The truth eclipse is 0.003 d after the catalogue ephemeris (so the fit has
+    to move it), the data start 0.2 d before it and stop 0.17 d after it.
+    """
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.astro.eclipse import EclipseShape
+    from eclipsebench.astro.orbit import eclipse_time_bmjd
+
+    system = get_system("XO-3b")
+    t_pred = eclipse_time_bmjd(system, 57000.0)
+    t_true = t_pred + 0.003
+    time = t_true + np.arange(-0.2, 0.17, CADENCE_D)
+    visible = EclipseShape(time, system).visible_fraction(t_true)
+
+    def table(**kw):
+        return make_epoch_table(t_ecl=t_true, visible=visible, time=time, **kw)
+
+    return {"system": system, "t_true": t_true, "t_pred": t_pred, "time": time,
+            "visible": visible, "table": table}

@@ -1,0 +1,183 @@
+"""Posterior sampling of the joint model with emcee.
+
+The log-probability is ``Systematics.log_likelihood(astro(theta_a), theta_s,
+noise_scale)`` inside the bounds of every parameter (a uniform prior) and
+``-inf`` outside. The move is the method's ``preferred_move``:
+
+- ``"stretch"``: emcee's affine-invariant stretch move (Goodman & Weare 2010).
+- ``"de"``: differential evolution (ter Braak 2006), the DE-MC of the BLISS
+  team (Stevenson et al. 2012); 90 % of proposals with emcee's default
+  ``gamma = 2.38 / sqrt(2 d)`` and 10 % with ``gamma = 1`` so that walkers can
+  jump between modes, as ter Braak recommends.
+
+Convergence: the chain is run in blocks; after each block the integrated
+autocorrelation time tau of every parameter is estimated and sampling stops
+once the chain is longer than ``tau_factor * max(tau)`` (50 by default, as the
+emcee documentation advises) or the step cap is reached; ``converged`` says
+which. The first ``2 max(tau)`` steps are discarded as burn-in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import emcee
+import numpy as np
+
+from ..decorrelate.base import Systematics
+from .astro_model import AstroModel
+
+__all__ = ["McmcResult", "run_mcmc", "make_moves"]
+
+
+@dataclass(frozen=True)
+class McmcResult:
+    """Posterior summary of one MCMC run.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Parameter names (astro then systematics).
+    median, std : ndarray
+        Posterior median and standard deviation of each parameter.
+    p16, p84 : ndarray
+        16th and 84th percentiles.
+    tau : ndarray
+        Integrated autocorrelation time of each parameter (steps).
+    n_steps : int
+        Steps per walker that were run.
+    converged : bool
+        Whether ``n_steps > tau_factor * max(tau)``.
+    acceptance : float
+        Mean acceptance fraction.
+    move : str
+        "stretch" or "de".
+    samples : ndarray
+        Flat posterior samples after burn-in and thinning.
+    """
+
+    names: tuple[str, ...]
+    median: np.ndarray
+    std: np.ndarray
+    p16: np.ndarray
+    p84: np.ndarray
+    tau: np.ndarray
+    n_steps: int
+    n_walkers: int
+    burn_in: int
+    converged: bool
+    acceptance: float
+    move: str
+    samples: np.ndarray = field(repr=False)
+
+    def error(self, name: str) -> float:
+        """Half the 16-84 percentile range of ``name`` (one sigma for a Gaussian)."""
+        i = self.names.index(name)
+        return float(0.5 * (self.p84[i] - self.p16[i]))
+
+
+def make_moves(move: str):
+    """The emcee moves for ``move`` ("stretch" or "de")."""
+    if move == "stretch":
+        return emcee.moves.StretchMove()
+    if move == "de":
+        return [(emcee.moves.DEMove(), 0.9), (emcee.moves.DEMove(gamma0=1.0), 0.1)]
+    raise ValueError(f"unknown MCMC move {move!r} (expected 'stretch' or 'de')")
+
+
+class _LogProb:
+    def __init__(self, systematics: Systematics, astro_model: AstroModel, lower, upper,
+                 noise_scale: float):
+        self.sys = systematics
+        self.astro = astro_model
+        self.n_astro = len(astro_model)
+        self.has_sys = len(systematics.param_names) > 0
+        self.lower = lower
+        self.upper = upper
+        self.noise_scale = noise_scale
+
+    def __call__(self, theta: np.ndarray) -> float:
+        if np.any(theta < self.lower) or np.any(theta > self.upper):
+            return -np.inf
+        theta_s = theta[self.n_astro:] if self.has_sys else None
+        value = self.sys.log_likelihood(self.astro(theta[:self.n_astro]), theta_s,
+                                        noise_scale=self.noise_scale)
+        return value if np.isfinite(value) else -np.inf
+
+
+def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, scale_start, *,
+             names: tuple[str, ...], rng: np.random.Generator, n_walkers: int = 32,
+             max_steps: int = 2000, block_steps: int = 250, tau_factor: float = 50.0,
+             noise_scale: float = 1.0, move: str | None = None) -> McmcResult:
+    """Sample the posterior of the joint parameters, starting near a least-squares solution.
+
+    Parameters
+    ----------
+    systematics, astro_model
+        As for :func:`~eclipsebench.fit.leastsq.fit_leastsq`.
+    theta_start : ndarray
+        Joint parameters to start from (the least-squares solution).
+    scale_start : ndarray
+        Width per parameter of the initial ball of walkers (e.g. the
+        least-squares errors); the walkers start at ``theta_start`` plus 10 %
+        of it times a standard normal deviate, folded into the bounds.
+    names : tuple of str
+        Parameter names.
+    rng : numpy.random.Generator
+        The stream (``eclipsebench.seeding.rng(seed, "reduce", epoch, method,
+        "mcmc")``); it seeds both the initial ball and emcee's own generator.
+    n_walkers, max_steps, block_steps, tau_factor
+        Ensemble size, step cap, steps between convergence checks, and the
+        chain length in units of tau required for convergence.
+    noise_scale : float
+        Multiplies the flux errors in the likelihood (the fitter passes
+        ``sqrt(chi2_red)`` so that the white-noise level matches the residuals).
+    move : {"stretch", "de"} or None
+        Default ``systematics.preferred_move``.
+    """
+    theta_start = np.asarray(theta_start, dtype=float)
+    ndim = len(theta_start)
+    lo_a, hi_a = astro_model.bounds
+    lo_s, hi_s = systematics.param_bounds()
+    lower = np.concatenate([lo_a, np.asarray(lo_s, dtype=float)])
+    upper = np.concatenate([hi_a, np.asarray(hi_s, dtype=float)])
+    move = move or getattr(systematics, "preferred_move", "stretch")
+    n_walkers = max(int(n_walkers), 2 * ndim + 2)
+    n_walkers += n_walkers % 2
+    scale = np.where(np.isfinite(scale_start) & (np.asarray(scale_start) > 0),
+                     scale_start, 1e-6 * np.maximum(1.0, np.abs(theta_start)))
+    p0 = theta_start + 0.1 * scale * rng.standard_normal((n_walkers, ndim))
+    p0 = _fold(p0, lower, upper)
+
+    log_prob = _LogProb(systematics, astro_model, lower, upper, noise_scale)
+    sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, moves=make_moves(move))
+    sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
+    state = p0
+    n_steps = 0
+    tau = np.full(ndim, np.inf)
+    converged = False
+    while n_steps < max_steps:
+        steps = min(block_steps, max_steps - n_steps)
+        state = sampler.run_mcmc(state, steps, progress=False)
+        n_steps += steps
+        tau = emcee.autocorr.integrated_time(sampler.get_chain(), tol=0)
+        if np.all(np.isfinite(tau)) and n_steps > tau_factor * np.max(tau):
+            converged = True
+            break
+    tau_max = float(np.max(tau)) if np.all(np.isfinite(tau)) else n_steps / 4.0
+    burn_in = min(int(np.ceil(2 * tau_max)), n_steps // 2)
+    thin = max(1, int(0.5 * np.min(tau))) if np.all(np.isfinite(tau)) else 1
+    samples = sampler.get_chain(discard=burn_in, thin=thin, flat=True)
+    p16, p50, p84 = np.percentile(samples, [15.865525393145708, 50.0, 84.13447460685429], axis=0)
+    return McmcResult(names=tuple(names), median=p50, std=np.std(samples, axis=0, ddof=1),
+                      p16=p16, p84=p84, tau=np.asarray(tau, dtype=float), n_steps=n_steps,
+                      n_walkers=n_walkers, burn_in=burn_in, converged=converged,
+                      acceptance=float(np.mean(sampler.acceptance_fraction)), move=move,
+                      samples=samples)
+
+
+def _fold(p: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Reflect points that left the box back inside it."""
+    p = np.where(p < lower, 2 * lower - p, p)
+    p = np.where(p > upper, 2 * upper - p, p)
+    return np.clip(p, lower, upper)

@@ -1,0 +1,527 @@
+"""From a photometry table and a method name to an eclipse depth.
+
+:func:`reduce_epoch` fits one epoch, :func:`reduce_joint` fits several epochs
+with one common depth, and :func:`select_phase_model` fits every phase-curve
+model and reports BIC and AIC for each so that a user can bracket the choice
+(paper Section 4.2). All three share one astrophysical model
+(:class:`~eclipsebench.fit.astro_model.AstroModel`); methods differ only in
+their systematics model.
+
+The reported depth uncertainty is the largest of the estimates available,
+as Wong et al. (2014) did: the least-squares (Jacobian) error multiplied by
+``max(1, beta_red)``, the prayer-bead spread, and the MCMC posterior width.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..config.reduce import ReduceSection
+from ..config.system import SystemSection
+from ..decorrelate import get_method
+from ..decorrelate.base import Systematics
+from ..errors import InputError
+from ..seeding import rng
+from .astro_model import PHASE_MODELS, AstroModel
+from .data import epoch_data_from_table
+from .leastsq import _covariance, _Problem, _summarise, fit_leastsq, prayer_bead
+from .mcmc import McmcResult, run_mcmc
+
+__all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
+           "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
+           "resolve_system", "predicted_eclipse_bmjd"]
+
+#: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
+_DEFAULT_OPTIONS = ReduceSection()
+
+
+# --------------------------------------------------------------------------- inputs
+def _as_table(table):
+    """An astropy Table from a Table or a path (read with the photometry reader)."""
+    if isinstance(table, (str, os.PathLike)):
+        path = os.fspath(table)
+        if not os.path.exists(path):
+            raise InputError(f"{path}: no such photometry table")
+        try:
+            from ..photometry.table import read_photometry
+        except ImportError:  # the photometry stage is not installed yet
+            from astropy.table import Table
+            try:
+                t = Table.read(path)
+            except Exception as exc:  # astropy raises many types for unreadable files
+                raise InputError(f"{path}: not a readable table ({exc})") from None
+        else:
+            t = read_photometry(path)
+        t.meta.setdefault("FILENAME", path)
+        return t
+    if not hasattr(table, "colnames"):
+        raise InputError("table: expected an astropy Table or the path of a photometry table")
+    return table
+
+
+def resolve_system(system: Any):
+    """A PlanetSystem from None (the configured default, XO-3b), a name, or a PlanetSystem."""
+    from ..astro.catalogue import get_system
+    if system is None:
+        return get_system(SystemSection().name)
+    if isinstance(system, str):
+        return get_system(system)
+    return system
+
+
+def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data") -> float:
+    """The catalogue ephemeris's eclipse nearest the data; InputError if it is outside them."""
+    from ..astro.orbit import eclipse_time_bmjd
+    t0, t1 = float(np.min(time_bmjd)), float(np.max(time_bmjd))
+    t_ecl = float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
+    if not t0 <= t_ecl <= t1:
+        name = getattr(system, "name", "the system")
+        raise InputError(f"{source}: the {name} eclipse nearest the data is at "
+                         f"{t_ecl:.5f} BMJD, outside the time span {t0:.5f}-{t1:.5f} "
+                         "(wrong --system, or no eclipse in these frames)")
+    return t_ecl
+
+
+def _epoch_number(table, epoch):
+    if epoch is not None:
+        return int(epoch)
+    value = (getattr(table, "meta", {}) or {}).get("EPOCH")
+    try:
+        return int(value) if value is not None else None
+    except (TypeError, ValueError):
+        return None
+
+
+@dataclass
+class PreparedEpoch:
+    """One epoch ready to fit: the method built on the data, and the predicted eclipse."""
+
+    table: Any
+    systematics: Systematics
+    system: Any
+    epoch: int | None
+    t_ecl_predicted_bmjd: float
+    source: str
+    n_frames: int
+
+    def astro_model(self, options: ReduceSection, *, phase: str | None = None) -> AstroModel:
+        """The shared astrophysical model at the method's data times."""
+        shape = options.eclipse_shape
+        if shape == "auto":
+            shape = getattr(self.systematics, "default_eclipse_shape", "physical")
+        return AstroModel(self.systematics.data.time_bmjd, self.system,
+                          phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape)
+
+
+def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
+                  epoch=None, pmap=None, method_options=None) -> PreparedEpoch:
+    """Read the table, keep the good frames, build the method and predict the eclipse time."""
+    table = _as_table(table)
+    source = str((table.meta or {}).get("FILENAME", "the photometry table"))
+    cls = get_method(method)
+    data = epoch_data_from_table(table, radius_px=options.radius_px or None, stamp=options.stamp)
+    system = resolve_system(system)
+    t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source)
+    sys_options = dict(method_options or {})
+    if pmap is not None:
+        sys_options["pmap"] = os.fspath(pmap)
+    systematics = cls(data, **sys_options)
+    return PreparedEpoch(table=table, systematics=systematics, system=system,
+                         epoch=_epoch_number(table, epoch), t_ecl_predicted_bmjd=t_pred,
+                         source=source, n_frames=len(data))
+
+
+# --------------------------------------------------------------------------- one epoch
+@dataclass(frozen=True)
+class EpochResult:
+    """The eclipse measured in one epoch by one method.
+
+    ``to_dict()`` gives the JSON-able summary (``docs/fitting.md`` lists the
+    keys); ``lightcurve`` holds the decorrelated light curve.
+    """
+
+    method: str
+    epoch: int | None
+    depth_ppm: float
+    depth_err_ppm: float
+    depth_err_method: str
+    depth_leastsq_ppm: float
+    depth_err_jacobian_ppm: float
+    depth_err_prayer_bead_ppm: float | None
+    depth_err_mcmc_ppm: float | None
+    t_ecl_bmjd: float
+    t_ecl_err_d: float
+    t_ecl_predicted_bmjd: float
+    bic: float
+    aic: float
+    k: int
+    log_likelihood: float
+    chi2_red: float
+    rms_ppm: float
+    beta_red: float
+    n_frames: int
+    n_points: int
+    phase: str
+    ramp: str
+    eclipse_shape: str
+    sampler: str
+    converged: bool
+    params: dict[str, float]
+    param_errors: dict[str, float]
+    mcmc: dict[str, Any] | None
+    system: str
+    seed: int
+    lightcurve: dict[str, np.ndarray] = field(repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A flat, JSON-able dict (no arrays): the contract keys and the diagnostics."""
+        out: dict[str, Any] = {
+            "method": self.method, "epoch": self.epoch,
+            "depth_ppm": self.depth_ppm, "depth_err_ppm": self.depth_err_ppm,
+            "depth_err_method": self.depth_err_method,
+            "depth_leastsq_ppm": self.depth_leastsq_ppm,
+            "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
+            "depth_err_prayer_bead_ppm": self.depth_err_prayer_bead_ppm,
+            "depth_err_mcmc_ppm": self.depth_err_mcmc_ppm,
+            "t_ecl_bmjd": self.t_ecl_bmjd, "t_ecl_err_d": self.t_ecl_err_d,
+            "t_ecl_predicted_bmjd": self.t_ecl_predicted_bmjd,
+            "bic": self.bic, "aic": self.aic, "k": self.k,
+            "log_likelihood": self.log_likelihood, "chi2_red": self.chi2_red,
+            "rms_ppm": self.rms_ppm, "beta_red": self.beta_red,
+            "n_frames": self.n_frames, "n_points": self.n_points,
+            "phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
+            "sampler": self.sampler, "converged": self.converged,
+            "system": self.system, "seed": self.seed,
+        }
+        for name, value in self.params.items():
+            if name not in ("depth", "t_ecl_bmjd"):
+                out[name] = value
+                out[f"{name}_err"] = self.param_errors[name]
+        if self.mcmc is not None:
+            out.update({f"mcmc_{k}": v for k, v in self.mcmc.items()})
+        return out
+
+    def lightcurve_table(self):
+        """The decorrelated light curve as an astropy Table (``RESULT.lc.ecsv`` columns)."""
+        from astropy.table import Table
+        t = Table({k: self.lightcurve[k] for k in
+                   ("time_bmjd", "flux_corrected", "astro_model", "residual")})
+        t.meta.update({"method": self.method, "epoch": self.epoch, "depth_ppm": self.depth_ppm,
+                       "phase": self.phase})
+        return t
+
+
+def _largest(estimates: dict[str, float | None]) -> tuple[float, str]:
+    usable = {k: v for k, v in estimates.items() if v is not None and np.isfinite(v)}
+    if not usable:
+        return float("nan"), "none"
+    name = max(usable, key=usable.get)
+    return float(usable[name]), name
+
+
+def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
+                 seed: int = 0, epoch: int | None = None, pmap=None,
+                 method_options: dict[str, Any] | None = None) -> EpochResult:
+    """Fit one epoch with one method and estimate the depth and its uncertainty.
+
+    Parameters
+    ----------
+    table : astropy.table.Table or path
+        One epoch's photometry table (``docs/contracts.md``).
+    method : str
+        A registered method name (``eclipsebench.decorrelate.available_methods()``).
+    options : ReduceSection
+        Phase and ramp model, sampler, error settings (``[reduce]``).
+    system : str, PlanetSystem or None
+        The planet (default: the configured system, XO-3b).
+    seed : int
+        Run seed; the MCMC stream is ``rng(seed, "reduce", epoch, method, "mcmc")``.
+    epoch : int or None
+        Epoch number (default: the table's ``EPOCH`` metadata).
+    pmap : path or None
+        Calibration set for ``kr-pmap`` (passed to the method as ``pmap``).
+    method_options : dict or None
+        Method-specific keyword options.
+
+    Returns
+    -------
+    EpochResult
+
+    Raises
+    ------
+    InputError
+        Missing columns, all frames flagged, an eclipse outside the time span,
+        an unknown method or option.
+    """
+    prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, pmap=pmap,
+                         method_options=method_options)
+    return fit_prepared(prep, method, options=options, seed=seed)
+
+
+def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
+                 seed: int = 0, phase: str | None = None, errors: bool = True) -> EpochResult:
+    """Fit a :class:`PreparedEpoch` (used by :func:`reduce_epoch` and the phase comparison)."""
+    systematics = prep.systematics
+    astro_model = prep.astro_model(options, phase=phase)
+    theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
+    fit = fit_leastsq(systematics, astro_model, theta0, max_nfev=options.max_nfev,
+                      beta_bin_minutes=tuple(options.beta_bin_minutes))
+    inflate = max(1.0, fit.beta_red) if np.isfinite(fit.beta_red) else 1.0
+    jac_depth = fit.error("depth")
+    jac_tecl = fit.error("t_ecl_bmjd")
+
+    pb_depth = pb_tecl = None
+    if errors and options.prayer_bead_shifts > 0:
+        beads = prayer_bead(systematics, astro_model, fit, n_shifts=options.prayer_bead_shifts)
+        pb_depth = float(np.std(beads[:, 0], ddof=1))
+        pb_tecl = float(np.std(beads[:, 1], ddof=1))
+
+    mc: McmcResult | None = None
+    mcmc_info = None
+    if errors and options.sampler == "mcmc":
+        stream = rng(seed, "reduce", prep.epoch if prep.epoch is not None else 0, method, "mcmc")
+        mc = run_mcmc(systematics, astro_model, fit.theta, fit.errors, names=fit.names,
+                      rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
+                      block_steps=options.mcmc_block_steps, tau_factor=options.mcmc_tau_factor,
+                      noise_scale=float(np.sqrt(max(fit.chi2_red, 1e-12))))
+        mcmc_info = {"move": mc.move, "walkers": mc.n_walkers, "steps": mc.n_steps,
+                     "burn_in": mc.burn_in, "tau_max": float(np.max(mc.tau)),
+                     "acceptance": mc.acceptance, "converged": mc.converged,
+                     "depth_median_ppm": float(mc.median[0] * 1e6)}
+
+    depth_err, err_method = _largest({
+        "jacobian_beta": jac_depth * inflate,
+        "prayer_bead": pb_depth,
+        "mcmc": mc.error("depth") if mc is not None else None})
+    t_err, _ = _largest({"jacobian_beta": jac_tecl * inflate, "prayer_bead": pb_tecl,
+                         "mcmc": mc.error("t_ecl_bmjd") if mc is not None else None})
+    theta_report = mc.median if mc is not None else fit.theta
+    astro = astro_model(theta_report[:fit.n_astro])
+    theta_s = theta_report[fit.n_astro:] if len(systematics.param_names) else None
+    corrected = systematics.correct(astro, theta_s)
+    lightcurve = {"time_bmjd": np.asarray(systematics.data.time_bmjd, dtype=float),
+                  "flux_corrected": corrected, "astro_model": astro,
+                  "residual": corrected - astro}
+    params = {n: float(v) for n, v in zip(fit.names, theta_report, strict=True)}
+    param_err = {n: float(e) for n, e in zip(fit.names, fit.errors, strict=True)}
+    if mc is not None:
+        param_err = {n: max(param_err[n], mc.error(n)) for n in fit.names}
+    converged = bool(fit.success and (mc.converged if mc is not None else True))
+    return EpochResult(
+        method=method, epoch=prep.epoch,
+        depth_ppm=params["depth"] * 1e6, depth_err_ppm=depth_err * 1e6,
+        depth_err_method=err_method, depth_leastsq_ppm=fit.value("depth") * 1e6,
+        depth_err_jacobian_ppm=jac_depth * 1e6,
+        depth_err_prayer_bead_ppm=None if pb_depth is None else pb_depth * 1e6,
+        depth_err_mcmc_ppm=None if mc is None else mc.error("depth") * 1e6,
+        t_ecl_bmjd=params["t_ecl_bmjd"], t_ecl_err_d=t_err,
+        t_ecl_predicted_bmjd=prep.t_ecl_predicted_bmjd,
+        bic=fit.bic, aic=fit.aic, k=fit.k, log_likelihood=fit.log_likelihood,
+        chi2_red=fit.chi2_red, rms_ppm=fit.rms_ppm, beta_red=fit.beta_red,
+        n_frames=prep.n_frames,
+        n_points=len(systematics.data.time_bmjd),
+        phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
+        sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
+        mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
+        lightcurve=lightcurve)
+
+
+# --------------------------------------------------------------------------- phase models
+@dataclass(frozen=True)
+class PhaseSelection:
+    """Every phase-curve model fitted to one epoch, with BIC and AIC for each.
+
+    ``rows`` has one dict per model (``phase``, ``k``, ``depth_ppm``,
+    ``depth_err_ppm``, ``bic``, ``aic``, ``delta_bic``, ``delta_aic``,
+    ``chi2_red``); ``best_bic`` and ``best_aic`` name the preferred models and
+    ``bracket`` lists the models from the BIC choice to the AIC choice in order
+    of size (Dziak et al. 2012, paper Section 4.2).
+    """
+
+    method: str
+    epoch: int | None
+    rows: tuple[dict[str, Any], ...]
+    best_bic: str
+    best_aic: str
+    bracket: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"method": self.method, "epoch": self.epoch, "models": list(self.rows),
+                "best_bic": self.best_bic, "best_aic": self.best_aic,
+                "bracket": list(self.bracket)}
+
+
+def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS,
+                       system=None, seed: int = 0, epoch: int | None = None, pmap=None,
+                       method_options: dict[str, Any] | None = None,
+                       phases: tuple[str, ...] = PHASE_MODELS) -> PhaseSelection:
+    """Fit each phase model by least squares and report BIC and AIC for each.
+
+    The method is built once and reused; each model's depth error is the
+    Jacobian error times ``max(1, beta_red)`` (no prayer bead or MCMC, to keep
+    the comparison fast).
+    """
+    prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, pmap=pmap,
+                         method_options=method_options)
+    rows = []
+    for phase in phases:
+        res = fit_prepared(prep, method, options=options, seed=seed, phase=phase, errors=False)
+        rows.append({"phase": phase, "k": res.k, "depth_ppm": res.depth_ppm,
+                     "depth_err_ppm": res.depth_err_ppm, "bic": res.bic, "aic": res.aic,
+                     "chi2_red": res.chi2_red, "beta_red": res.beta_red})
+    min_bic = min(r["bic"] for r in rows)
+    min_aic = min(r["aic"] for r in rows)
+    for r in rows:
+        r["delta_bic"] = r["bic"] - min_bic
+        r["delta_aic"] = r["aic"] - min_aic
+    best_bic = min(rows, key=lambda r: r["bic"])
+    best_aic = min(rows, key=lambda r: r["aic"])
+    chosen = (best_bic["phase"], best_aic["phase"])
+    lo, hi = sorted((best_bic["k"], best_aic["k"]))
+    bracket = tuple(r["phase"] for r in sorted(rows, key=lambda r: r["k"])
+                    if lo < r["k"] < hi or r["phase"] in chosen)
+    return PhaseSelection(method=method, epoch=prep.epoch, rows=tuple(rows),
+                          best_bic=best_bic["phase"], best_aic=best_aic["phase"], bracket=bracket)
+
+
+# --------------------------------------------------------------------------- joint fit
+@dataclass(frozen=True)
+class JointResult:
+    """One depth common to several epochs; every other parameter per epoch."""
+
+    method: str
+    epochs: tuple[int | None, ...]
+    depth_ppm: float
+    depth_err_ppm: float
+    depth_err_jacobian_ppm: float
+    beta_red: float
+    chi2_red: float
+    bic: float
+    aic: float
+    k: int
+    n_points: int
+    phase: str
+    converged: bool
+    t_ecl_bmjd: tuple[float, ...]
+    per_epoch: tuple[dict[str, Any], ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"method": self.method, "epochs": list(self.epochs), "depth_ppm": self.depth_ppm,
+                "depth_err_ppm": self.depth_err_ppm,
+                "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
+                "beta_red": self.beta_red, "chi2_red": self.chi2_red, "bic": self.bic,
+                "aic": self.aic, "k": self.k, "n_points": self.n_points, "phase": self.phase,
+                "converged": self.converged, "t_ecl_bmjd": list(self.t_ecl_bmjd),
+                "per_epoch": list(self.per_epoch)}
+
+
+class _JointProblem:
+    """Residuals of several epochs with the depth (parameter 0) shared."""
+
+    def __init__(self, problems: list[_Problem]):
+        self.problems = problems
+        self.sizes = [len(p.astro) + p.n_sys - 1 for p in problems]
+        self.offsets = np.concatenate([[1], 1 + np.cumsum(self.sizes)]).astype(int)
+        self.lower = np.concatenate([[problems[0].lower[0]]] + [p.lower[1:] for p in problems])
+        self.upper = np.concatenate([[problems[0].upper[0]]] + [p.upper[1:] for p in problems])
+        self.n_rows = [len(p.sys.data.flux) for p in problems]
+
+    def epoch_theta(self, theta: np.ndarray, i: int) -> np.ndarray:
+        return np.concatenate([[theta[0]], theta[self.offsets[i]:self.offsets[i + 1]]])
+
+    def scales(self, theta: np.ndarray) -> np.ndarray:
+        parts = [self.problems[0].astro.scales[:1]]
+        for i, p in enumerate(self.problems):
+            parts.append(p.scales(self.epoch_theta(theta, i))[1:])
+        return np.concatenate(parts)
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        return np.concatenate([p.residuals(self.epoch_theta(theta, i))
+                               for i, p in enumerate(self.problems)])
+
+    def jacobian(self, theta: np.ndarray, *, central: bool = False) -> np.ndarray:
+        """Block-structured finite differences: each epoch's block touches only its rows."""
+        jac = np.zeros((sum(self.n_rows), len(theta)))
+        row = 0
+        for i, p in enumerate(self.problems):
+            block = p.jacobian(self.epoch_theta(theta, i), central=central)
+            rows = slice(row, row + self.n_rows[i])
+            jac[rows, 0] = block[:, 0]
+            jac[rows, self.offsets[i]:self.offsets[i + 1]] = block[:, 1:]
+            row += self.n_rows[i]
+        return jac
+
+
+def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
+                 seed: int = 0, epochs=None, pmap=None,
+                 method_options: dict[str, Any] | None = None) -> JointResult:
+    """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
+
+    Each epoch is first fitted alone (its solution starts the joint fit), then
+    all are fitted together by least squares. The depth error is the Jacobian
+    error times ``max(1, beta_red)``, with ``beta_red`` the mean of the
+    epochs' red-noise factors.
+    """
+    from scipy.optimize import least_squares
+
+    tables = list(tables)
+    if not tables:
+        raise InputError("reduce_joint: no photometry tables given")
+    epochs = list(epochs) if epochs is not None else [None] * len(tables)
+    if len(epochs) != len(tables):
+        raise InputError("reduce_joint: give one epoch number per table")
+    problems, fits, preps = [], [], []
+    for table, ep in zip(tables, epochs, strict=True):
+        prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, pmap=pmap,
+                             method_options=method_options)
+        astro_model = prep.astro_model(options)
+        theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
+        fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,
+                          beta_bin_minutes=tuple(options.beta_bin_minutes))
+        preps.append(prep)
+        fits.append(fit)
+        problems.append(_Problem(prep.systematics, astro_model))
+    joint = _JointProblem(problems)
+    weights = np.array([1.0 / max(f.error("depth"), 1e-12) ** 2 for f in fits])
+    depth0 = float(np.sum(weights * [f.value("depth") for f in fits]) / np.sum(weights))
+    theta0 = np.concatenate([[depth0]] + [f.theta[1:] for f in fits])
+    theta0 = np.clip(theta0, joint.lower, joint.upper)
+    sol = least_squares(joint.residuals, theta0, jac=lambda th: joint.jacobian(th),
+                        bounds=(joint.lower, joint.upper), x_scale=joint.scales(theta0),
+                        method="trf", max_nfev=options.max_nfev, xtol=1e-10, ftol=1e-10,
+                        gtol=1e-10)
+    theta = sol.x
+    per_epoch, betas, loglike, chi2, k, n = [], [], 0.0, 0.0, 1, 0
+    for i, (p, prep) in enumerate(zip(problems, preps, strict=True)):
+        s = _summarise(p, joint.epoch_theta(theta, i), sol.nfev, bool(sol.success),
+                       str(sol.message), tuple(options.beta_bin_minutes))
+        betas.append(s.beta_red)
+        loglike += s.log_likelihood
+        chi2 += s.chi2
+        k += s.k - 1
+        n += s.n_data
+        per_epoch.append({"epoch": prep.epoch, "t_ecl_bmjd": s.value("t_ecl_bmjd"),
+                          "rms_ppm": s.rms_ppm, "beta_red": s.beta_red, "chi2_red": s.chi2_red,
+                          "n_points": s.n_data,
+                          "depth_alone_ppm": fits[i].value("depth") * 1e6})
+    chi2_red = chi2 / (n - k)
+    jac = joint.jacobian(theta, central=True)
+    cov = _covariance(jac, chi2_red)
+    err_depth = float(np.sqrt(max(cov[0, 0], 0.0)))
+    finite_betas = [b for b in betas if np.isfinite(b)]
+    beta = float(np.mean(finite_betas)) if finite_betas else float("nan")
+    inflate = max(1.0, beta) if np.isfinite(beta) else 1.0
+    bic = -2.0 * loglike + k * np.log(n)
+    aic = -2.0 * loglike + 2.0 * k
+    return JointResult(method=method, epochs=tuple(p.epoch for p in preps),
+                       depth_ppm=float(theta[0] * 1e6), depth_err_ppm=err_depth * inflate * 1e6,
+                       depth_err_jacobian_ppm=err_depth * 1e6, beta_red=beta, chi2_red=chi2_red,
+                       bic=float(bic), aic=float(aic), k=k, n_points=n,
+                       phase=problems[0].astro.phase, converged=bool(sol.success),
+                       t_ecl_bmjd=tuple(e["t_ecl_bmjd"] for e in per_epoch),
+                       per_epoch=tuple(per_epoch))
+
