@@ -1,0 +1,368 @@
+"""Read Spitzer/IRAC BCD products (archive or simulated) into arrays and frame times.
+
+File names follow the archive: ``SPITZER_I<ch>_<AORKEY>_<EXPID>_<DCE>_<ver>_bcd.fits``
+with optional ``_bunc.fits`` (uncertainty, MJy/sr) and ``_bimsk.fits``
+(bit mask) companions. Subarray files are cubes of 32x32 frames (64 per
+file); full-array files are single 256x256 frames.
+
+Frame times
+-----------
+``BMJD_OBS`` is the barycentric MJD of the start of the data-collection event
+(DCE). On the IRAC files it is a *UTC* timestamp moved to the barycentre
+(``BMJD_OBS - MJD_OBS`` is the light-travel time alone; the real headers give
+``ET_OBS - UTCS_OBS = TDB - UTC`` = 67.184 s in December 2012). We therefore
+
+1. take frame ``k`` of a file to start at ``BMJD_OBS + k * FRAMTIME`` (FRAMTIME
+   is the interval between frame starts; the real cubes are 64 x 2 s frames
+   in DCEs that start 129.3 s apart);
+2. put its mid-exposure at half a frame later: the Fowler reads of a frame
+   span ``(2 FN + WT)`` sample times = FRAMTIME, symmetric about their middle;
+3. convert the result from UTC to TDB with astropy (leap seconds + 32.184 s +
+   the periodic TDB-TT term), giving BMJD_TDB:
+   ``time_bmjd = tdb(BMJD_OBS + (k + 1/2) FRAMTIME / 86400)``.
+
+A file whose header says ``TIMESYS = 'TDB'`` (or whose ``BMJD_OBS`` comment
+says TDB) is taken as already in TDB.
+
+Units
+-----
+BCD values are MJy/sr; electrons per pixel are ``BCD * GAIN * EXPTIME / FLUXCONV``
+(paper Appendix A: ``BCD = FLUXCONV * e / (GAIN * t_exp)``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from astropy.io import fits
+from astropy.time import Time
+
+from ..errors import DataError, InputError
+
+__all__ = ["BCD_NAME", "BcdInfo", "BcdCube", "Epoch", "find_bcd_files", "read_bcd_header",
+           "read_bcd", "frame_times_bmjd", "group_epochs", "electrons_per_mjysr"]
+
+BCD_NAME = re.compile(r"^SPITZER_I(?P<ch>[1-4])_(?P<aorkey>\d+)_(?P<expid>\d+)_(?P<dce>\d+)_"
+                      r"(?P<ver>\d+)_bcd\.fits$")
+_REQUIRED = ("BMJD_OBS", "FRAMTIME", "EXPTIME", "GAIN", "FLUXCONV")
+SECONDS_PER_DAY = 86400.0
+
+
+@dataclass(frozen=True)
+class BcdInfo:
+    """What the pipeline needs from one BCD file's header and name."""
+
+    path: Path
+    channel: int
+    aorkey: int
+    expid: int
+    dce: int
+    n_frames: int
+    ny: int
+    nx: int
+    subarray: bool
+    bmjd_obs: float
+    tdb: bool
+    framtime_s: float
+    exptime_s: float
+    gain: float
+    fluxconv: float
+    fowler: int
+    wait: int
+    read_noise_e: float
+    epoch: int | None = None
+    simulate: bool = False
+    extra: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def electrons_per_mjysr(self) -> float:
+        """Factor that turns MJy/sr into electrons per pixel per frame."""
+        return electrons_per_mjysr(self.gain, self.exptime_s, self.fluxconv)
+
+    @property
+    def start_bmjd(self) -> float:
+        """Mid-exposure time of the first frame, BMJD_TDB."""
+        return float(frame_times_bmjd(self)[0])
+
+
+@dataclass
+class BcdCube:
+    """One BCD file read: frames in MJy/sr, optional uncertainty and mask."""
+
+    info: BcdInfo
+    data: np.ndarray                 # (n_frames, ny, nx) float32, MJy/sr
+    unc: np.ndarray | None = None    # same shape, MJy/sr
+    mask: np.ndarray | None = None   # same shape, int32 bits
+
+    @property
+    def time_bmjd(self) -> np.ndarray:
+        """Mid-exposure time of each frame, BMJD_TDB."""
+        return frame_times_bmjd(self.info)
+
+
+@dataclass(frozen=True)
+class Epoch:
+    """AORs observed together: number (1-based) and their files in time order."""
+
+    number: int
+    aorkeys: tuple[int, ...]
+    files: tuple[BcdInfo, ...]
+
+
+def electrons_per_mjysr(gain: float, exptime_s: float, fluxconv: float) -> float:
+    """``GAIN * EXPTIME / FLUXCONV``: electrons per pixel for 1 MJy/sr.
+
+    Examples
+    --------
+    >>> round(electrons_per_mjysr(3.71, 1.92, 0.1447), 4)
+    49.2274
+    """
+    return float(gain) * float(exptime_s) / float(fluxconv)
+
+
+def find_bcd_files(input_dir: str | os.PathLike, channel: int | None = None) -> list[Path]:
+    """All ``*_bcd.fits`` files under ``input_dir`` (recursively), sorted by name.
+
+    Raises
+    ------
+    InputError
+        If ``input_dir`` is not a folder, holds no BCD file, or holds several
+        channels and ``channel`` is not given.
+    """
+    root = Path(input_dir)
+    if root.is_file() and BCD_NAME.match(root.name):
+        files = [root]
+    elif not root.is_dir():
+        raise InputError(f"{root}: no such folder (expected a folder of IRAC *_bcd.fits files)")
+    else:
+        files = sorted((p for p in root.rglob("SPITZER_I*_bcd.fits") if BCD_NAME.match(p.name)),
+                       key=lambda p: p.name)
+    if channel is not None:
+        files = [p for p in files if int(BCD_NAME.match(p.name)["ch"]) == int(channel)]
+    if not files:
+        what = f"channel {channel} " if channel is not None else ""
+        raise InputError(f"{root}: no IRAC {what}BCD files (SPITZER_I<ch>_<AORKEY>_<EXPID>_"
+                         "<DCE>_<ver>_bcd.fits) found")
+    channels = sorted({int(BCD_NAME.match(p.name)["ch"]) for p in files})
+    if len(channels) > 1:
+        raise InputError(f"{root}: files of channels {channels}; choose one with --channel")
+    return files
+
+
+def _card(header: fits.Header, key: str, path: Path, kind=float):
+    if key not in header:
+        raise DataError(path, f"header lacks {key}")
+    value = header[key]
+    try:
+        out = kind(value)
+    except (TypeError, ValueError):
+        raise DataError(path, f"header {key} = {value!r} is not a number") from None
+    if kind is float and not math.isfinite(out):
+        raise DataError(path, f"header {key} = {value!r} is not finite")
+    return out
+
+
+def _open(path: Path):
+    """Open a FITS file, turning every failure and warning into a DataError."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            hdul = fits.open(path, memmap=False, lazy_load_hdus=False)
+    except FileNotFoundError:
+        raise DataError(path, "no such file") from None
+    except Exception as exc:  # astropy raises OSError, ValueError, VerifyWarning...
+        raise DataError(path, f"not a readable FITS file ({type(exc).__name__}: "
+                              f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
+    return hdul
+
+
+def _check_complete(path: Path, hdu) -> None:
+    """Refuse files shorter than their header says (truncated downloads)."""
+    size = path.stat().st_size
+    expected = hdu._data_offset + hdu._data_size if hdu._data_offset is not None else None
+    if expected is not None and size < expected:
+        raise DataError(path, f"truncated: {size} bytes, the header needs {expected}")
+
+
+def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
+    """Parse and check the header of one BCD file (the data are not read).
+
+    Raises
+    ------
+    DataError
+        Naming the file when it is unreadable or truncated, has the wrong
+        shape (anything but n x 32 x 32 or 256 x 256), or lacks a keyword
+        needed for times or units (BMJD_OBS, FRAMTIME, EXPTIME, GAIN, FLUXCONV).
+    """
+    path = Path(path)
+    m = BCD_NAME.match(path.name)
+    if m is None:
+        raise DataError(path, "name does not follow SPITZER_I<ch>_<AORKEY>_<EXPID>_<DCE>_<ver>"
+                              "_bcd.fits")
+    hdul = _open(path)
+    with hdul:
+        hdu = hdul[0]
+        header = hdu.header
+        _check_complete(path, hdu)
+        naxis = header.get("NAXIS", 0)
+        shape = tuple(int(header.get(f"NAXIS{k}", 0)) for k in range(naxis, 0, -1))
+        if naxis == 3 and shape[1:] == (32, 32) and shape[0] >= 1:
+            n_frames, ny, nx, subarray = shape[0], 32, 32, True
+        elif naxis == 2 and shape == (256, 256):
+            n_frames, ny, nx, subarray = 1, 256, 256, False
+        elif naxis == 3 and shape == (1, 256, 256):
+            n_frames, ny, nx, subarray = 1, 256, 256, False
+        else:
+            raise DataError(path, f"NAXIS={naxis} shape {shape}: expected a subarray cube "
+                                  "(n, 32, 32) or a full-array frame (256, 256)")
+        bunit = str(header.get("BUNIT", "MJy/sr")).strip()
+        if bunit.replace(" ", "").lower() != "mjy/sr":
+            raise DataError(path, f"BUNIT = {bunit!r}: expected MJy/sr")
+        values = {key: _card(header, key, path) for key in _REQUIRED}
+        for key in ("FRAMTIME", "EXPTIME", "GAIN", "FLUXCONV"):
+            if values[key] <= 0:
+                raise DataError(path, f"header {key} = {values[key]}: expected a positive number")
+        readmode = str(header.get("READMODE", "SUB" if subarray else "FULL")).strip().upper()
+        if subarray != (readmode == "SUB"):
+            raise DataError(path, f"READMODE = {readmode!r} does not match the data shape {shape}")
+        chnl = int(header.get("CHNLNUM", m["ch"]))
+        if chnl != int(m["ch"]):
+            raise DataError(path, f"CHNLNUM = {chnl} but the name says channel {m['ch']}")
+        aorkey = int(header.get("AORKEY", m["aorkey"]))
+        if aorkey != int(m["aorkey"]):
+            raise DataError(path, f"AORKEY = {aorkey} but the name says {m['aorkey']}")
+        sample_s = float(header.get("SAMPTIME", 0.01 if subarray else 0.2))
+        fowler = header.get("AFOWLNUM")
+        wait = header.get("AWAITPER")
+        if fowler is None or wait is None:  # EXPTIME = (FN + WT) dt, FRAMTIME = (2 FN + WT) dt
+            fowler = round((values["FRAMTIME"] - values["EXPTIME"]) / sample_s)
+            wait = round(values["EXPTIME"] / sample_s) - fowler
+        timesys = str(header.get("TIMESYS", "")).strip().upper()
+        comment = str(header.comments["BMJD_OBS"]).upper()
+        tdb = timesys == "TDB" or "TDB" in comment
+        epoch = header.get("EPOCH")
+        simulate = bool(header.get("SIMULATE", False))
+        return BcdInfo(
+            path=path, channel=chnl, aorkey=aorkey, expid=int(header.get("EXPID", m["expid"])),
+            dce=int(header.get("DCENUM", m["dce"])), n_frames=n_frames, ny=ny, nx=nx,
+            subarray=subarray, bmjd_obs=values["BMJD_OBS"], tdb=tdb,
+            framtime_s=values["FRAMTIME"], exptime_s=values["EXPTIME"], gain=values["GAIN"],
+            fluxconv=values["FLUXCONV"], fowler=max(int(fowler), 1), wait=max(int(wait), 0),
+            read_noise_e=float(header.get("RONOISE", 9.4)),
+            epoch=int(epoch) if epoch is not None else None, simulate=simulate,
+            extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD")})
+
+
+def frame_times_bmjd(info: BcdInfo) -> np.ndarray:
+    """Mid-exposure BMJD_TDB of each frame of a file (see the module notes)."""
+    k = np.arange(info.n_frames, dtype=float)
+    t = info.bmjd_obs + (k + 0.5) * info.framtime_s / SECONDS_PER_DAY
+    if info.tdb:
+        return t
+    day = np.floor(t[0])
+    tdb = Time(day, t - day, format="mjd", scale="utc").tdb
+    return (tdb.jd1 - 2400000.5) + tdb.jd2
+
+
+def _read_companion(path: Path, suffix: str, shape: tuple[int, ...], dtype) -> np.ndarray | None:
+    comp = path.with_name(path.name[: -len("_bcd.fits")] + f"_{suffix}.fits")
+    if not comp.exists():
+        return None
+    hdul = _open(comp)
+    with hdul:
+        _check_complete(comp, hdul[0])
+        data = hdul[0].data
+        if data is None or data.size != int(np.prod(shape)):
+            raise DataError(comp, f"shape {None if data is None else data.shape} does not match "
+                                  f"its BCD {shape}")
+        return np.asarray(data, dtype=dtype).reshape(shape)
+
+
+def read_bcd(path: str | os.PathLike | BcdInfo, *, unc: bool = False,
+             mask: bool = True) -> BcdCube:
+    """Read one BCD file (and its ``_bunc``/``_bimsk`` companions when present).
+
+    Parameters
+    ----------
+    path : path or BcdInfo
+        The ``*_bcd.fits`` file (or its parsed header).
+    unc, mask : bool
+        Also read the uncertainty cube / the bit-mask cube if the file exists.
+
+    Returns
+    -------
+    BcdCube
+        ``data`` has shape (n_frames, ny, nx), float32, MJy/sr.
+    """
+    info = path if isinstance(path, BcdInfo) else read_bcd_header(path)
+    hdul = _open(info.path)
+    with hdul:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                raw = hdul[0].data
+        except Exception as exc:
+            raise DataError(info.path, f"data unreadable ({type(exc).__name__})") from None
+        if raw is None:
+            raise DataError(info.path, "no data in the primary HDU")
+        shape = (info.n_frames, info.ny, info.nx)
+        data = np.asarray(raw, dtype=np.float32).reshape(shape)
+    cube = BcdCube(info=info, data=data)
+    if unc:
+        cube.unc = _read_companion(info.path, "bunc", shape, np.float32)
+    if mask:
+        cube.mask = _read_companion(info.path, "bimsk", shape, np.int32)
+    return cube
+
+
+def group_epochs(infos: list[BcdInfo], gap_days: float = 1.0) -> list[Epoch]:
+    """Group files into AORs and AORs into epochs, each in time order.
+
+    AORs whose start times lie within ``gap_days`` of the previous AOR's start
+    form one epoch; when every file carries an ``EPOCH`` header (simulated
+    data) that number is used instead.
+
+    Raises
+    ------
+    InputError
+        If some files carry ``EPOCH`` and others do not, or one AOR's files
+        disagree about it.
+    """
+    if not infos:
+        return []
+    by_aor: dict[int, list[BcdInfo]] = {}
+    for info in infos:
+        by_aor.setdefault(info.aorkey, []).append(info)
+    for files in by_aor.values():
+        files.sort(key=lambda i: (i.bmjd_obs, i.expid, i.dce))
+    aors = sorted(by_aor, key=lambda a: by_aor[a][0].bmjd_obs)
+    has_epoch = [i.epoch is not None for i in infos]
+    if any(has_epoch) and not all(has_epoch):
+        raise InputError(f"{infos[0].path.parent}: some BCD files carry an EPOCH header and "
+                         "others do not; process simulated and real data separately")
+    groups: dict[int, list[int]] = {}
+    if all(has_epoch):
+        for a in aors:
+            epochs = {i.epoch for i in by_aor[a]}
+            if len(epochs) != 1:
+                raise InputError(f"AOR {a}: its files carry different EPOCH headers {sorted(epochs)}")
+            groups.setdefault(epochs.pop(), []).append(a)
+    else:
+        number = 0
+        last_start = -np.inf
+        for a in aors:
+            start = by_aor[a][0].bmjd_obs
+            if start - last_start > gap_days:
+                number += 1
+                groups[number] = []
+            groups[number].append(a)
+            last_start = start
+    return [Epoch(number=num, aorkeys=tuple(groups[num]),
+                  files=tuple(f for a in groups[num] for f in by_aor[a]))
+            for num in sorted(groups)]
