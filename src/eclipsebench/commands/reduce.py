@@ -1,0 +1,165 @@
+"""``eclipsebench reduce``: fit one epoch's photometry table with one method."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..config.base import parse_override
+from ..errors import InputError
+from ..fit.astro_model import ECLIPSE_SHAPES, PHASE_MODELS, RAMP_MODELS
+from .options import positive_float, positive_int
+
+NAME = "reduce"
+HELP = ("Fit one epoch's photometry table with one decorrelation method and the shared "
+        "eclipse + phase-curve model; write the depth (JSON) and the decorrelated light curve.")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("table", metavar="TABLE", help="photometry table of one epoch (FITS or ECSV)")
+    p.add_argument("--method", required=True, metavar="NAME",
+                   help="decorrelation method: bliss, gp, ica, kr-data, kr-pmap, pld, segpoly")
+    p.add_argument("--phase", choices=PHASE_MODELS, default=None,
+                   help="phase-curve model (default: [reduce] phase, quadratic)")
+    p.add_argument("--ramp", choices=RAMP_MODELS, default=None,
+                   help="detector ramp (default: [reduce] ramp, none)")
+    p.add_argument("--eclipse-shape", choices=("auto",) + ECLIPSE_SHAPES, default=None,
+                   help="eclipse shape; auto = the method's default (box for segpoly)")
+    p.add_argument("--sampler", choices=("leastsq", "mcmc"), default=None,
+                   help="least squares only, or least squares then emcee (default: leastsq)")
+    p.add_argument("--prayer-bead", type=positive_int(minimum=0), default=None, metavar="N",
+                   help="cyclic residual shifts for the prayer-bead error (0: none; default 16)")
+    p.add_argument("--walkers", type=positive_int(minimum=4), default=None, metavar="N",
+                   help="MCMC walkers (even; default 32)")
+    p.add_argument("--steps", type=positive_int(minimum=100), default=None, metavar="N",
+                   help="MCMC step cap (default 2000)")
+    p.add_argument("--radius", type=positive_float(), default=None, metavar="PX",
+                   help="aperture radius whose flux column is fitted (default: the table's flux)")
+    p.add_argument("--pmap", metavar="PATH", default=None,
+                   help="calibration set for kr-pmap (a calibration-star table or the SSC pmap); "
+                        "simulated tables find theirs through SIMDIR")
+    p.add_argument("--system", metavar="NAME", default=None,
+                   help="planet (default: [system] name, XO-3b)")
+    p.add_argument("--epoch", type=positive_int(minimum=0), default=None, metavar="N",
+                   help="epoch number (default: the table's EPOCH)")
+    p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
+                   help="run seed (MCMC stream: reduce/epoch/method/mcmc)")
+    p.add_argument("--option", dest="method_options", action="append", default=[],
+                   metavar="KEY=VALUE", help="method option (repeatable), e.g. --option k=50")
+    p.add_argument("--config", metavar="CONFIG", default=None,
+                   help="configuration file whose [reduce] and [system] sections are used")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="SECTION.KEY=VALUE", help="override one configuration value")
+    p.add_argument("--compare-phases", action="store_true",
+                   help="also fit every phase model and report BIC and AIC for each")
+    p.add_argument("--out", metavar="RESULT.json", default=None,
+                   help="result file (default: beside TABLE, <table stem>.<method>.json); the "
+                        "light curve goes to RESULT.lc.ecsv")
+    p.add_argument("--plot", metavar="FILE.png", default=None,
+                   help="plot the binned decorrelated light curve with the model")
+
+
+def _method_options(items: list[str]) -> dict:
+    out = {}
+    for item in items:
+        if "=" not in item or not item.split("=", 1)[0].strip():
+            raise InputError(f"--option {item!r}: expected KEY=VALUE")
+        path, value = parse_override(item)
+        if len(path) != 1:
+            raise InputError(f"--option {item!r}: expected KEY=VALUE")
+        out[path[0]] = value
+    return out
+
+
+def _options(args: argparse.Namespace):
+    from dataclasses import replace
+
+    from ..config import load_config
+    cfg = load_config(args.config, args.overrides)
+    changes = {"phase": args.phase, "ramp": args.ramp, "eclipse_shape": args.eclipse_shape,
+               "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
+               "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius}
+    options = replace(cfg.reduce, **{k: v for k, v in changes.items() if v is not None})
+    try:
+        options.validate()
+    except InputError as exc:
+        raise InputError(str(exc).replace("config key '", "option '")) from None
+    system = args.system or cfg.system.name
+    if cfg.system.catalogue:
+        from ..astro.catalogue import get_system
+        system = get_system(system, cfg.system.catalogue)
+    return options, system
+
+
+def _clean(obj):
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def lightcurve_path(result_path: str | Path) -> Path:
+    """``RESULT.json`` -> ``RESULT.lc.ecsv``."""
+    p = Path(result_path)
+    stem = p.name[:-len(p.suffix)] if p.suffix else p.name
+    return p.with_name(stem + ".lc.ecsv")
+
+
+def run(args: argparse.Namespace) -> dict:
+    from ..fit.reduce import reduce_epoch, select_phase_model
+    from ..io.atomic import atomic_path, write_json
+
+    table_path = Path(args.table)
+    if not table_path.is_file():
+        raise InputError(f"{table_path}: no such photometry table")
+    options, system = _options(args)
+    method_options = _method_options(args.method_options)
+    result = reduce_epoch(str(table_path), args.method, options=options, system=system,
+                          seed=args.seed, epoch=args.epoch, pmap=args.pmap,
+                          method_options=method_options)
+    out = Path(args.out) if args.out else table_path.with_name(
+        f"{table_path.stem}.{args.method}.json")
+    lc_path = lightcurve_path(out)
+    summary = result.to_dict()
+    if args.compare_phases:
+        sel = select_phase_model(str(table_path), args.method, options=options, system=system,
+                                 seed=args.seed, epoch=args.epoch, pmap=args.pmap,
+                                 method_options=method_options)
+        summary["phase_models"] = sel.to_dict()
+    summary.update({"table": str(table_path), "lightcurve_file": str(lc_path)})
+    with atomic_path(lc_path) as tmp:
+        result.lightcurve_table().write(tmp, format="ascii.ecsv")
+    if args.plot:
+        from ..fit.plot import plot_reduced_lightcurve
+        plot_reduced_lightcurve(result, args.plot)
+        summary["plot_file"] = str(args.plot)
+    summary = _clean(summary)
+    write_json(out, summary)
+    summary["result_file"] = str(out)
+    return summary
+
+
+def format_text(result: dict) -> str:
+    lines = [f"method        {result['method']} (epoch {result['epoch']}, phase {result['phase']}, "
+             f"{result['sampler']})",
+             f"depth         {result['depth_ppm']:.1f} +- {result['depth_err_ppm']:.1f} ppm "
+             f"(error from {result['depth_err_method']})",
+             f"t_ecl         {result['t_ecl_bmjd']:.5f} +- {result['t_ecl_err_d'] * 86400:.0f} s "
+             "BMJD_TDB",
+             f"rms           {result['rms_ppm']:.0f} ppm, beta_red {result['beta_red']:.2f}, "
+             f"chi2_red {result['chi2_red']:.3f}",
+             f"BIC / AIC     {result['bic']:.1f} / {result['aic']:.1f} (k = {result['k']})"]
+    models = result.get("phase_models")
+    if models:
+        lines.append("phase models  (BIC picks " + models["best_bic"] + ", AIC picks "
+                     + models["best_aic"] + ")")
+        for row in models["models"]:
+            lines.append(f"  {row['phase']:<10} depth {row['depth_ppm']:7.1f} +- "
+                         f"{row['depth_err_ppm']:5.1f} ppm  dBIC {row['delta_bic']:7.1f}  "
+                         f"dAIC {row['delta_aic']:7.1f}")
+    lines.append(f"wrote         {result['result_file']} and {result['lightcurve_file']}")
+    return "\n".join(lines)

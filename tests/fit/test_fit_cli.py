@@ -1,0 +1,64 @@
+"""``eclipsebench reduce`` end to end: files written, JSON keys, one-line errors."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from astropy.table import Table
+
+from eclipsebench.cli import main
+
+
+@pytest.fixture
+def table_file(tmp_path, xo3_epoch):
+    path = tmp_path / "epoch_03.fits"
+    xo3_epoch["table"](seed=21)[::2].write(path)
+    return path
+
+
+def test_reduce_writes_result_and_lightcurve(tmp_path, table_file, polygain, capsys, kit):
+    out = tmp_path / "res" / "r.json"
+    code = main(["reduce", str(table_file), "--method", polygain.name, "--phase", "quadratic",
+                 "--prayer-bead", "3", "--out", str(out), "--plot", str(tmp_path / "lc.png"),
+                 "--json"])
+    assert code == 0
+    printed = json.loads(capsys.readouterr().out)
+    saved = json.loads(out.read_text())
+    for key in ("method", "depth_ppm", "depth_err_ppm", "t_ecl_bmjd", "bic", "aic", "rms_ppm",
+                "beta_red", "n_frames", "epoch"):
+        assert key in saved
+    assert saved["depth_ppm"] == printed["depth_ppm"]
+    assert abs(saved["depth_ppm"] - kit.TRUE_DEPTH * 1e6) < 3 * saved["depth_err_ppm"]
+    lc = Table.read(tmp_path / "res" / "r.lc.ecsv", format="ascii.ecsv")
+    assert lc.colnames == ["time_bmjd", "flux_corrected", "astro_model", "residual"]
+    assert len(lc) == saved["n_points"]
+    assert (tmp_path / "lc.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_default_output_beside_the_table_and_text(table_file, polygain, capsys):
+    code = main(["reduce", str(table_file), "--method", polygain.name, "--prayer-bead", "0",
+                 "--compare-phases", "--phase", "linear"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "depth" in text and "BIC picks" in text
+    saved = json.loads((table_file.parent / f"epoch_03.{polygain.name}.json").read_text())
+    assert saved["phase"] == "linear"
+    assert {m["phase"] for m in saved["phase_models"]["models"]} == {"flat", "linear",
+                                                                     "quadratic", "sinusoid"}
+    assert (table_file.parent / f"epoch_03.{polygain.name}.lc.ecsv").is_file()
+
+
+def test_errors_are_one_line_exit_2(tmp_path, table_file, polygain, capsys, xo3_epoch):
+    assert main(["reduce", str(tmp_path / "nope.fits"), "--method", polygain.name]) == 2
+    err = capsys.readouterr().err
+    assert "no such photometry table" in err and err.count("\n") == 1
+    assert main(["reduce", str(table_file), "--method", "nonesuch"]) == 2
+    assert "unknown method" in capsys.readouterr().err
+    early = tmp_path / "early.fits"
+    t = xo3_epoch["table"]()
+    t[t["time_bmjd"] < xo3_epoch["t_pred"] - 0.1].write(early)
+    assert main(["reduce", str(early), "--method", polygain.name]) == 2
+    assert "outside the time span" in capsys.readouterr().err
+    assert main(["reduce", str(table_file), "--method", polygain.name, "--option", "k"]) == 2
+    assert "--option" in capsys.readouterr().err
