@@ -325,13 +325,15 @@ class KernelRegressionPmap(Systematics):
     def flux_scale(self, astro: np.ndarray) -> float:
         """Weighted least-squares ``F0`` of ``flux = F0 * astro * gain`` (electrons)."""
         m = np.asarray(astro, float) * self.gain
-        return float(np.dot(self._ivar * m, self._flux) / np.dot(self._ivar * m, m))
+        wm = self._ivar * m
+        return float(np.einsum("i,i->", wm, self._flux) / np.einsum("i,i->", wm, m))
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``F0 * astro * gain`` with ``F0`` solved in closed form (electrons)."""
         m = np.asarray(astro, float) * self.gain
-        f0 = np.dot(self._ivar * m, self._flux) / np.dot(self._ivar * m, m)
-        return f0 * m
+        # einsum rather than np.dot: no BLAS threads in the fitter's inner loop.
+        wm = self._ivar * m
+        return (np.einsum("i,i->", wm, self._flux) / np.einsum("i,i->", wm, m)) * m
 
     def with_flux(self, flux: np.ndarray) -> KernelRegressionPmap:
         """The same fixed gain on new fluxes."""

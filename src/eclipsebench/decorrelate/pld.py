@@ -77,6 +77,9 @@ def time_basis(time: np.ndarray, degree: int) -> np.ndarray:
     return np.column_stack([tau**d for d in range(1, degree + 1)]) if degree else np.empty((len(t), 0))
 
 
+_OUTER_BYTES_MAX = 64 * 2**20
+
+
 class PldDesign:
     """Parameter-independent pieces of the PLD regression.
 
@@ -101,10 +104,17 @@ class PldDesign:
         self.col_scale = np.sqrt(np.mean(d**2, axis=0))
         self.col_scale[self.col_scale == 0] = 1.0
         self.design = d / self.col_scale
+        self.iu = np.triu_indices(self.n_regressors)
+        self.outer = None
         if self.bin_frames == 1:
             self.starts = None
             self.b_flux = np.asarray(flux, float)
             self.b_ivar_sqrt = 1.0 / np.asarray(flux_err, float)
+            # Per-frame products D_i D_j (upper triangle): the normal matrix is
+            # then one weighted sum per evaluation, with no BLAS call (BLAS
+            # threads stall on a loaded machine for arrays this small).
+            if n * len(self.iu[0]) * 8 <= _OUTER_BYTES_MAX:
+                self.outer = self.design[:, self.iu[0]] * self.design[:, self.iu[1]]
         else:
             self.order = None if time is None else np.argsort(np.asarray(time), kind="stable")
             self.starts = np.arange(0, n, self.bin_frames)
@@ -137,10 +147,18 @@ def pld_solve(design: PldDesign, astro: np.ndarray) -> np.ndarray:
     Minimises ``sum_b ((F_b - (astro D)_b c) / sigma_b)^2`` over bins ``b``
     (frames when unbinned) through the p x p normal equations.
     """
-    g = design._binned(design.design * np.asarray(astro, float)[:, None])
-    gw = g * design.b_ivar_sqrt[:, None]
-    a = gw.T @ gw
-    b = gw.T @ design.b_target
+    astro = np.asarray(astro, float)
+    if design.outer is not None:
+        s = astro * design.b_ivar_sqrt
+        tri = np.einsum("n,nk->k", s * s, design.outer)
+        a = np.empty((design.n_regressors, design.n_regressors))
+        a[design.iu] = tri
+        a.T[design.iu] = tri
+        b = np.einsum("n,nk->k", s * design.b_target, design.design)
+    else:
+        gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
+        a = np.einsum("bi,bj->ij", gw, gw)
+        b = np.einsum("bi,b->i", gw, design.b_target)
     try:
         return np.linalg.solve(a, b)
     except np.linalg.LinAlgError:
@@ -202,7 +220,7 @@ class PixelLevelDecorrelation(Systematics):
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``astro * (P_hat c [+ poly])`` with ``c`` solved by weighted least squares."""
         astro = np.asarray(astro, float)
-        return astro * (self.design.design @ pld_solve(self.design, astro))
+        return astro * np.einsum("nk,k->n", self.design.design, pld_solve(self.design, astro))
 
     def with_flux(self, flux: np.ndarray) -> PixelLevelDecorrelation:
         """The same design on new fluxes."""
