@@ -1,0 +1,169 @@
+"""The per-epoch photometry table: build, write (FITS, atomically), read.
+
+Columns and metadata are the contract of ``docs/contracts.md``. JSON-valued
+metadata (``INPUTS``, ``OPTIONS``, ``AORKEYS``, ``FLAGBITS``, ``FLAGCNT``) are
+stored as JSON strings in the FITS header and decoded by
+:func:`read_photometry`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from pathlib import Path
+
+import astropy.units as u
+import numpy as np
+from astropy.io import fits
+from astropy.table import Table
+
+from .. import __version__
+from ..errors import DataError
+from ..io.atomic import atomic_path
+
+__all__ = ["REQUIRED_COLUMNS", "COLUMN_UNITS", "JSON_KEYS", "make_table", "write_photometry",
+           "read_photometry"]
+
+REQUIRED_COLUMNS = ("time_bmjd", "aorkey", "expid", "frame", "x", "y", "x_gauss", "y_gauss",
+                    "noise_pixels", "width_x", "width_y", "background", "flux", "flux_err",
+                    "stamp3", "stamp5", "flag")
+JSON_KEYS = ("INPUTS", "OPTIONS", "AORKEYS", "FLAGBITS", "FLAGCNT")
+
+_STRUCTURAL = re.compile(r"^(XTENSION|BITPIX|NAXIS\d*|PCOUNT|GCOUNT|TFIELDS|EXTNAME|CHECKSUM|"
+                         r"DATASUM|COMMENT|HISTORY|T(TYPE|FORM|UNIT|DIM|NULL|SCAL|ZERO|DISP)\d+)$")
+_PIX = u.pix
+_E = u.electron
+COLUMN_UNITS = {
+    "time_bmjd": u.day, "x": _PIX, "y": _PIX, "x_col": _PIX, "y_col": _PIX, "x_gauss": _PIX,
+    "y_gauss": _PIX, "x_gfix": _PIX, "y_gfix": _PIX, "x_lsq": _PIX, "y_lsq": _PIX,
+    "width_x": _PIX, "width_y": _PIX, "gauss_fixed_width": _PIX, "noise_pixels": _PIX**2,
+    "background": _E / _PIX**2, "background_mean": _E / _PIX**2,
+    "background_median": _E / _PIX**2, "background_sigma": _E / _PIX**2,
+    "flux": _E, "flux_err": _E, "flux_raw": _E, "aperture_area": _PIX**2,
+    "stamp3": _E, "stamp5": _E,
+}
+_ORDER = ("time_bmjd", "aorkey", "expid", "dce", "frame", "x", "y", "x_col", "y_col", "x_gauss",
+          "y_gauss", "x_gfix", "y_gfix", "x_lsq", "y_lsq", "noise_pixels", "width_x", "width_y",
+          "background", "flux", "flux_err", "flag")
+_DTYPES = {"aorkey": np.int64, "expid": np.int32, "dce": np.int32, "frame": np.int32,
+           "flag": np.int32, "peak_x": np.int16, "peak_y": np.int16, "stamp_x": np.int16,
+           "stamp_y": np.int16, "background_npix": np.int16}
+
+
+def _unit_for(name: str):
+    if name in COLUMN_UNITS:
+        return COLUMN_UNITS[name]
+    if name.startswith("flux_"):
+        return _E
+    if name.startswith("radius_"):
+        return _PIX
+    return None
+
+
+def make_table(columns: dict[str, np.ndarray], meta: dict) -> Table:
+    """An astropy Table with the package's column order, dtypes and units.
+
+    ``meta`` values that are lists or dicts are kept as Python objects here
+    and encoded as JSON by :func:`write_photometry`.
+    """
+    names = [c for c in _ORDER if c in columns] + sorted(c for c in columns if c not in _ORDER)
+    table = Table()
+    for name in names:
+        values = np.asarray(columns[name])
+        if name in _DTYPES:
+            values = values.astype(_DTYPES[name])
+        elif values.dtype == bool:
+            values = values.astype(np.int16)
+        unit = _unit_for(name)
+        table[name] = values if unit is None else u.Quantity(values, unit).value
+        if unit is not None:
+            table[name].unit = unit
+    table.meta.update(meta)
+    return table
+
+
+def _header_cards(meta: dict) -> list[tuple[str, object]]:
+    cards = []
+    for key, value in meta.items():
+        key = str(key).upper()
+        if key in JSON_KEYS or isinstance(value, (list, tuple, dict)):
+            value = json.dumps(value, sort_keys=True, default=str)
+        elif isinstance(value, np.generic):
+            value = value.item()
+        elif value is None:
+            continue
+        cards.append((key if len(key) <= 8 else f"HIERARCH {key}", value))
+    return cards
+
+
+def write_photometry(table: Table, path: str | os.PathLike) -> Path:
+    """Write ``table`` as a FITS binary table, atomically (temporary file + rename)."""
+    path = Path(path)
+    plain = Table(table, meta={}, copy=False)
+    units = {}
+    for name in plain.colnames:
+        if plain[name].unit is not None:
+            # electrons are not a FITS-standard unit: keep astropy's generic spelling in TUNITn
+            units[name] = plain[name].unit.to_string("generic")
+            plain[name].unit = None
+    hdu = fits.table_to_hdu(plain)
+    hdu.name = "PHOTOMETRY"
+    for k, name in enumerate(plain.colnames, start=1):
+        if name in units:
+            hdu.header[f"TUNIT{k}"] = units[name]
+    for key, value in _header_cards(dict(table.meta)):
+        hdu.header[key] = value
+    hdu.header["HIERARCH EB_VERSION"] = str(table.meta.get("EB_VERSION", __version__))
+    with atomic_path(path) as tmp:
+        fits.HDUList([fits.PrimaryHDU(), hdu]).writeto(tmp, checksum=True)
+    return path
+
+
+def read_photometry(path: str | os.PathLike) -> Table:
+    """Read a photometry table written by :func:`write_photometry`.
+
+    JSON metadata (``INPUTS``, ``OPTIONS``, ``AORKEYS``, ``FLAGBITS``,
+    ``FLAGCNT``) come back as Python objects.
+
+    Raises
+    ------
+    DataError
+        Naming the file if it cannot be read or lacks a required column.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(path, "no such photometry table")
+    try:
+        with fits.open(path, memmap=False) as hdul:
+            hdu = hdul["PHOTOMETRY"] if "PHOTOMETRY" in hdul else hdul[1]
+            header = hdu.header
+            units = {header[f"TTYPE{k}"]: header[f"TUNIT{k}"]
+                     for k in range(1, int(header.get("TFIELDS", 0)) + 1)
+                     if f"TUNIT{k}" in header}
+            # a plain structured array: astropy would warn about the non-FITS unit 'electron'
+            table = Table(np.array(hdu.data))
+            for name, unit in units.items():
+                table[name].unit = u.Unit(unit, format="generic")
+            for key, value in header.items():
+                if not _STRUCTURAL.match(key):
+                    table.meta[key] = value
+    except DataError:
+        raise
+    except Exception as exc:
+        raise DataError(path, f"not a readable photometry table ({type(exc).__name__}: {exc})") \
+            from None
+    missing = [c for c in REQUIRED_COLUMNS if c not in table.colnames]
+    if missing:
+        raise DataError(path, f"photometry table lacks columns {missing}")
+    meta = {}
+    for key, value in table.meta.items():
+        if key in JSON_KEYS and isinstance(value, str):
+            try:
+                value = json.loads(value)
+            except json.JSONDecodeError:
+                pass
+        meta[key] = value
+    table.meta.clear()
+    table.meta.update(meta)
+    return table
