@@ -24,7 +24,6 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from scipy.optimize import least_squares
 from scipy.special import erf
 
 from eclipsebench.decorrelate.base import EpochData
@@ -154,17 +153,28 @@ def write_calibration_table(path: Path, *, n_points=200000, seed=2015, systemati
     return path
 
 
-def fit_depth(model, time, *, t_ecl_guess, depth_guess=1500.0):
-    """Least squares over (depth, t_ecl) of ``model.residuals(eclipse_curve(...))``.
+class TrapezoidShape:
+    """The test eclipse geometry in the astro API (``visible_fraction(t_ecl)``)."""
+
+    def __init__(self, time_bmjd):
+        self.time_bmjd = np.asarray(time_bmjd, float)
+
+    def visible_fraction(self, t_ecl_bmjd):
+        return (eclipse_curve(self.time_bmjd, t_ecl_bmjd, 1e6) - 1.0)
+
+
+def fit_depth(model, time, *, t_ecl_guess, depth_guess=1500.0, phase="flat"):
+    """Joint least squares of depth and t_ecl with the framework (``eclipsebench.fit``).
 
     Returns (depth_ppm, t_ecl_bmjd).
     """
-    def resid(p):
-        return model.residuals(eclipse_curve(time, t_ecl_guess + p[1] / 1440.0, p[0] * 1000.0))
+    from eclipsebench.fit.astro_model import AstroModel
+    from eclipsebench.fit.leastsq import fit_leastsq
 
-    sol = least_squares(resid, x0=[depth_guess / 1000.0, 3.0], x_scale=[0.1, 1.0],
-                        diff_step=1e-4, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
-    return sol.x[0] * 1000.0, t_ecl_guess + sol.x[1] / 1440.0
+    astro = AstroModel(time, None, phase=phase, shape=TrapezoidShape(time))
+    fit = fit_leastsq(model, astro, astro.initial(depth=depth_guess * 1e-6,
+                                                  t_ecl_bmjd=t_ecl_guess))
+    return fit.value("depth") * 1e6, fit.value("t_ecl_bmjd")
 
 
 @pytest.fixture(scope="session")
