@@ -1,0 +1,184 @@
+"""Fit the channel-2 gain-map models committed in ``src/eclipsebench/data/gainmap_ch2.json``.
+
+Usage (from the project root, with ``../shared/data/irac/pmap_ch2/`` present)::
+
+    .venv/bin/python tools/fit_gainmap.py [--pmap-dir DIR] [--radius 3.0] [--degree 6]
+                                          [--out src/eclipsebench/data/gainmap_ch2.json]
+
+Nothing from ``shared/`` is copied into the repository; only coefficients.
+
+``pmap_poly``
+    A 2-D polynomial of total degree ``--degree`` in the *centroid's*
+    sub-pixel phase ``(x_c - 15, y_c - 15)`` fitted to the warm gain map
+    (weight 1 where its occupancy exceeds 20, ``--low-weight`` elsewhere so
+    the whole pixel stays bounded): the optional rescaling of IRSA PRFs.
+``builtin``
+    The PSF of :class:`eclipsebench.instrument.prf.BuiltinPRF`: its Gaussian
+    blur is chosen so that the noise pixels of a star at the mean position of
+    the real XO-3 peak-up AOR (15.09, 15.18) equal the value measured on
+    those frames (``--beta``, 4.60); then stars are rendered without gain on
+    a grid of *true* positions across pixel (15, 15), their 7x7
+    centre-of-light centroids and aperture sums (radius ``--radius``) are
+    measured, and the gain polynomial ``G`` in the true sub-pixel phase is
+    fitted so that ``G x aperture sum`` equals the gain map at the measured
+    centroid (same weights). ``fit_rms`` is the RMS of the relative
+    difference over the positions whose centroid has occupancy > 20.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy import interpolate, optimize
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+from eclipsebench.instrument import prf as P  # noqa: E402
+
+OCC_MIN = 20.0
+
+
+def load_pmap(folder: Path):
+    """pmap, x grid, y grid (0-based pixel coordinates), occupancy."""
+    import warnings
+
+    from astropy.io import fits
+    from astropy.io.fits.verify import VerifyWarning
+
+    out = {}
+    for key in ("pmap", "xgrid", "ygrid", "occu"):
+        path = next(folder.glob(f"{key}_ch2_*.fits"))
+        with warnings.catch_warnings():
+            # the pmap files end with a non-standard trailer (see shared/data/irac/README.md)
+            warnings.simplefilter("ignore", VerifyWarning)
+            out[key] = np.asarray(fits.getdata(path), float)
+    return out
+
+
+def pmap_interpolator(pm):
+    x = pm["xgrid"][0, :]
+    y = pm["ygrid"][:, 0]
+    val = interpolate.RegularGridInterpolator((y, x), pm["pmap"], bounds_error=False,
+                                              fill_value=np.nan)
+    occ = interpolate.RegularGridInterpolator((y, x), pm["occu"], method="nearest",
+                                              bounds_error=False, fill_value=0.0)
+    return val, occ
+
+
+def poly_design(u, v, degree):
+    powers = [(m, t - m) for t in range(degree + 1) for m in range(t, -1, -1)]
+    return powers, np.stack([u**m * v**n for m, n in powers], axis=-1)
+
+
+def fit_pmap_poly(pm, degree):
+    mask = pm["occu"] > OCC_MIN
+    u = pm["xgrid"][mask] - 15.0
+    v = pm["ygrid"][mask] - 15.0
+    powers, a = poly_design(u, v, degree)
+    c, *_ = np.linalg.lstsq(a, pm["pmap"][mask], rcond=None)
+    rms = float(np.sqrt(np.mean((a @ c - pm["pmap"][mask]) ** 2)))
+    return {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
+            "phase_origin": "nearest pixel centre", "occupancy_min": OCC_MIN,
+            "fit_rms": rms, "n_cells": int(mask.sum())}
+
+
+def beta_at(blur_px, obscuration, os_, half_px, x, y):
+    psf = P.psf_fine(os_, half_px - 0.5, obscuration=obscuration, blur_px=blur_px)
+    table = P.pixel_integrated_table(psf, os_)
+    prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
+    return float(P.noise_pixels(prf.render([x], [y]))[0])
+
+
+def weighted_poly(u, v, target, weights, degree):
+    powers, a = poly_design(u, v, degree)
+    sw = np.sqrt(weights)
+    c, *_ = np.linalg.lstsq(a * sw[:, None], target * sw, rcond=None)
+    return powers, c, a @ c
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pmap-dir", type=Path, default=ROOT / ".." / "shared" / "data" / "irac"
+                    / "pmap_ch2")
+    ap.add_argument("--radius", type=float, default=3.0, help="aperture radius (px) of the pmap")
+    ap.add_argument("--degree", type=int, default=6, help="polynomial total degree")
+    ap.add_argument("--low-weight", type=float, default=0.05,
+                    help="weight of gain-map cells with occupancy <= 20")
+    ap.add_argument("--obscuration", type=float, default=0.14)
+    ap.add_argument("--beta", type=float, default=4.60, help="target noise pixels")
+    ap.add_argument("--step", type=float, default=0.02, help="true-position grid step (px)")
+    ap.add_argument("--out", type=Path, default=ROOT / "src" / "eclipsebench" / "data"
+                    / "gainmap_ch2.json")
+    args = ap.parse_args(argv)
+
+    pm = load_pmap(args.pmap_dir)
+    result = {"source": "pmap_ch2_0p1s_x4_500x500_0043_120124 (Spitzer Science Center)",
+              "made_by": "tools/fit_gainmap.py " + " ".join(sys.argv[1:] if argv is None else argv)}
+
+    # (1) the gain map itself as a function of the centroid phase
+    high = pm["occu"] > OCC_MIN
+    w = np.where(high, 1.0, args.low_weight).ravel()
+    u, v = pm["xgrid"].ravel() - 15.0, pm["ygrid"].ravel() - 15.0
+    powers, c, fit = weighted_poly(u, v, pm["pmap"].ravel(), w, args.degree)
+    rms = float(np.sqrt(np.mean((fit - pm["pmap"].ravel())[high.ravel()] ** 2)))
+    result["pmap_poly"] = {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
+                           "variable": "centroid phase about the nearest pixel centre",
+                           "occupancy_min": OCC_MIN, "fit_rms": rms}
+    print(f"pmap polynomial (degree {args.degree}): rms {rms:.5f} where occupancy > {OCC_MIN}")
+
+    # (2) the builtin PSF width
+    os_, half = 20, 12.8
+    blur = optimize.brentq(lambda b: beta_at(b, args.obscuration, os_, half, 15.09, 15.18)
+                           - args.beta, 0.0, 1.0, xtol=1e-4)
+    print(f"PSF blur {blur:.4f} px gives noise pixels {args.beta}")
+    psf = P.psf_fine(os_, half - 0.5, obscuration=args.obscuration, blur_px=blur)
+    table = P.pixel_integrated_table(psf, os_)
+    prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
+
+    # (3) the gain polynomial in the true phase
+    g = np.arange(-0.5, 0.5 + 1e-9, args.step)
+    gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
+    xs, ys = gx.ravel(), gy.ravel()
+    img = prf.render(xs, ys)
+    xc, yc = P.centroid_col(img, around=(15, 15))
+    ap_flux = P.aperture_flux(img, xc, yc, args.radius)
+    val, occ = pmap_interpolator(pm)
+    pts = np.column_stack([yc, xc])
+    target = val(pts)
+    inside = np.isfinite(target)
+    ok = inside & (occ(pts) > OCC_MIN)
+    wt = np.where(ok, 1.0, args.low_weight)[inside]
+    powers, c, fit = weighted_poly(xs[inside] - 15.0, ys[inside] - 15.0,
+                                   target[inside] / ap_flux[inside], wt, args.degree)
+    model = fit * ap_flux[inside]
+    sel = ok[inside]
+    scale = np.sum(model[sel] * target[inside][sel]) / np.sum(model[sel] ** 2)
+    rel = model[sel] * scale / target[inside][sel] - 1.0
+    rms = float(np.sqrt(np.mean(rel**2)))
+    full = poly_design(xs - 15.0, ys - 15.0, args.degree)[1] @ c
+    print(f"builtin gain (degree {args.degree}): {sel.sum()} positions, rms {rms:.5f}; "
+          f"G over the whole pixel {full.min() / full.mean():.4f}..{full.max() / full.mean():.4f}")
+    result["builtin"] = {
+        "obscuration": args.obscuration, "blur_px": float(blur),
+        "target_noise_pixels": args.beta, "noise_pixels_position": [15.09, 15.18],
+        "gain": {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
+                 "variable": "true sub-pixel phase about the nearest pixel centre"},
+        "aperture_radius_px": args.radius,
+        "centroid": "centre of light, 7x7 box on pixel (15, 15)",
+        "fit_rms": rms, "n_positions": int(sel.sum()),
+    }
+    from eclipsebench.io.atomic import atomic_path
+
+    with atomic_path(args.out) as tmp:
+        Path(tmp).write_text(json.dumps(result, indent=1) + "\n")
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
