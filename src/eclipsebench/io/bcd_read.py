@@ -8,21 +8,25 @@ file); full-array files are single 256x256 frames.
 Frame times
 -----------
 ``BMJD_OBS`` is the barycentric MJD of the start of the data-collection event
-(DCE). On the IRAC files it is a *UTC* timestamp moved to the barycentre
+(DCE). On the archive files it is a *UTC* timestamp moved to the barycentre
 (``BMJD_OBS - MJD_OBS`` is the light-travel time alone; the real headers give
 ``ET_OBS - UTCS_OBS = TDB - UTC`` = 67.184 s in December 2012). We therefore
 
-1. take frame ``k`` of a file to start at ``BMJD_OBS + k * FRAMTIME`` (FRAMTIME
-   is the interval between frame starts; the real cubes are 64 x 2 s frames
-   in DCEs that start 129.3 s apart);
-2. put its mid-exposure at half a frame later: the Fowler reads of a frame
-   span ``(2 FN + WT)`` sample times = FRAMTIME, symmetric about their middle;
-3. convert the result from UTC to TDB with astropy (leap seconds + 32.184 s +
-   the periodic TDB-TT term), giving BMJD_TDB:
-   ``time_bmjd = tdb(BMJD_OBS + (k + 1/2) FRAMTIME / 86400)``.
+1. take frame ``k`` of a file to start at ``BMJD_OBS + k * dt_frame``, where
+   ``dt_frame`` is FRAMTIME unless ``AINTBEG``/``ATIMEEND`` say the frames are
+   spaced more widely: ``(ATIMEEND - AINTBEG - FRAMTIME) / (n - 1)`` when that
+   is >= FRAMTIME (the simulator's convention, 2.008 s); on the real cubes it
+   is 1.968 s < FRAMTIME, so FRAMTIME (2 s) is used;
+2. put its mid-exposure at the centre of the Fowler reads,
+   ``(2 FN + WT + 1) / 2 * SAMPTIME`` after the frame start (1.005 s for the
+   2 s subarray readout; FRAMTIME / 2 when the readout is unknown);
+3. convert from UTC to TDB with astropy (leap seconds + 32.184 s + the
+   periodic TDB-TT term): ``time_bmjd = tdb(BMJD_OBS + t_k / 86400)``.
 
-A file whose header says ``TIMESYS = 'TDB'`` (or whose ``BMJD_OBS`` comment
-says TDB) is taken as already in TDB.
+The time scale of ``BMJD_OBS`` is taken from ``TIMESYS`` when the header has
+it; otherwise it is UTC for archive files and TDB for files written by the
+eclipsebench simulator (``SIMULATE = T``; :mod:`eclipsebench.io.bcd_write`
+writes BMJD_TDB into ``BMJD_OBS``).
 
 Units
 -----
@@ -76,6 +80,8 @@ class BcdInfo:
     fowler: int
     wait: int
     read_noise_e: float
+    frame_interval_s: float = 0.0
+    sample_time_s: float = 0.01
     epoch: int | None = None
     simulate: bool = False
     extra: dict = field(default_factory=dict, compare=False)
@@ -243,26 +249,37 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
         if fowler is None or wait is None:  # EXPTIME = (FN + WT) dt, FRAMTIME = (2 FN + WT) dt
             fowler = round((values["FRAMTIME"] - values["EXPTIME"]) / sample_s)
             wait = round(values["EXPTIME"] / sample_s) - fowler
-        timesys = str(header.get("TIMESYS", "")).strip().upper()
-        comment = str(header.comments["BMJD_OBS"]).upper()
-        tdb = timesys == "TDB" or "TDB" in comment
         epoch = header.get("EPOCH")
         simulate = bool(header.get("SIMULATE", False))
+        timesys = str(header.get("TIMESYS", "TDB" if simulate else "UTC")).strip().upper()
+        if timesys not in ("UTC", "TDB"):
+            raise DataError(path, f"TIMESYS = {timesys!r}: expected UTC or TDB")
+        tdb = timesys == "TDB"
+        interval = values["FRAMTIME"]
+        if n_frames > 1 and "AINTBEG" in header and "ATIMEEND" in header:
+            spread = (float(header["ATIMEEND"]) - float(header["AINTBEG"]) - values["FRAMTIME"])
+            candidate = spread / (n_frames - 1)
+            if values["FRAMTIME"] <= candidate < 1.1 * values["FRAMTIME"]:
+                interval = candidate
         return BcdInfo(
             path=path, channel=chnl, aorkey=aorkey, expid=int(header.get("EXPID", m["expid"])),
             dce=int(header.get("DCENUM", m["dce"])), n_frames=n_frames, ny=ny, nx=nx,
             subarray=subarray, bmjd_obs=values["BMJD_OBS"], tdb=tdb,
             framtime_s=values["FRAMTIME"], exptime_s=values["EXPTIME"], gain=values["GAIN"],
             fluxconv=values["FLUXCONV"], fowler=max(int(fowler), 1), wait=max(int(wait), 0),
-            read_noise_e=float(header.get("RONOISE", 9.4)),
-            epoch=int(epoch) if epoch is not None else None, simulate=simulate,
+            read_noise_e=float(header.get("RONOISE", 9.4)), frame_interval_s=interval,
+            sample_time_s=sample_s, epoch=int(epoch) if epoch is not None else None, simulate=simulate,
             extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD")})
 
 
 def frame_times_bmjd(info: BcdInfo) -> np.ndarray:
     """Mid-exposure BMJD_TDB of each frame of a file (see the module notes)."""
     k = np.arange(info.n_frames, dtype=float)
-    t = info.bmjd_obs + (k + 0.5) * info.framtime_s / SECONDS_PER_DAY
+    interval = info.frame_interval_s if info.frame_interval_s > 0 else info.framtime_s
+    mid = 0.5 * (2 * info.fowler + info.wait + 1) * info.sample_time_s
+    if not 0.0 < mid <= info.framtime_s:
+        mid = 0.5 * info.framtime_s
+    t = info.bmjd_obs + (k * interval + mid) / SECONDS_PER_DAY
     if info.tdb:
         return t
     day = np.floor(t[0])

@@ -337,11 +337,11 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
 def _frame_lsq_asym(img, px, py, bg, grid_h, win_r):
     """Least-asymmetry centroid (Lust et al. 2014) about the peak pixel.
 
-    For each integer candidate centre within ``grid_h`` px of (px, py), the
-    asymmetry is the sum over rings of equal distance (pixels within
+    For each integer candidate centre within ``grid_h`` (>= 2) px of (px, py),
+    the asymmetry is the sum over rings of equal distance (pixels within
     ``win_r`` px) of the squared deviations from the ring mean. The centre is
-    the vertex of the parabola through the smallest asymmetry and its two
-    neighbours along each axis (no fit when the minimum lies on the grid edge).
+    the vertex of the parabola through the smallest asymmetry within 1 px of
+    (px, py) and its two neighbours along each axis.
     Returns (x, y, ok).
     """
     ny, nx = img.shape
@@ -375,11 +375,13 @@ def _frame_lsq_asym(img, px, py, bg, grid_h, win_r):
                 if cnt[k] > 1.0:
                     a += s2[k] - s1[k] * s1[k] / cnt[k]
             asym[gj, gi] = a
+    # the unnormalised asymmetry is also small far from the star (little light in the
+    # window), so the minimum is sought within 1 px of the brightest pixel only
     gi0 = 0
     gj0 = 0
     amin = np.inf
-    for gj in range(ng):
-        for gi in range(ng):
+    for gj in range(grid_h - 1, grid_h + 2):
+        for gi in range(grid_h - 1, grid_h + 2):
             if asym[gj, gi] < amin:
                 amin = asym[gj, gi]
                 gi0 = gi
