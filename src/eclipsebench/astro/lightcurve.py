@@ -130,7 +130,8 @@ def light_curve_function(system: PlanetSystem, *, albedo: float = 0.0,
                          wavelength_um: float = 4.5095,
                          fix_depth_ppm: float = 1875.0,
                          limb_dark: str = "quadratic", limb_dark_u=None,
-                         n_lat: int = 24, n_lon: int = 96, n_time: int = 2048) -> LightCurve:
+                         quadrature: str = "gauss", n_lat: int = 12, n_lon: int = 48,
+                         n_time: int = 1024) -> LightCurve:
     """Build the light curve of ``system``; the defaults are the 2015 challenge's.
 
     Parameters
@@ -150,8 +151,10 @@ def light_curve_function(system: PlanetSystem, *, albedo: float = 0.0,
     limb_dark, limb_dark_u
         Transit limb darkening (batman law and coefficients); default the
         system's quadratic coefficients.
-    n_lat, n_lon, n_time
-        Resolution of the thermal model (see ``ThermalModel``).
+    quadrature, n_lat, n_lon, n_time
+        Surface quadrature and resolution of the thermal model (see
+        :class:`~eclipsebench.astro.thermal.ThermalModel`; ``"iracsim2015"``
+        reproduces the 2015 challenge's surface sum).
     """
     if flux_ratio_model not in FLUX_RATIO_MODELS:
         raise InputError(f"flux_ratio_model: expected one of {', '.join(FLUX_RATIO_MODELS)}, "
@@ -162,12 +165,14 @@ def light_curve_function(system: PlanetSystem, *, albedo: float = 0.0,
         raise InputError(f"tau_rad_days: expected a number >= 0, got {tau_rad_days}")
     if wavelength_um <= 0:
         raise InputError(f"wavelength_um: expected a positive wavelength, got {wavelength_um}")
+    if quadrature not in ("gauss", "iracsim2015"):
+        raise InputError(f"quadrature: expected gauss or iracsim2015, got {quadrature!r}")
     if fix_depth_ppm < 0:
         raise InputError(f"fix_depth_ppm: expected 0 (not fixed) or a depth > 0, "
                          f"got {fix_depth_ppm}")
     model = ThermalModel(system, albedo=albedo, tau_rad_days=tau_rad_days, omega_rot=omega_rot,
                          band=band_for(flux_ratio_model, wavelength_um),
-                         n_lat=n_lat, n_lon=n_lon, n_time=n_time)
+                         n_lat=n_lat, n_lon=n_lon, n_time=n_time, quadrature=quadrature)
     table = model.flux_table()
     t_obs = geometric_to_observed(table.t_geom, system)
     # close the period so that interpolation wraps smoothly
@@ -184,7 +189,8 @@ def light_curve_function(system: PlanetSystem, *, albedo: float = 0.0,
     options = {"albedo": float(albedo), "tau_rad_days": float(tau_rad_days),
                "omega_rot": float(omega_rot), "flux_ratio_model": flux_ratio_model,
                "wavelength_um": float(wavelength_um), "band": model.band.name,
-               "fix_depth_ppm": float(fix_depth_ppm), "limb_dark": transit.limb_dark,
+               "fix_depth_ppm": float(fix_depth_ppm), "quadrature": quadrature,
+               "limb_dark": transit.limb_dark,
                "limb_dark_u": list(transit.u), "t0_periastron_k": model.t0_k}
     return LightCurve(system=system, depth_ppm=model_depth * scale, model_depth_ppm=model_depth,
                       planet_scale=scale, t_transit_bmjd=t_tr, t_eclipse_bmjd=t_ecl,
