@@ -1,16 +1,40 @@
-"""``[observation]``, ``[pointing]`` and ``[simulation]``: the IRAC simulator's inputs."""
+"""``[observation]`` and ``[simulation]``: the IRAC simulator's inputs.
+
+The defaults reproduce the synthetic half of the 2015 IRAC data challenge
+(Section 2.3, Table 2 ``sim_xo3meas`` and Appendix A of Ingalls et al. 2016),
+with the flux and background levels measured on the real "Pre" AOR of XO-3
+(AORKEY 46466816) and the paper's Section 3.3 numbers.
+"""
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 from typing import Literal
 
 from .base import check
 
+# Table 2 (sim_xo3meas) of the paper: start of the first exposure of each
+# simulated epoch's "Pre" AOR, JD - 2455000.
+TABLE2_START_TIMES_JD = (2206.1459, 2209.2927, 2212.5079, 2215.7214, 2218.9047,
+                         2222.0547, 2225.2356, 2228.4898, 2231.6296, 2234.8406)
+
+SUBARRAY_PX = 32
+
 
 @dataclass(frozen=True)
 class ObservationSection:
-    """The observation plan of one epoch (Section 2.2 and Table 2 of the paper)."""
+    """The observation plan of one epoch (Section 2.2 and Table 2 of the paper).
+
+    An epoch is a "Pre" AOR of ``pre_cubes`` cubes, a gap of ``aor_gap_s``
+    (the PCRS peak-up of the next AOR), and a "Main" AOR of ``main_cubes``
+    cubes. A cube holds ``frames_per_cube`` frames whose integrations start
+    every ``frame_interval_s``; cubes start every ``cube_interval_s`` (129.4 s
+    between consecutive ``BMJD_OBS`` in the real cubes of AOR 46466816).
+    ``start_times_jd`` (JD - 2455000) are the epochs' first exposures; epochs
+    beyond the list continue on later orbits (see ``docs/simulate.md``).
+    """
 
     pre_cubes: int = 11
     main_cubes: int = 233
@@ -18,6 +42,11 @@ class ObservationSection:
     fowler: int = 8
     wait: int = 184
     sample_time_s: float = 0.01
+    frame_interval_s: float = 2.008
+    cube_interval_s: float = 129.4
+    aor_gap_s: float = 300.0
+    start_times_jd: tuple[float, ...] = TABLE2_START_TIMES_JD
+    aorkey_base: int = 20150000
     x0_px: float = 15.15
     y0_px: float = 15.20
     peakup_scatter_px: float = 0.04
@@ -29,32 +58,77 @@ class ObservationSection:
         check(self.fowler >= 1, "fowler", "a Fowler number >= 1")
         check(self.wait >= 0, "wait", "a non-negative number of wait ticks")
         check(self.sample_time_s > 0, "sample_time_s", "a positive sample time in s")
-        check(2.0 <= self.x0_px <= 29.0, "x0_px", "a position on the 32x32 subarray (2-29 px)")
-        check(2.0 <= self.y0_px <= 29.0, "y0_px", "a position on the 32x32 subarray (2-29 px)")
-        check(self.peakup_scatter_px >= 0, "peakup_scatter_px", "a non-negative scatter in px")
+        t_int_s = (2 * self.fowler + self.wait) * self.sample_time_s
+        check(self.frame_interval_s >= t_int_s - 1e-9, "frame_interval_s",
+              f"at least the integration time (2 FN + WT) x sample_time = {t_int_s:g} s")
+        check(self.cube_interval_s >= self.frames_per_cube * self.frame_interval_s - 1e-9,
+              "cube_interval_s", "at least frames_per_cube x frame_interval_s")
+        check(self.aor_gap_s >= 0, "aor_gap_s", "a non-negative gap in s")
+        check(len(self.start_times_jd) >= 1 and all(math.isfinite(t) for t in self.start_times_jd),
+              "start_times_jd", "a non-empty list of start times (JD - 2455000)")
+        check(all(b > a for a, b in itertools.pairwise(self.start_times_jd)),
+              "start_times_jd", "start times in increasing order")
+        check(0 <= self.aorkey_base <= 99_999_000, "aorkey_base", "an AORKEY of at most 8 digits")
+        check(2.0 <= self.x0_px <= SUBARRAY_PX - 3.0, "x0_px",
+              "a position on the 32x32 subarray (2-29 px)")
+        check(2.0 <= self.y0_px <= SUBARRAY_PX - 3.0, "y0_px",
+              "a position on the 32x32 subarray (2-29 px)")
+        check(0 <= self.peakup_scatter_px <= 1.0, "peakup_scatter_px",
+              "a scatter between 0 and 1 px")
 
 
 @dataclass(frozen=True)
 class SimulationSection:
-    """Detector and noise model of the simulator (Appendix A.2-A.3)."""
+    """Detector, source and noise model of the simulator (Appendix A.2-A.3).
+
+    ``flux_aperture_e`` is the star's background-free flux in the r = 2.25 px
+    aperture per frame (electrons accumulated over EXPTIME; the paper's
+    simulated mean is 73,246 e). ``background_e_per_px`` is the sky per pixel
+    and frame (about 5 e far from the star in the real cubes of AOR
+    46466816); ``background_slope_per_day`` its fractional change per day.
+    ``pointing_motion = false`` holds the star at its peak-up position and
+    ``flat_gain = true`` switches off the intra-pixel gain: twins with these
+    switches changed draw from the same photon and read-noise streams in the
+    same order. ``pointing_ranges`` overrides entries of Table 5
+    (``"name=C:value"``, ``"name=U:lo:hi"``, ``"name=G:lo:hi"``).
+    """
 
     noise_model: Literal["physical", "iracsim2015"] = "physical"
     flux_aperture_e: float = 73246.0
-    background_e_per_px: float = 4.0
+    aperture_radius_px: float = 2.25
+    background_e_per_px: float = 5.0
     background_slope_per_day: float = 0.0
-    read_noise_e: float = 9.4
+    read_noise_e: float | None = None  # unset: 9.4 e (physical), 16.8 e (iracsim2015)
     gain_e_per_dn: float = 3.71
     fluxconv: float = 0.1469
     subsamples: int = 10
     prf: str = "builtin"
+    stamp_px: int = 13
+    pointing_motion: bool = True
+    pointing_ranges: tuple[str, ...] = ()  # Table 5 overrides: "a_sd_px=U:0:0.5", "a_j_px=C:0.02"
+    flat_gain: bool = False
     calibration_frames: int = 400000
     write_calibration: bool = True
+    calibration_box_px: float = 1.0
 
     def validate(self) -> None:
-        check(self.flux_aperture_e > 0, "flux_aperture_e", "a positive flux in electrons")
-        check(self.background_e_per_px >= 0, "background_e_per_px", "a non-negative background")
-        check(self.read_noise_e >= 0, "read_noise_e", "a non-negative read noise in electrons")
+        check(math.isfinite(self.flux_aperture_e) and self.flux_aperture_e > 0,
+              "flux_aperture_e", "a positive flux in electrons")
+        check(0.5 <= self.aperture_radius_px <= 6.0, "aperture_radius_px",
+              "an aperture radius in 0.5-6 px")
+        check(math.isfinite(self.background_e_per_px) and self.background_e_per_px >= 0,
+              "background_e_per_px", "a non-negative background in electrons per pixel")
+        check(math.isfinite(self.background_slope_per_day) and abs(self.background_slope_per_day) < 10,
+              "background_slope_per_day", "a fractional slope per day with |slope| < 10")
+        check(self.read_noise_e is None or self.read_noise_e >= 0, "read_noise_e",
+              "a non-negative read noise in electrons")
         check(self.gain_e_per_dn > 0, "gain_e_per_dn", "a positive gain")
         check(self.fluxconv > 0, "fluxconv", "a positive FLUXCONV")
-        check(self.subsamples >= 1, "subsamples", "at least 1 sub-sample per Fowler sample")
+        check(1 <= self.subsamples <= 100, "subsamples",
+              "between 1 and 100 sub-samples per Fowler sample")
+        check(bool(self.prf.strip()), "prf", "'builtin', 'irsa' or a folder of IRSA PRF files")
+        check(5 <= self.stamp_px <= SUBARRAY_PX and self.stamp_px % 2 == 1, "stamp_px",
+              "an odd stamp size between 5 and 31 px")
         check(self.calibration_frames >= 0, "calibration_frames", "a non-negative count")
+        check(0 < self.calibration_box_px <= 3.0, "calibration_box_px",
+              "a positive box width (px) over which calibration pointings are spread")

@@ -1,0 +1,60 @@
+"""``eclipsebench simulate``: write a simulated IRAC eclipse challenge (BCD cubes + truth)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..config import load_config, replace
+from ..errors import InputError
+from .options import add_config_options, positive_int
+
+NAME = "simulate"
+HELP = ("Simulate Spitzer/IRAC channel-2 subarray BCD cubes of an eclipsing planet with known "
+        "truth (IRACSIM, Ingalls et al. 2016 Appendix A); default: the XO-3b 2015 challenge.")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_config_options(p)
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="challenge folder to write (complete epochs are kept on a rerun)")
+    p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
+                   help="random seed (default: challenge.seed of the configuration)")
+    p.add_argument("--epochs", type=positive_int(), metavar="K",
+                   help="number of epochs (default: challenge.epochs)")
+    p.add_argument("--workers", type=positive_int(), metavar="N",
+                   help="worker processes (default: run.workers)")
+    p.add_argument("--no-calibration", action="store_true",
+                   help="do not write the calibration-star set for KR/Pmap")
+
+
+def run(args: argparse.Namespace) -> dict:
+    from ..simulate.challenge import simulate_challenge
+
+    cfg = load_config(args.config, args.overrides)
+    challenge = cfg.challenge
+    if args.seed is not None:
+        challenge = replace(challenge, seed=args.seed)
+    if args.epochs is not None:
+        challenge = replace(challenge, epochs=args.epochs)
+    cfg = replace(cfg, challenge=challenge)
+    if not str(args.out).strip():
+        raise InputError("--out: expected a folder")
+    result = simulate_challenge(cfg, args.out, workers=args.workers,
+                                calibration=False if args.no_calibration else None)
+    return result.to_dict()
+
+
+def format_text(result: dict) -> str:
+    lines = [f"wrote {result['files']} cube files for {result['epochs']} epochs to "
+             f"{result['out_dir']}"
+             + (f" ({result['skipped_aors']} AORs already complete)" if result["skipped_aors"]
+                else ""),
+             f"truth      {result['out_dir']}/truth.ecsv ({result['truth_rows']} rows)"]
+    if result["calibration"]:
+        lines.append(f"calibration {result['calibration']}")
+    lines.append("epoch  aorkeys            t_ecl_bmjd      x_sd    y_sd    xy_cov(1e-4)")
+    for r in result["truth"]:
+        lines.append(f"{r['epoch']:>5}  {r['aorkey_pre']}/{r['aorkey_main']}  "
+                     f"{r['t_ecl_bmjd']:.5f}  {r['x_sd']:.4f}  {r['y_sd']:.4f}  "
+                     f"{1e4 * r['xy_cov']:8.2f}")
+    return "\n".join(lines)

@@ -1,0 +1,128 @@
+"""Write simulated IRAC BCD cubes (``_bcd.fits`` and ``_bunc.fits``) as the archive names them.
+
+Files go to ``ROOT/r<AORKEY>/ch2/bcd/SPITZER_I2_<AORKEY>_<EXPID:04d>_0000_1_bcd.fits``
+(and ``..._bunc.fits``): a primary HDU with a float32 (64, 32, 32) cube in
+MJy/sr. Headers are formatted here directly from card tuples (see
+:mod:`eclipsebench.io.header_template`) because a challenge has ~10,000 of
+them; every file is written atomically.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import write_bytes
+from .header_template import (
+    IRAC_TURN_ON_MJD_UTC,
+    BcdHeaderInfo,
+    Card,
+    bcd_cards,
+    bunc_cards,
+    cube_cards,
+    format_header,
+    sim_cards,
+)
+
+__all__ = ["bcd_path", "bunc_path", "AorWriter", "bmjd_to_utc", "cube_bytes"]
+
+
+def bcd_path(root: str | Path, aorkey: int, expid: int) -> Path:
+    """``ROOT/r<AORKEY>/ch2/bcd/SPITZER_I2_<AORKEY>_<EXPID:04d>_0000_1_bcd.fits``."""
+    return (Path(root) / f"r{aorkey}" / "ch2" / "bcd"
+            / f"SPITZER_I2_{aorkey}_{expid:04d}_0000_1_bcd.fits")
+
+
+def bunc_path(root: str | Path, aorkey: int, expid: int) -> Path:
+    """The ``_bunc.fits`` beside :func:`bcd_path`."""
+    p = bcd_path(root, aorkey, expid)
+    return p.with_name(p.name.replace("_bcd.fits", "_bunc.fits"))
+
+
+def bmjd_to_utc(bmjd: np.ndarray, ra_deg: float, dec_deg: float) -> tuple[np.ndarray, list[str]]:
+    """MJD (UTC) and ISO ``DATE_OBS`` strings of barycentric times ``bmjd`` (TDB).
+
+    Removes the Roemer delay of a geocentric observer toward (RA, Dec) and
+    TDB - UTC (astropy, built-in ephemeris). Spitzer trailed the Earth by up
+    to ~0.6 AU, so the real ``MJD_OBS`` differs by up to a few minutes from
+    this geocentric value; nothing downstream uses ``MJD_OBS`` for timing.
+    """
+    from astropy import units as u
+    from astropy.coordinates import EarthLocation, SkyCoord
+    from astropy.time import Time
+
+    bmjd = np.atleast_1d(np.asarray(bmjd, dtype=float))
+    star = SkyCoord(ra_deg * u.deg, dec_deg * u.deg, frame="icrs")
+    geocentre = EarthLocation.from_geocentric(0.0, 0.0, 0.0, unit=u.m)
+    guess = Time(bmjd, format="mjd", scale="tdb", location=geocentre)
+    for _ in range(2):
+        ltt = guess.light_travel_time(star, kind="barycentric")
+        guess = Time(bmjd, format="mjd", scale="tdb", location=geocentre) - ltt
+    utc = guess.utc
+    utc.precision = 3
+    return np.asarray(utc.mjd, dtype=float), [str(s) for s in np.atleast_1d(utc.isot)]
+
+
+def cube_bytes(cube: np.ndarray) -> bytes:
+    """The data block of a float32 cube: big-endian, zero-padded to 2880 bytes."""
+    data = np.ascontiguousarray(cube, dtype=">f4").tobytes()
+    return data + b"\0" * ((-len(data)) % 2880)
+
+
+class AorWriter:
+    """Writes the cubes of one AOR, formatting only the per-cube cards each time.
+
+    Parameters
+    ----------
+    root : path
+        The challenge folder ``DIR``.
+    info : BcdHeaderInfo
+        Everything the headers say that is constant over the AOR.
+    """
+
+    def __init__(self, root: str | Path, info: BcdHeaderInfo):
+        self.root = Path(root)
+        self.info = info
+        self._bcd_before, self._bcd_after = bcd_cards(info)
+        self._bcd_sim = sim_cards(info)
+        self._bunc_before, self._bunc_after = bunc_cards(info)
+
+    def with_info(self, **changes) -> AorWriter:
+        """A writer for the same folder with some header values changed."""
+        return AorWriter(self.root, replace(self.info, **changes))
+
+    def headers(self, *, expid: int, bmjd_obs: float, mjd_obs: float, date_obs: str,
+                xy_mean: np.ndarray | None) -> tuple[bytes, bytes]:
+        """The BCD and BUNC header bytes of cube ``expid``."""
+        aintbeg = (mjd_obs - IRAC_TURN_ON_MJD_UTC) * 86400.0
+        n = self.info.frames_per_cube
+        # ATIMEEND: end of the last frame's integration.
+        atimeend = aintbeg + (n - 1) * self.info.frame_interval_s + self.info.frame_time_s
+        pairs = None if xy_mean is None else [(float(x), float(y)) for x, y in xy_mean]
+        times, ids = cube_cards(date_obs=date_obs, mjd_obs=mjd_obs, bmjd_obs=bmjd_obs,
+                                aintbeg=aintbeg, atimeend=atimeend, expid=expid,
+                                aorkey=self.info.aorkey, xy_mean=pairs)
+        bcd_cards_all: list[Card] = (self._bcd_before + times + self._bcd_after + ids
+                                     + self._bcd_sim)
+        bunc_ids = [c for c in ids if not c[0].startswith("XYMEAN")]
+        bunc_all: list[Card] = (self._bunc_before + times + self._bunc_after + bunc_ids
+                                + self._bcd_sim)
+        return format_header(bcd_cards_all), format_header(bunc_all)
+
+    def write_cube(self, *, expid: int, bcd_mjysr: np.ndarray, bunc_mjysr: np.ndarray,
+                   bmjd_obs: float, mjd_obs: float, date_obs: str,
+                   xy_mean: np.ndarray | None = None) -> tuple[Path, Path]:
+        """Write cube ``expid`` (``_bunc`` first, then ``_bcd``) and return both paths."""
+        n = self.info.frames_per_cube
+        if bcd_mjysr.shape != (n, 32, 32) or bunc_mjysr.shape != (n, 32, 32):
+            raise ValueError(f"cubes must be ({n}, 32, 32), got {bcd_mjysr.shape} and "
+                             f"{bunc_mjysr.shape}")
+        h_bcd, h_bunc = self.headers(expid=expid, bmjd_obs=bmjd_obs, mjd_obs=mjd_obs,
+                                     date_obs=date_obs, xy_mean=xy_mean)
+        p_bcd = bcd_path(self.root, self.info.aorkey, expid)
+        p_bunc = bunc_path(self.root, self.info.aorkey, expid)
+        write_bytes(p_bunc, h_bunc + cube_bytes(bunc_mjysr))
+        write_bytes(p_bcd, h_bcd + cube_bytes(bcd_mjysr))
+        return p_bcd, p_bunc

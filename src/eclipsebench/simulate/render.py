@@ -1,0 +1,333 @@
+"""Render Fowler-sampled subarray frames of a moving point source (paper Appendix A.2-A.3).
+
+Pure kernels on arrays: the orchestration (plans, files) lives in
+:mod:`eclipsebench.simulate.challenge`.
+
+How a frame is made
+-------------------
+The pointing model is sampled every ``delta t = Delta t / n`` (1 ms for the
+subarray, ``n = 10`` sub-samples per Fowler tick). Rendering the PRF at every
+sub-sample (2,000 PRFs per frame) is avoided with a second-order Taylor
+expansion about the frame's mean position ``p_f`` (the Fowler-weighted mean of
+the sub-sample positions, written as ``XYMEANnn``)::
+
+    PRF(p_f + d) ~ V + G . d + 1/2 d^T H d
+
+so the mean charge of tick ``k`` in pixel ``i`` is
+``q_ki = r_f [V_i m0_k + Gx_i mx_k + Gy_i my_k + 1/2 Hxx_i mxx_k + Hxy_i mxy_k
++ 1/2 Hyy_i myy_k] + b``, where ``m.._k`` are the tick's mean sub-sample moments
+of ``d`` (``m0 = 1``; 1.1 for the ``iracsim2015`` model, which integrates
+``n + 1`` sub-samples per tick), ``r_f`` the star's electrons per tick times
+``L(t_f)``, and ``b`` the background per tick. The sub-sample spread of the
+fractional Brownian jitter (rms ~0.09 px within a frame) is what the second
+moments carry; higher orders are below 1e-3 of the pixel values.
+
+Only a stamp (13 x 13 by default) around the star gets this per-tick
+treatment. Outside it the star's wings change little within a cube: they are
+rendered once per cube at the cube's mean position and, with the background,
+give each pixel a constant rate over the frame.
+
+Noise (physical model)
+    Stamp pixels: :func:`eclipsebench.instrument.fowler.fowler_sample_grouped`
+    (FN Poisson draws per pixel, exact). Constant-rate pixels: the same
+    distribution with two Poisson draws per pixel (:func:`fowler_uniform`).
+    Read noise: one Gaussian per pixel, ``sigma_rn sqrt(2 / FN)``, from its
+    own stream. ``iracsim2015``: the per-tick charges of every pixel go
+    through :func:`eclipsebench.instrument.fowler.fowler_sample_iracsim2015`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..instrument.constants import ReadoutMode
+from ..instrument.fowler import fowler_sample_grouped, fowler_sample_iracsim2015, fowler_weights
+
+__all__ = ["FrameModel", "tick_moments", "weight_groups", "read_intervals",
+           "star_group_charges", "fowler_uniform",
+           "expected_fowler", "render_frames", "stamp_origin", "N_MOMENTS"]
+
+N_MOMENTS = 6  # 1, dx, dy, dx^2, dx dy, dy^2
+SMALL_COUNT = 32  # ramp electrons per pixel up to which each gets its own weight draw
+
+
+@dataclass(frozen=True)
+class FrameModel:
+    """Detector and noise settings shared by all frames of a simulation.
+
+    Parameters
+    ----------
+    mode : ReadoutMode
+        Fowler sampling (FN, WT, tick time).
+    noise_model : {"physical", "iracsim2015"}
+    read_noise_e : float
+        Gaussian read noise per read (electrons).
+    subsamples : int
+        Pointing sub-samples per tick ``n``.
+    stamp_px : int
+        Side of the square stamp that gets the per-tick treatment (odd).
+    shape : tuple of int
+        Image shape (ny, nx).
+    """
+
+    mode: ReadoutMode
+    noise_model: str = "physical"
+    read_noise_e: float = 9.4
+    subsamples: int = 10
+    stamp_px: int = 13
+    shape: tuple[int, int] = (32, 32)
+
+    @property
+    def subsamples_per_tick(self) -> int:
+        """Sub-samples summed into one tick (``n + 1`` for ``iracsim2015``)."""
+        return self.subsamples + (1 if self.noise_model == "iracsim2015" else 0)
+
+    @property
+    def grid_samples_per_frame(self) -> int:
+        """Pointing-grid samples a frame needs (one more than ``n_max n`` for the extra one)."""
+        return self.mode.n_max * self.subsamples + 1
+
+    @property
+    def ticks_per_exposure(self) -> int:
+        """``FN + WT``: ticks between a pedestal and its signal read."""
+        return self.mode.fowler + self.mode.wait
+
+
+def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean position and per-tick moments of the sub-sample offsets of each frame.
+
+    Parameters
+    ----------
+    dx, dy : ndarray, shape (n_frames, n_max * n + 1)
+        Pointing offsets (px) at the frame's sub-samples ``t_start + s delta t``.
+    model : FrameModel
+
+    Returns
+    -------
+    x_mean, y_mean : ndarray, shape (n_frames,)
+        Fowler-weighted mean offset of each frame (what the frame "sees").
+    moments : ndarray, shape (n_frames, n_max, 6)
+        Per tick: ``[m0, <d_x>, <d_y>, <d_x^2>, <d_x d_y>, <d_y^2>]`` summed over
+        the tick's sub-samples and divided by ``n`` (so ``m0`` is 1, or 1.1 with
+        ``n + 1`` sub-samples), with ``d`` relative to the frame mean.
+    """
+    mode, n = model.mode, model.subsamples
+    nf = dx.shape[0]
+    n_max = mode.n_max
+    span = model.subsamples_per_tick
+    # sub-sample s of tick k is grid sample k n + s, s = 0 .. span - 1
+    idx = (np.arange(n_max)[:, None] * n + np.arange(span)[None, :]).ravel()
+    sx = dx[:, idx].reshape(nf, n_max, span)
+    sy = dy[:, idx].reshape(nf, n_max, span)
+    w = fowler_weights(mode).astype(float)
+    tick_x = sx.mean(axis=2)
+    tick_y = sy.mean(axis=2)
+    x_mean = tick_x @ w / w.sum()
+    y_mean = tick_y @ w / w.sum()
+    ux = sx - x_mean[:, None, None]
+    uy = sy - y_mean[:, None, None]
+    moments = np.empty((nf, n_max, N_MOMENTS))
+    moments[:, :, 0] = span / n
+    moments[:, :, 1] = ux.sum(axis=2) / n
+    moments[:, :, 2] = uy.sum(axis=2) / n
+    moments[:, :, 3] = (ux * ux).sum(axis=2) / n
+    moments[:, :, 4] = (ux * uy).sum(axis=2) / n
+    moments[:, :, 5] = (uy * uy).sum(axis=2) / n
+    return x_mean, y_mean, moments
+
+
+def weight_groups(mode: ReadoutMode) -> np.ndarray:
+    """Indicator matrix (n_max, FN): tick ``k`` belongs to the group of Fowler weight ``j``.
+
+    Row sums are 1 except for the first tick (weight 0), whose charge never
+    enters the frame.
+    """
+    w = fowler_weights(mode)
+    return (w[:, None] == np.arange(1, mode.fowler + 1)[None, :]).astype(float)
+
+
+def read_intervals(mode: ReadoutMode) -> np.ndarray:
+    """Indicator matrix (n_max, 2 FN): tick ``k`` is collected before read ``r`` and after read ``r - 1``.
+
+    Reads are ``P_1 .. P_FN, S_1 .. S_FN`` (ticks ``1..FN`` and
+    ``FN + WT + 1 .. 2 FN + WT``); ticks after the last read are not collected.
+    """
+    fn, wt = mode.fowler, mode.wait
+    read_tick = np.concatenate([np.arange(1, fn + 1), fn + wt + np.arange(1, fn + 1)])
+    k = np.arange(1, mode.n_max + 1)
+    interval = np.searchsorted(read_tick, k, side="left")
+    out = np.zeros((mode.n_max, 2 * fn))
+    ok = interval < 2 * fn
+    out[np.flatnonzero(ok), interval[ok]] = 1.0
+    return out
+
+
+def star_group_charges(basis: np.ndarray, group_moments: np.ndarray,
+                       rate_e_per_tick: np.ndarray) -> np.ndarray:
+    """Mean star charge per tick group and stamp pixel from the Taylor basis.
+
+    Parameters
+    ----------
+    basis : ndarray, shape (n_frames, 6, n_pix)
+        ``[V, Gx, Gy, Hxx/2, Hxy, Hyy/2]`` of the PRF at each frame's mean
+        position, per stamp pixel (PRF units).
+    group_moments : ndarray, shape (n_frames, n_groups, 6)
+        :func:`tick_moments` summed over the ticks of each group.
+    rate_e_per_tick : ndarray, shape (n_frames,)
+        Electrons per tick per PRF unit (flux scale times L(t)).
+
+    Returns
+    -------
+    ndarray, shape (n_groups, n_frames, n_pix)
+        Group-major, as the :mod:`eclipsebench.instrument.fowler` kernels want.
+    """
+    q = np.einsum("fgm,fmp->gfp", group_moments, basis, optimize=True)
+    q *= rate_e_per_tick[None, :, None]
+    np.clip(q, 0.0, None, out=q)
+    return q
+
+
+def fowler_uniform(rate_e_per_tick: np.ndarray, mode: ReadoutMode,
+                   rng: np.random.Generator) -> np.ndarray:
+    """Physical Fowler sampling of pixels whose rate is constant over the frame (no read noise).
+
+    The same distribution as
+    :func:`~eclipsebench.instrument.fowler.fowler_sample_grouped` for equal
+    tick charges ``r``: the ``WT + 1`` ticks of weight FN give
+    ``Poisson((WT + 1) r)``; the ``2 (FN - 1)`` ramp ticks (weights
+    ``1 .. FN-1``, two ticks each) give ``Poisson(2 (FN - 1) r)`` electrons in
+    total, each landing in a ramp tick chosen uniformly (splitting a Poisson
+    count multinomially gives independent Poisson counts), so the frame value
+    ``[FN N_wait + sum_e w_e] / FN`` needs two Poisson draws per pixel (plus
+    one small integer per ramp electron, or one multinomial draw for pixels
+    with more than 32 ramp electrons).
+
+    Parameters
+    ----------
+    rate_e_per_tick : ndarray
+        Mean charge per tick (e), any shape, >= 0.
+    mode : ReadoutMode
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    ndarray
+        ``sum_i (S_i - P_i) / FN`` (e), same shape.
+    """
+    r = np.asarray(rate_e_per_tick, dtype=float)
+    fn, wt = mode.fowler, mode.wait
+    n_wait = rng.poisson((wt + 1) * r)
+    total = fn * n_wait.astype(float)
+    if fn == 2:
+        total += rng.poisson(2 * r)
+    elif fn > 2:
+        n_ramp = rng.poisson(2 * (fn - 1) * r).ravel()
+        small = n_ramp <= SMALL_COUNT
+        # few electrons: one uniform weight each; many: a multinomial split
+        n_small = np.where(small, n_ramp, 0)
+        n_e = int(n_small.sum())
+        extra = np.zeros(n_ramp.size)
+        if n_e:
+            owner = np.repeat(np.arange(n_ramp.size), n_small)
+            weight = rng.integers(1, fn, size=n_e).astype(float)
+            extra += np.bincount(owner, weights=weight, minlength=n_ramp.size)
+        big = np.flatnonzero(~small)
+        if big.size:
+            counts = rng.multinomial(n_ramp[big], np.full(fn - 1, 1.0 / (fn - 1)))
+            extra[big] += counts @ np.arange(1, fn, dtype=float)
+        total += extra.reshape(r.shape)
+    return total / fn
+
+
+def expected_fowler(q_ticks: np.ndarray, mode: ReadoutMode) -> np.ndarray:
+    """Noise-free frame value ``sum_k w_k q_k / FN`` of tick charges ``(n_max, ...)``."""
+    w = fowler_weights(mode).astype(float)
+    return np.tensordot(w, q_ticks, axes=(0, 0)) / mode.fowler
+
+
+def stamp_origin(x: np.ndarray, y: np.ndarray, size: int, shape: tuple[int, int]
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Lower-left pixel (x0, y0) of the ``size`` stamp centred on (x, y), kept on the array."""
+    half = size // 2
+    x0 = np.clip(np.rint(x).astype(int) - half, 0, shape[1] - size)
+    y0 = np.clip(np.rint(y).astype(int) - half, 0, shape[0] - size)
+    return x0, y0
+
+
+def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, stamp_x0: int, stamp_y0: int,
+                  wings: np.ndarray, star_e_per_tick: np.ndarray, background_e_per_tick:
+                  np.ndarray, rng_photon: np.random.Generator, rng_read: np.random.Generator
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Fowler-sampled frames (electrons per exposure) and their noise-free expectation.
+
+    Parameters
+    ----------
+    model : FrameModel
+    moments : ndarray, shape (n_frames, n_max, 6)
+        :func:`tick_moments`.
+    basis : ndarray, shape (n_frames, 6, s*s)
+        Taylor basis of the PRF in the stamp whose lower-left pixel is
+        ``(stamp_x0, stamp_y0)`` (the same for all frames of the call).
+    wings : ndarray, shape (ny, nx)
+        The star (PRF units) over the whole array at the chunk's mean
+        position; used outside the stamp.
+    star_e_per_tick : ndarray, shape (n_frames,)
+        Electrons per tick per PRF unit, including ``L(t)``.
+    background_e_per_tick : ndarray, shape (n_frames,)
+        Background electrons per tick and pixel.
+    rng_photon, rng_read : numpy.random.Generator
+        Streams for photon noise and read noise; draw counts and order do not
+        depend on the pointing or the gain map, so systematics-free twins
+        draw from the same streams in the same order.
+
+    Returns
+    -------
+    frames_e, expected_e : ndarray, shape (n_frames, ny, nx)
+    """
+    mode = model.mode
+    ny, nx = model.shape
+    s = model.stamp_px
+    nf = moments.shape[0]
+    if basis.shape != (nf, N_MOMENTS, s * s):
+        raise ValueError(f"basis: expected shape {(nf, N_MOMENTS, s * s)}, got {basis.shape}")
+    in_stamp = np.zeros((ny, nx), dtype=bool)
+    in_stamp[stamp_y0:stamp_y0 + s, stamp_x0:stamp_x0 + s] = True
+    outside = ~in_stamp.ravel()
+
+    m0 = moments[:, :, 0]                                                # (nf, n_max)
+    rate_out = (star_e_per_tick[:, None] * wings.ravel()[outside][None, :]
+                + background_e_per_tick[:, None])                       # (nf, n_out) per tick
+    np.clip(rate_out, 0.0, None, out=rate_out)
+    frames = np.empty((nf, ny * nx))
+    expected = np.empty((nf, ny * nx))
+    stamp_cols = np.flatnonzero(in_stamp.ravel())
+    out_cols = np.flatnonzero(outside)
+    if model.noise_model == "physical":
+        member = weight_groups(mode)                                     # (n_max, FN)
+        gm = np.einsum("ftm,tg->fgm", moments, member)                   # (nf, FN, 6)
+        groups = star_group_charges(basis, gm, star_e_per_tick)          # (FN, nf, s*s)
+        groups += (gm[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
+        frames[:, stamp_cols] = fowler_sample_grouped(groups, mode, rng_photon, 0.0)
+        frames[:, out_cols] = fowler_uniform(rate_out, mode, rng_photon)
+        j = np.arange(1, mode.fowler + 1, dtype=float)
+        expected[:, stamp_cols] = np.tensordot(j, groups, axes=(0, 0)) / mode.fowler
+    else:
+        member = read_intervals(mode)                                    # (n_max, 2FN)
+        im = np.einsum("ftm,tr->frm", moments, member)                   # (nf, 2FN, 6)
+        inc = star_group_charges(basis, im, star_e_per_tick)             # (2FN, nf, s*s)
+        inc += (im[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
+        reads = np.cumsum(inc, axis=0)
+        frames[:, stamp_cols] = fowler_sample_iracsim2015(reads, mode, rng_photon, 0.0)
+        reads_out = np.cumsum(im[:, :, 0].T, axis=0)[:, :, None] * rate_out[None, :, :]
+        frames[:, out_cols] = fowler_sample_iracsim2015(reads_out, mode, rng_photon, 0.0)
+        fn = mode.fowler
+        expected[:, stamp_cols] = (reads[fn:] - reads[:fn]).sum(axis=0) / fn
+    w_sum = (fowler_weights(mode)[None, :] * m0).sum(axis=1) / mode.fowler
+    expected[:, out_cols] = rate_out * w_sum[:, None]
+    # Read noise: 2 FN reads per pixel; their sum in sum_i (S_i - P_i) / FN is one Gaussian.
+    frames += rng_read.standard_normal(size=frames.shape) * (model.read_noise_e
+                                                             * np.sqrt(2.0 / mode.fowler))
+    return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)

@@ -1,0 +1,130 @@
+"""The star's image for the simulator: a PRF choice plus the flux scale.
+
+``simulation.prf`` selects the PRF:
+
+``"builtin"``
+    :class:`eclipsebench.instrument.prf.BuiltinPRF` (the package's own optics
+    times a fitted intra-pixel response); ``simulation.flat_gain = true``
+    switches the intra-pixel response off.
+``"irsa:<folder>"``
+    :class:`eclipsebench.instrument.prf.IrsaPRF` from a folder of IRSA/IRACSIM
+    PRF files (e.g. ``../shared/data/irac/prf/warm_2015_ch2``). Their
+    intra-pixel structure is part of the files, so ``flat_gain`` cannot switch
+    it off (a configuration error says so).
+
+The flux scale makes a star at the peak-up target ``(x0_px, y0_px)`` give
+``flux_aperture_e`` electrons per exposure in the ``aperture_radius_px``
+aperture (paper Appendix A.2: the PRF rescaled to an input aperture flux).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..config import Config
+from ..errors import ConfigError, InputError
+from ..instrument.prf import PRF, BuiltinPRF, IrsaPRF, aperture_flux
+from .render import N_MOMENTS
+
+__all__ = ["StarImager", "make_star_imager", "make_prf"]
+
+_PRF_CACHE: dict[tuple, PRF] = {}
+
+
+def make_prf(name: str, *, flat_gain: bool = False) -> PRF:
+    """The PRF that ``simulation.prf = name`` selects (cached per process)."""
+    key = (name, flat_gain)
+    cached = _PRF_CACHE.get(key)
+    if cached is not None:
+        return cached
+    if name == "builtin":
+        prf: PRF = BuiltinPRF(gain=not flat_gain)
+    elif name.startswith("irsa:"):
+        folder = Path(name[5:]).expanduser()
+        if flat_gain:
+            raise ConfigError("simulation.flat_gain", "true needs prf = 'builtin' (IRSA PRF "
+                                                      "files carry their intra-pixel response)")
+        if not folder.is_dir():
+            raise ConfigError("simulation.prf", f"{str(folder)!r} is not a folder of IRSA PRF "
+                                                "files")
+        try:
+            prf = IrsaPRF.from_files(folder)
+        except InputError as exc:
+            raise ConfigError("simulation.prf", str(exc)) from None
+    else:
+        raise ConfigError("simulation.prf", f"expected 'builtin' or 'irsa:<folder>', got {name!r}")
+    _PRF_CACHE[key] = prf
+    return prf
+
+
+class StarImager:
+    """Noiseless images of the star and their Taylor expansion in position.
+
+    Parameters
+    ----------
+    prf : PRF
+        Unit-normalised PRF.
+    x_ref_px, y_ref_px : float
+        Where ``flux_aperture_e`` is defined (the peak-up target).
+    radius_px : float
+        Aperture radius of the flux definition.
+    """
+
+    def __init__(self, prf: PRF, *, x_ref_px: float, y_ref_px: float, radius_px: float):
+        self.prf = prf
+        im = prf.render(np.array([x_ref_px]), np.array([y_ref_px]), shape=(32, 32))
+        self.aperture_per_unit = float(aperture_flux(im, x_ref_px, y_ref_px, radius_px)[0])
+
+    def electrons_per_unit(self, flux_aperture_e: float) -> float:
+        """Electrons per exposure per PRF unit for an aperture flux ``flux_aperture_e``."""
+        return flux_aperture_e / self.aperture_per_unit
+
+    def image(self, x_px: float, y_px: float, shape: tuple[int, int]) -> np.ndarray:
+        """The star at ``(x, y)`` over an array of ``shape`` (PRF units)."""
+        return self.prf.render(np.array([x_px]), np.array([y_px]), shape=shape)[0]
+
+    def stamps(self, x_px: np.ndarray, y_px: np.ndarray, sx0: int, sy0: int, size: int
+               ) -> np.ndarray:
+        """Values on the common stamp at ``(sx0, sy0)``, shape (n, size, size)."""
+        return self._common(x_px, y_px, sx0, sy0, size, order=0)[:, 0]
+
+    def taylor_basis(self, x_px: np.ndarray, y_px: np.ndarray, sx0: int, sy0: int, size: int
+                     ) -> np.ndarray:
+        """``[V, Gx, Gy, Hxx/2, Hxy, Hyy/2]`` on the common stamp, shape (n, 6, size*size)."""
+        t = self._common(x_px, y_px, sx0, sy0, size, order=2)
+        n = t.shape[0]
+        basis = t.reshape(n, N_MOMENTS, size * size).copy()
+        basis[:, 3] *= 0.5
+        basis[:, 5] *= 0.5
+        return basis
+
+    def _common(self, x_px, y_px, sx0: int, sy0: int, size: int, order: int) -> np.ndarray:
+        """Evaluate on stamps centred on each star, then crop all to the common stamp."""
+        x = np.atleast_1d(np.asarray(x_px, float))
+        y = np.atleast_1d(np.asarray(y_px, float))
+        half = size // 2
+        cx, cy = sx0 + half, sy0 + half
+        margin = int(max(np.abs(np.rint(x) - cx).max(), np.abs(np.rint(y) - cy).max()))
+        h = half + margin
+        if order == 0:
+            vals, x0, y0 = self.prf.render_stamp(x, y, half=h)
+            full = vals[:, None]
+        else:
+            ts = self.prf.render_taylor(x, y, half=h)
+            full = np.stack([ts.value, ts.dx, ts.dy, ts.dxx, ts.dxy, ts.dyy], axis=1)
+            x0, y0 = ts.x0, ts.y0
+        ox = sx0 - x0
+        oy = sy0 - y0
+        a = oy[:, None] + np.arange(size)[None, :]          # (n, size) rows
+        b = ox[:, None] + np.arange(size)[None, :]          # (n, size) cols
+        idx_n = np.arange(x.size)[:, None, None]
+        return full.transpose(0, 2, 3, 1)[idx_n, a[:, :, None], b[:, None, :]].transpose(0, 3, 1, 2)
+
+
+def make_star_imager(cfg: Config) -> StarImager:
+    """The :class:`StarImager` of a configuration."""
+    prf = make_prf(cfg.simulation.prf.strip(), flat_gain=cfg.simulation.flat_gain)
+    return StarImager(prf, x_ref_px=cfg.observation.x0_px, y_ref_px=cfg.observation.y0_px,
+                      radius_px=cfg.simulation.aperture_radius_px)
