@@ -59,8 +59,8 @@ def star_cube(n=64, *, x0=15.2, y0=14.9, sigma=0.6, total=70000.0, bg=5.0, seed=
               noise=True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """n frames of a jittering integrated Gaussian star plus background, with photon noise."""
     rng = np.random.default_rng(seed)
-    xs = x0 + 0.03 * rng.standard_normal(n)
-    ys = y0 + 0.03 * rng.standard_normal(n)
+    xs = x0 + 0.01 * rng.standard_normal(n)
+    ys = y0 + 0.01 * rng.standard_normal(n)
     cube = np.stack([integrated_gaussian(x, y, sigma, total) for x, y in zip(xs, ys, strict=True)]) + bg
     if noise:
         cube = rng.poisson(cube).astype(float)

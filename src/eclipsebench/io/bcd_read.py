@@ -36,6 +36,7 @@ BCD values are MJy/sr; electrons per pixel are ``BCD * GAIN * EXPTIME / FLUXCONV
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
@@ -174,18 +175,26 @@ def _card(header: fits.Header, key: str, path: Path, kind=float):
     return out
 
 
+@contextlib.contextmanager
 def _open(path: Path):
     """Open a FITS file, turning every failure and warning into a DataError."""
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            hdul = fits.open(path, memmap=False, lazy_load_hdus=False)
+        fh = open(path, "rb")  # noqa: SIM115 - closed by the with block below
     except FileNotFoundError:
         raise DataError(path, "no such file") from None
-    except Exception as exc:  # astropy raises OSError, ValueError, VerifyWarning...
-        raise DataError(path, f"not a readable FITS file ({type(exc).__name__}: "
-                              f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
-    return hdul
+    except OSError as exc:
+        raise DataError(path, f"cannot read ({exc.strerror})") from None
+    with fh:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                hdul = fits.open(fh, memmap=False, lazy_load_hdus=False)
+        except Exception as exc:  # astropy raises OSError, ValueError, VerifyWarning...
+            text = str(exc).splitlines()[0] if str(exc) else ""
+            raise DataError(path, f"not a readable FITS file ({type(exc).__name__}: {text})") \
+                from None
+        with hdul:
+            yield hdul
 
 
 def _check_complete(path: Path, hdu) -> None:
@@ -211,8 +220,7 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
     if m is None:
         raise DataError(path, "name does not follow SPITZER_I<ch>_<AORKEY>_<EXPID>_<DCE>_<ver>"
                               "_bcd.fits")
-    hdul = _open(path)
-    with hdul:
+    with _open(path) as hdul:
         hdu = hdul[0]
         header = hdu.header
         _check_complete(path, hdu)
@@ -291,8 +299,7 @@ def _read_companion(path: Path, suffix: str, shape: tuple[int, ...], dtype) -> n
     comp = path.with_name(path.name[: -len("_bcd.fits")] + f"_{suffix}.fits")
     if not comp.exists():
         return None
-    hdul = _open(comp)
-    with hdul:
+    with _open(comp) as hdul:
         _check_complete(comp, hdul[0])
         data = hdul[0].data
         if data is None or data.size != int(np.prod(shape)):
@@ -318,8 +325,7 @@ def read_bcd(path: str | os.PathLike | BcdInfo, *, unc: bool = False,
         ``data`` has shape (n_frames, ny, nx), float32, MJy/sr.
     """
     info = path if isinstance(path, BcdInfo) else read_bcd_header(path)
-    hdul = _open(info.path)
-    with hdul:
+    with _open(info.path) as hdul:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error")

@@ -111,7 +111,8 @@ def outliers(values: np.ndarray, window: int, nsigma: float,
 
 
 def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
-                       valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                       valid: np.ndarray | None = None,
+                       read_var_e2: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Replace per-pixel outliers in time by the pixel's running median.
 
     Parameters
@@ -125,6 +126,11 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
         median (1.4826 x MAD over the whole series).
     valid : ndarray of bool, optional
         Frames used to build the medians (e.g. not the first frames).
+    read_var_e2 : float
+        Read-noise variance per pixel (electrons^2). The noise of a pixel is at
+        least ``sqrt(max(median, 0) + read_var_e2)`` (photon + read noise), so a
+        pixel whose residuals are quantised or nearly constant is not
+        over-flagged.
 
     Returns
     -------
@@ -150,8 +156,10 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
     med = median_filter(filled, size=(size, 1, 1), mode="nearest")
     resid = np.where(finite, sub - med, np.nan)
     sigma = robust_sigma(resid, axis=0)
+    floor = np.sqrt(np.clip(med, 0.0, None) + float(read_var_e2))
+    sigma = np.where(np.isfinite(sigma), np.maximum(sigma[None], floor), floor)
     with np.errstate(invalid="ignore"):
-        bad = finite & (np.abs(resid) > nsigma * np.where(sigma > 0, sigma, np.inf)[None])
+        bad = finite & (np.abs(resid) > nsigma * np.where(sigma > 0, sigma, np.inf))
     cleaned = cube.copy()
     sub_clean = np.where(bad, med, sub)
     cleaned[idx] = sub_clean

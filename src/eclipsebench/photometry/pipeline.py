@@ -132,7 +132,8 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
         y0, y1 = max(stack.star_y - reach, 0), min(stack.star_y + reach + 1, ny)
         x0, x1 = max(stack.star_x - reach, 0), min(stack.star_x + reach + 1, nx)
         cleaned, hits = reject_cosmic_rays(frames[:, y0:y1, x0:x1], opt.cosmic_ray_window,
-                                           opt.cosmic_ray_sigma, valid=~stack.first)
+                                           opt.cosmic_ray_sigma, valid=~stack.first,
+                                           read_var_e2=2.0 * stack.read_noise_e**2 / stack.fowler)
         if hits.any():
             frames = frames.copy()
             frames[:, y0:y1, x0:x1] = cleaned

@@ -72,6 +72,8 @@ def make_table(columns: dict[str, np.ndarray], meta: dict) -> Table:
     for name in names:
         values = np.asarray(columns[name])
         if name in _DTYPES:
+            if values.dtype.kind == "f":  # e.g. no pixel index for an all-NaN frame
+                values = np.where(np.isfinite(values), values, -1)
             values = values.astype(_DTYPES[name])
         elif values.dtype == bool:
             values = values.astype(np.int16)
