@@ -95,10 +95,15 @@ def make_epoch_table(*, t_ecl, visible, time, noise=1e-3, seed=1, systematics=Tr
         flux = flux * (1.0 + red_noise * walk)
     n = len(time)
     stamp = np.broadcast_to(flux[:, None, None] / 9.0, (n, 3, 3)).copy()
-    t = Table({"time_bmjd": time, "aorkey": np.full(n, 20150001), "x": x, "y": y,
-               "noise_pixels": np.full(n, 7.0) + 0.1 * np.sin(time * 50), "flux": flux,
+    stamp5 = np.broadcast_to(flux[:, None, None] / 25.0, (n, 5, 5)).copy()
+    t = Table({"time_bmjd": time, "aorkey": np.full(n, 20150001),
+               "expid": np.arange(n) // 64, "frame": np.arange(n) % 64, "x": x, "y": y,
+               "x_gauss": x, "y_gauss": y,
+               "noise_pixels": np.full(n, 7.0) + 0.1 * np.sin(time * 50),
+               "width_x": np.full(n, 0.6), "width_y": np.full(n, 0.6),
+               "background": np.full(n, 0.1), "flux": flux,
                "flux_err": np.full(n, F0 * max(noise, 1e-4)), "flag": np.zeros(n, dtype=np.int32),
-               "stamp3": stamp})
+               "stamp3": stamp, "stamp5": stamp5})
     t.meta["EPOCH"] = 3
     return t
 

@@ -17,7 +17,7 @@ MCMC = ReduceSection(phase="flat", sampler="mcmc", mcmc_walkers=16, mcmc_steps=3
 
 @pytest.fixture(scope="module")
 def small_table(xo3_epoch):
-    return xo3_epoch["table"](seed=5)[::2]
+    return xo3_epoch["table"](seed=5)[::8]
 
 
 def test_mcmc_agrees_with_least_squares(polygain, small_table):

@@ -91,3 +91,36 @@ def test_joint_fit_has_one_depth(kit, polygain, xo3_epoch):
     lo, hi = sorted(s.depth_ppm for s in singles)
     assert lo - 20 < joint.depth_ppm < hi + 20
     assert joint.k == 1 + 2 * (3 + 6)  # depth + per epoch (t_ecl, c1, c2, 6 gain terms)
+
+
+def test_method_hooks_extra_variance_and_hyperparameters(monkeypatch, polygain, xo3_epoch):
+    from typing import ClassVar
+
+    from eclipsebench.decorrelate import base
+
+    calls = []
+
+    class Hooked(polygain):
+        name: ClassVar[str] = "test-polygain-hooked"
+
+        def extra_depth_variance(self, astro, dastro_ddepth):
+            # dastro/ddepth is the visible fraction (at the fitted eclipse time)
+            assert np.mean(np.abs(dastro_ddepth - xo3_epoch["visible"][::2])) < 0.01
+            assert dastro_ddepth.min() == pytest.approx(0, abs=1e-6)
+            return (50e-6) ** 2
+
+        def optimise_hyperparameters(self, astro):
+            calls.append(float(np.mean(astro)))
+            return {"converged": True}
+
+    monkeypatch.setitem(base._REGISTRY, Hooked.name, Hooked)
+    table = xo3_epoch["table"](seed=8)[::2]
+    opts = ReduceSection(prayer_bead_shifts=0)
+    plain = reduce_epoch(table, polygain.name, options=opts)
+    hooked = reduce_epoch(table, Hooked.name, options=opts)
+    assert hooked.depth_err_separation_ppm == pytest.approx(50.0)
+    assert hooked.depth_err_ppm == pytest.approx(np.hypot(plain.depth_err_ppm, 50.0))
+    assert hooked.depth_err_method.endswith("+separation")
+    # alternation: called at least once, stops when the solution no longer moves
+    assert 1 <= len(calls) <= 5
+    assert hooked.depth_ppm == pytest.approx(plain.depth_ppm, abs=1e-3)

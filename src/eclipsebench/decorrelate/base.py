@@ -179,6 +179,24 @@ class Systematics(ABC):
         from dataclasses import replace
         return type(self)(replace(self.data, flux=np.asarray(flux, dtype=float)), **self.options)
 
+    def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:
+        """Re-set parameters that the method fixes by maximum likelihood for a given ``astro``.
+
+        The fitter alternates this with the least-squares fit of the joint
+        parameters (coordinate ascent) for methods that override it (GP: kernel
+        and white-noise parameters). The default does nothing and returns None.
+        """
+        return None
+
+    def extra_depth_variance(self, astro: np.ndarray, dastro_ddepth: np.ndarray) -> float:
+        """A variance of the depth (fraction squared) that the fit cannot see, default 0.
+
+        The fitter adds it to the depth variance (ICA: the component-separation
+        error). ``dastro_ddepth`` is the derivative of ``astro`` with respect to
+        the depth at the solution.
+        """
+        return 0.0
+
     def n_effective_params(self) -> int:
         """Free parameters that the systematics model adds, for BIC and AIC."""
         return len(self.param_names)

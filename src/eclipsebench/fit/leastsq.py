@@ -35,7 +35,8 @@ from ..errors import InputError
 from .astro_model import AstroModel
 
 __all__ = ["FitResult", "fit_leastsq", "information_criteria", "rms_vs_bin_size",
-           "red_noise_beta", "prayer_bead", "joint_names"]
+           "red_noise_beta", "prayer_bead", "joint_names", "has_hyperparameters",
+           "has_own_likelihood"]
 
 _SECONDS_PER_DAY = 86400.0
 
@@ -125,7 +126,8 @@ class FitResult:
     errors : ndarray
         ``sqrt(diag(cov))`` (not yet multiplied by ``beta_red``).
     chi2, chi2_red : float
-        Chi-square with the reported flux errors, and per degree of freedom.
+        Sum of squares of ``Systematics.residuals`` (the chi-square with the
+        reported flux errors, or the GP's whitened one), and per degree of freedom.
     n_data, k : int
         Number of fitted points and of free parameters (astro + effective
         systematics parameters).
@@ -239,7 +241,8 @@ def _covariance(jac: np.ndarray, chi2_red: float) -> np.ndarray:
 
 def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro, *,
                 theta0_sys=None, max_nfev: int | None = 200,
-                beta_bin_minutes: tuple[float, float] = (10.0, 30.0)) -> FitResult:
+                beta_bin_minutes: tuple[float, float] = (10.0, 30.0),
+                max_alternations: int = 5) -> FitResult:
     """Fit astro and systematics parameters jointly by least squares.
 
     Parameters
@@ -256,6 +259,11 @@ def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro,
         Cap on the number of least-squares iterations' function evaluations.
     beta_bin_minutes : (float, float)
         Bin widths over which the red-noise factor is averaged.
+    max_alternations : int
+        For methods that override ``optimise_hyperparameters`` (GP), at most
+        this many rounds of "hyperparameters for the fitted astro, then the
+        joint fit again", stopping when the depth moves by < 0.1 ppm and the
+        eclipse time by < 0.1 s.
 
     Returns
     -------
@@ -269,12 +277,32 @@ def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro,
     theta0 = np.concatenate([np.asarray(theta0_astro, dtype=float),
                              np.asarray(theta0_sys, dtype=float)])
     sol = _solve(problem, theta0, max_nfev)
+    nfev = sol.nfev
+    if has_hyperparameters(systematics):
+        # coordinate ascent: hyperparameters for the fitted astro, then the joint fit again
+        for _ in range(max_alternations):
+            previous = sol.x
+            systematics.optimise_hyperparameters(astro_model(previous[:problem.n_astro]))
+            sol = _solve(problem, previous, max_nfev)
+            nfev += sol.nfev
+            step = np.abs(sol.x[:2] - previous[:2])
+            if step[0] < 1e-7 and step[1] < 1e-6:  # 0.1 ppm and 0.09 s
+                break
     if not np.all(np.isfinite(sol.fun)):
         raise InputError(f"method '{systematics.name}': the model is not finite at the "
                          "least-squares solution")
-    theta = sol.x
-    return _summarise(problem, theta, sol.nfev, bool(sol.success), str(sol.message),
+    return _summarise(problem, sol.x, nfev, bool(sol.success), str(sol.message),
                       beta_bin_minutes)
+
+
+def has_hyperparameters(systematics: Systematics) -> bool:
+    """Whether the method sets parameters by maximum likelihood between fits (GP)."""
+    return type(systematics).optimise_hyperparameters is not Systematics.optimise_hyperparameters
+
+
+def has_own_likelihood(systematics: Systematics) -> bool:
+    """Whether the method replaces the white-noise likelihood (GP); it then models its noise."""
+    return type(systematics).log_likelihood is not Systematics.log_likelihood
 
 
 def _summarise(problem: _Problem, theta: np.ndarray, nfev: int, success: bool, message: str,
@@ -283,7 +311,8 @@ def _summarise(problem: _Problem, theta: np.ndarray, nfev: int, success: bool, m
     theta_a, theta_s = problem.split(theta)
     astro = problem.astro(theta_a)
     model = sys.predict(astro, theta_s)
-    resid = (sys.data.flux - model) / sys.data.flux_err
+    # the method's own normalised residuals (whitened ones for a GP)
+    resid = sys.residuals(astro, theta_s)
     chi2 = float(np.dot(resid, resid))
     n = len(resid)
     k = problem.n_astro + int(sys.n_effective_params())

@@ -28,7 +28,15 @@ from ..errors import InputError
 from ..seeding import rng
 from .astro_model import PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table
-from .leastsq import _covariance, _Problem, _summarise, fit_leastsq, prayer_bead
+from .leastsq import (
+    FitResult,
+    _covariance,
+    _Problem,
+    _summarise,
+    fit_leastsq,
+    has_own_likelihood,
+    prayer_bead,
+)
 from .mcmc import McmcResult, run_mcmc
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
@@ -153,6 +161,7 @@ class EpochResult:
     depth_err_jacobian_ppm: float
     depth_err_prayer_bead_ppm: float | None
     depth_err_mcmc_ppm: float | None
+    depth_err_separation_ppm: float
     t_ecl_bmjd: float
     t_ecl_err_d: float
     t_ecl_predicted_bmjd: float
@@ -187,6 +196,7 @@ class EpochResult:
             "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
             "depth_err_prayer_bead_ppm": self.depth_err_prayer_bead_ppm,
             "depth_err_mcmc_ppm": self.depth_err_mcmc_ppm,
+            "depth_err_separation_ppm": self.depth_err_separation_ppm,
             "t_ecl_bmjd": self.t_ecl_bmjd, "t_ecl_err_d": self.t_ecl_err_d,
             "t_ecl_predicted_bmjd": self.t_ecl_predicted_bmjd,
             "bic": self.bic, "aic": self.aic, "k": self.k,
@@ -221,6 +231,30 @@ def _largest(estimates: dict[str, float | None]) -> tuple[float, str]:
         return float("nan"), "none"
     name = max(usable, key=usable.get)
     return float(usable[name]), name
+
+
+def _mcmc_noise_scale(systematics: Systematics, fit: FitResult) -> float:
+    """Flux-error scale of the MCMC likelihood: sqrt(chi2_red), or 1 for own likelihoods.
+
+    With the white-noise likelihood the reported flux errors are rescaled so
+    that the residuals have chi2_red = 1 (the Jacobian covariance is scaled the
+    same way). A method with its own likelihood (GP) models its white noise.
+    """
+    if has_own_likelihood(systematics):
+        return 1.0
+    return float(np.sqrt(max(fit.chi2_red, 1e-12)))
+
+
+def _extra_depth_variance(systematics: Systematics, astro_model: AstroModel,
+                          fit: FitResult) -> float:
+    """The method's extra depth variance (ICA's component separation), fraction squared."""
+    theta = fit.theta_astro.copy()
+    astro = astro_model(theta)
+    h = 1e-6
+    theta[0] += h
+    dastro = (astro_model(theta) - astro) / h
+    value = float(systematics.extra_depth_variance(astro, dastro))
+    return value if np.isfinite(value) and value > 0 else 0.0
 
 
 def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
@@ -287,16 +321,20 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         mc = run_mcmc(systematics, astro_model, fit.theta, fit.errors, names=fit.names,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
                       block_steps=options.mcmc_block_steps, tau_factor=options.mcmc_tau_factor,
-                      noise_scale=float(np.sqrt(max(fit.chi2_red, 1e-12))))
+                      noise_scale=_mcmc_noise_scale(systematics, fit))
         mcmc_info = {"move": mc.move, "walkers": mc.n_walkers, "steps": mc.n_steps,
                      "burn_in": mc.burn_in, "tau_max": float(np.max(mc.tau)),
                      "acceptance": mc.acceptance, "converged": mc.converged,
                      "depth_median_ppm": float(mc.median[0] * 1e6)}
 
+    separation_var = _extra_depth_variance(systematics, astro_model, fit)
     depth_err, err_method = _largest({
         "jacobian_beta": jac_depth * inflate,
         "prayer_bead": pb_depth,
         "mcmc": mc.error("depth") if mc is not None else None})
+    if separation_var > 0:
+        depth_err = float(np.hypot(depth_err, np.sqrt(separation_var)))
+        err_method += "+separation"
     t_err, _ = _largest({"jacobian_beta": jac_tecl * inflate, "prayer_bead": pb_tecl,
                          "mcmc": mc.error("t_ecl_bmjd") if mc is not None else None})
     theta_report = mc.median if mc is not None else fit.theta
@@ -318,6 +356,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         depth_err_jacobian_ppm=jac_depth * 1e6,
         depth_err_prayer_bead_ppm=None if pb_depth is None else pb_depth * 1e6,
         depth_err_mcmc_ppm=None if mc is None else mc.error("depth") * 1e6,
+        depth_err_separation_ppm=float(np.sqrt(separation_var) * 1e6),
         t_ecl_bmjd=params["t_ecl_bmjd"], t_ecl_err_d=t_err,
         t_ecl_predicted_bmjd=prep.t_ecl_predicted_bmjd,
         bic=fit.bic, aic=fit.aic, k=fit.k, log_likelihood=fit.log_likelihood,
