@@ -75,6 +75,15 @@ class RunReport:
     skipped: list[str] = field(default_factory=list)
     wall_s: float = 0.0
     executor: str = ""
+    task_s: dict[str, float] = field(default_factory=dict)
+
+    def stage_seconds(self) -> dict[str, float]:
+        """Task time summed per stage prefix (``simulate``, ``reduce``...), seconds."""
+        out: dict[str, float] = {}
+        for key, sec in self.task_s.items():
+            stage = key.split("/", 1)[0]
+            out[stage] = out.get(stage, 0.0) + sec
+        return out
 
 
 class TaskFailed(RuntimeError):
@@ -123,8 +132,10 @@ def _order(by_key: dict[str, Task]) -> list[str]:
     return out
 
 
-def _call(func: Callable[..., object], args: tuple) -> None:
+def _call(func: Callable[..., object], args: tuple) -> float:
+    t0 = time.perf_counter()
     func(*args)
+    return time.perf_counter() - t0
 
 
 class _Bars:
@@ -221,7 +232,7 @@ def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseExc
         if _blocked(task, set(failures)) or not all(d in done for d in task.deps):
             continue  # a dependency failed: not run
         try:
-            task.func(*task.args)
+            report.task_s[key] = _call(task.func, task.args)
             _finish(task)
         except Exception as exc:  # collected and re-raised after the others ran
             failures[key] = exc
@@ -280,7 +291,7 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, *, workers,
             key = futures.pop(fut.key)
             task = by_key[key]
             try:
-                fut.result()
+                report.task_s[key] = fut.result()
                 _finish(task)
             except Exception as exc:  # collected and re-raised after the others ran
                 failures[key] = exc

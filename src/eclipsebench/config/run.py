@@ -23,11 +23,45 @@ class ChallengeSection:
 
 @dataclass(frozen=True)
 class RunSection:
-    """How the runner executes: methods, workers, scheduler."""
+    """How the runner executes and what it adds to the statistics.
+
+    Attributes
+    ----------
+    methods : list of str
+        Methods to run (empty: every registered method).
+    workers : int
+        1: in-process; N >= 2: a local Dask cluster of N processes.
+    scheduler : str
+        Address of an existing Dask scheduler (empty: none).
+    empirical_photon_limit : bool
+        Simulate systematics-free twins of every epoch (no pointing motion,
+        the same noise seeds) and reduce them, for the empirical photon limit.
+    photon_limit_method : str
+        Method that reduces the twins (empty: the first method run).
+    f_in : float
+        Fraction of frames in eclipse for the analytic photon limit (0: from
+        the eclipse geometry of the simulated epochs; the paper used 1/3).
+    bootstrap : int
+        Bootstrap resamples for the intervals on R, r and a (0: none).
+    report : bool
+        Write the report (figures, tables, index.html).
+    lightcurve_epoch : int
+        Epoch whose decorrelated light curves the report shows (the paper's
+        5th; the last epoch when there are fewer).
+    """
 
     methods: tuple[str, ...] = ()  # empty: every registered method
     workers: int = 2
     scheduler: str = ""  # address of an existing Dask scheduler; empty: a local cluster
+    empirical_photon_limit: bool = True
+    photon_limit_method: str = ""
+    f_in: float = 0.0
+    bootstrap: int = 2000
+    report: bool = True
+    lightcurve_epoch: int = 5
 
     def validate(self) -> None:
         check(self.workers >= 1, "workers", "at least 1 worker")
+        check(0.0 <= self.f_in < 1.0, "f_in", "0 (from the eclipse geometry) or a fraction in (0, 1)")
+        check(self.bootstrap >= 0, "bootstrap", "a non-negative number of resamples")
+        check(self.lightcurve_epoch >= 1, "lightcurve_epoch", "an epoch number >= 1")

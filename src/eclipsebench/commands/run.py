@@ -1,0 +1,93 @@
+"""``eclipsebench run``: the whole data challenge (simulate, photometry, reduce, stats, report)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..config import load_config
+from .options import add_config_options, positive_int
+
+NAME = "run"
+HELP = ("Run the data challenge end to end on Dask: simulate every epoch, photometry, every method "
+        "on every epoch, statistics (Tables 3-4), photon limits and the report; resumable.")
+
+
+def _methods(text: str) -> list[str]:
+    names = [m.strip() for m in text.split(",") if m.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("expected a comma-separated list of method names")
+    return names
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    add_config_options(p)
+    p.add_argument("--out", metavar="DIR",
+                   help="run folder (default: runs/<challenge>-seed<SEED>-<EPOCHS>ep); rerunning "
+                        "the same command resumes it")
+    p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
+                   help="challenge seed (challenge.seed)")
+    p.add_argument("--epochs", type=positive_int(), metavar="K",
+                   help="number of simulated epochs (challenge.epochs); e.g. 200 for Monte Carlo")
+    p.add_argument("--methods", type=_methods, metavar="A,B,...",
+                   help="methods to run (run.methods; default: every registered method)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=positive_int(), metavar="N",
+                   help="Dask worker processes of a local cluster; 1 runs in this process")
+    g.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of an existing Dask scheduler, e.g. tcp://host:8786")
+
+
+def _overrides(args: argparse.Namespace) -> list[str]:
+    extra = []
+    if args.seed is not None:
+        extra.append(f"challenge.seed={args.seed}")
+    if args.epochs is not None:
+        extra.append(f"challenge.epochs={args.epochs}")
+    if args.methods is not None:
+        extra.append("run.methods=[" + ", ".join(f'"{m}"' for m in args.methods) + "]")
+    if args.workers is not None:
+        extra.append(f"run.workers={args.workers}")
+    if args.scheduler is not None:
+        extra.append(f'run.scheduler="{args.scheduler}"')
+    return list(args.overrides) + extra
+
+
+def run(args: argparse.Namespace) -> dict:
+    from ..challenge.runner import run_challenge
+
+    cfg = load_config(args.config, _overrides(args))
+    out = Path(args.out) if args.out else Path(
+        "runs") / f"{cfg.challenge.name}-seed{cfg.challenge.seed}-{cfg.challenge.epochs}ep"
+    summary, report = run_challenge(cfg, out)
+    if args.json:
+        return summary
+    return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
+                                "skipped": len(report.skipped), "wall_s": report.wall_s,
+                                "executor": report.executor}}
+
+
+def format_text(result: dict) -> str:
+    from ..report.tables import format_text_table
+
+    lines = [format_text_table(result)]
+    pl = result.get("photon_limit", {})
+    a, e = pl.get("analytic"), pl.get("empirical")
+    if a:
+        lines.append(f"photon limit (analytic, Section 3.3): {a['sigma_phot_ppm']:.1f} ppm "
+                     f"(S/N {a['snr_single']:.0f}, {a['frames']:.0f} frames, f_in {a['f_in']:.3f})")
+    if e and e.get("sigma_phot_ppm") is not None:
+        lines.append(f"photon limit (empirical, {e['method']} on no-motion twins): "
+                     f"{e['sigma_phot_ppm']:.1f} ppm (68%: {e['sigma_phot_lo_ppm']:.1f}-"
+                     f"{e['sigma_phot_hi_ppm']:.1f})")
+    cover = {m: s.get("coverage") for m, s in result["methods"].items()
+             if s.get("coverage") is not None}
+    if cover:
+        lines.append("1-sigma coverage of the truth: "
+                     + ", ".join(f"{m} {c:.2f}" for m, c in cover.items()))
+    run = result.get("_run")
+    if run:
+        lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "
+                     f"{run['wall_s']:.1f} s ({run['executor']}); summary in "
+                     f"{run['out']}/summary.json, report in {run['out']}/report/index.html")
+    return "\n".join(lines)
