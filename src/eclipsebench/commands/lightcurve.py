@@ -6,15 +6,13 @@ import argparse
 
 import numpy as np
 
+from ..astro.bias import EPOCH10_START_BMJD
 from ..errors import InputError
 from .options import nonnegative_float, positive_float
 
 NAME = "lightcurve"
 HELP = ("Model light curve L(t) of a star and planet (Cowan & Agol thermal phase curve, "
         "eclipses, transits); defaults are the 2015 challenge's XO-3b settings.")
-
-# the paper's simulated epoch 10 starts at JD - 2455000 = 2234.8406 (Table 2)
-EPOCH10_START_BMJD = 2234.8406 + 2455000.0 - 2400000.5
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -48,6 +46,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..astro.bias import epoch_times
     from ..astro.catalogue import get_system
     from ..astro.lightcurve import light_curve_function
     from ..astro.orbit import BMJD_OFFSET
@@ -61,11 +60,10 @@ def run(args: argparse.Namespace) -> dict:
     lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **options)
     instantaneous = lc if args.tau_rad == 0 else light_curve_function(
         system, fix_depth_ppm=0.0, **{**options, "tau_rad_days": 0.0})
-    step = args.cadence_s / 86400.0
     n = int(np.floor(args.hours * 3600.0 / args.cadence_s)) + 1
     if n > 50_000_000:
         raise InputError("--hours/--cadence-s: more than 5e7 samples requested")
-    time = args.start + step * np.arange(n)
+    time = epoch_times(args.start, args.hours, args.cadence_s)
     flux = lc(time)
     stop = float(time[-1])
     mid = 0.5 * (args.start + stop)
