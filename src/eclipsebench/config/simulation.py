@@ -96,7 +96,8 @@ class SimulationSection:
     noise_model: Literal["physical", "iracsim2015"] = "physical"
     flux_aperture_e: float = 73246.0
     aperture_radius_px: float = 2.25
-    background_e_per_px: float = 5.0
+    background_e_per_px: float = 55.4  # 881 e in the r = 2.25 px aperture (paper Sec. 3.3)
+    background_reference: Literal["annulus", "sky"] = "annulus"
     background_slope_per_day: float = 0.0
     read_noise_e: float | None = None  # unset: 9.4 e (physical), 16.8 e (iracsim2015)
     gain_e_per_dn: float = 3.71

@@ -150,7 +150,9 @@ def simulate_calibration(cfg: Config, *, n_frames: int | None = None,
     star = make_star_imager(cfg)
     e_per_unit = star.electrons_per_unit(flux_aperture_e)
     ticks_exp = mode.fowler + mode.wait
-    bg_per_tick = sim.background_e_per_px * (mode.t_exp_s / ((cfg.observation.fowler
+    sky_e = star.sky_e_per_px(sim.background_e_per_px, sim.flux_aperture_e,
+                              sim.background_reference)
+    bg_per_tick = sky_e * (mode.t_exp_s / ((cfg.observation.fowler
                                                              + cfg.observation.wait)
                                                             * cfg.observation.sample_time_s))
     bg_per_tick /= ticks_exp

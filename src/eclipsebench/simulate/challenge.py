@@ -193,7 +193,7 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
     """Render and write every cube of one AOR; return its per-frame truth.
 
     The truth arrays (``time_bmjd``, ``flux_true`` = L(t), ``x_true``,
-    ``y_true``, ``expid``, ``frame``, ``background_e``) are also written to
+    ``y_true``, ``expid``, ``frame``, ``sky_e_per_px``) are also written to
     ``DIR/.simstate/r<AORKEY>.npz`` after the last cube, marking the AOR done.
     """
     out_dir = Path(out_dir)
@@ -221,11 +221,13 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
     n_grid = model.grid_samples_per_frame
     tick_mid = 0.5 * (mode.n_max + 1) * mode.sample_time_s  # centre of the Fowler weights
     flux_per_tick = star.electrons_per_unit(sim.flux_aperture_e) / model.ticks_per_exposure
-    bg_per_tick = sim.background_e_per_px / model.ticks_per_exposure
+    sky_e = star.sky_e_per_px(sim.background_e_per_px, sim.flux_aperture_e,
+                              sim.background_reference)
+    bg_per_tick = sky_e / model.ticks_per_exposure
     ny, nx = model.shape
 
     truth = {k: [] for k in ("time_bmjd", "flux_true", "x_true", "y_true", "expid", "frame",
-                             "background_e")}
+                             "sky_e_per_px")}
     bar = progress(range(aor.n_cubes), desc=f"epoch {plan.epoch} r{aor.aorkey}",
                    total=aor.n_cubes, unit="cube")
     for c in bar:
@@ -270,7 +272,7 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
         truth["y_true"].append(y_f)
         truth["expid"].append(np.full(nf, expid))
         truth["frame"].append(np.arange(nf))
-        truth["background_e"].append(bg * model.ticks_per_exposure)
+        truth["sky_e_per_px"].append(bg * model.ticks_per_exposure)
     out = {k: np.concatenate(v) for k, v in truth.items()}
     out["aorkey"] = np.full(out["time_bmjd"].size, aor.aorkey)
     state = out_dir / STATE_DIR / f"r{aor.aorkey}.npz"
@@ -351,7 +353,7 @@ def _write_epoch(cfg: Config, plan: EpochPlan, out_dir: Path, lc, seed: int) -> 
     table = Table({"time_bmjd": frames["time_bmjd"], "aorkey": frames["aorkey"],
                    "expid": frames["expid"], "frame": frames["frame"],
                    "flux_true": frames["flux_true"], "x_true": frames["x_true"],
-                   "y_true": frames["y_true"], "background_e": frames["background_e"]})
+                   "y_true": frames["y_true"], "sky_e_per_px": frames["sky_e_per_px"]})
     table.meta = {"epoch": plan.epoch, "seed": seed,
                   "description": "true L(t) (1 = star alone) and true mean position (0-based px) "
                                  "per frame; time_bmjd at the centre of the Fowler weights"}

@@ -31,6 +31,7 @@ from .render import N_MOMENTS
 __all__ = ["StarImager", "make_star_imager", "make_prf"]
 
 _PRF_CACHE: dict[tuple, PRF] = {}
+ANNULUS_PX = (3.0, 7.0)
 
 
 def make_prf(name: str, *, flat_gain: bool = False) -> PRF:
@@ -76,10 +77,27 @@ class StarImager:
         self.prf = prf
         im = prf.render(np.array([x_ref_px]), np.array([y_ref_px]), shape=(32, 32))
         self.aperture_per_unit = float(aperture_flux(im, x_ref_px, y_ref_px, radius_px)[0])
+        py, px = np.mgrid[0:32, 0:32]
+        r = np.hypot(px - x_ref_px, py - y_ref_px)
+        ring = (r >= ANNULUS_PX[0]) & (r <= ANNULUS_PX[1])
+        self.annulus_per_unit = float(im[0][ring].mean())
 
     def electrons_per_unit(self, flux_aperture_e: float) -> float:
         """Electrons per exposure per PRF unit for an aperture flux ``flux_aperture_e``."""
         return flux_aperture_e / self.aperture_per_unit
+
+    def sky_e_per_px(self, background_e_per_px: float, flux_aperture_e: float,
+                     reference: str) -> float:
+        """Sky per pixel and exposure giving ``background_e_per_px`` as ``reference`` defines it.
+
+        ``"annulus"``: the mean of the 3-7 px annulus around the peak-up target
+        including the star's wings (what photometry measures), floored at 0;
+        ``"sky"``: the value itself.
+        """
+        if reference == "sky":
+            return background_e_per_px
+        wing = self.annulus_per_unit * self.electrons_per_unit(flux_aperture_e)
+        return max(background_e_per_px - wing, 0.0)
 
     def image(self, x_px: float, y_px: float, shape: tuple[int, int]) -> np.ndarray:
         """The star at ``(x, y)`` over an array of ``shape`` (PRF units)."""
