@@ -81,7 +81,7 @@ def test_taylor_stamps_match_finite_differences_and_subsample_averages(builtin):
     approx = (ts.value[0] + u.mean() * ts.dx[0] + v.mean() * ts.dy[0]
               + 0.5 * ((u**2).mean() * ts.dxx[0] + 2 * (u * v).mean() * ts.dxy[0]
                        + (v**2).mean() * ts.dyy[0]))
-    assert np.max(np.abs(mean - approx)) < 2e-5 * ts.value[0].max() / 1e-2
+    assert np.max(np.abs(mean - approx)) < 1e-4 * ts.value[0].max()  # measured 5e-5
 
 
 def test_flux_scale_in_electrons_and_jansky(builtin):

@@ -299,11 +299,10 @@ class PointingModel:
         p = self.params
         out = np.zeros((2, self._block_len))
         if p.a_fbm_px > 0:
-            for axis in range(2):
-                z = fbm_segments(self._stream(0, axis, b), FBM_BLOCK_SEGMENTS, FBM_SEGMENT,
-                                 p.beta_fbm).ravel()
-                peak = np.max(np.abs(z))
-                out[axis] = z * (p.a_fbm_px / peak) if peak > 0 else 0.0
+            z = fbm_segments(self._stream(0, b), 2 * FBM_BLOCK_SEGMENTS, FBM_SEGMENT,
+                             p.beta_fbm).reshape(2, self._block_len)
+            peak = np.max(np.abs(z), axis=1, keepdims=True)
+            np.multiply(z, p.a_fbm_px / np.where(peak > 0, peak, 1.0), out=out)
         if len(self._block_cache) >= 4:
             self._block_cache.pop(next(iter(self._block_cache)))
         self._block_cache[b] = out
