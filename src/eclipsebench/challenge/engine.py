@@ -247,7 +247,14 @@ def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseExc
 
 
 def _open_client(workers: int, scheduler: str | None):
+    import logging
+
     from distributed import Client, LocalCluster
+
+    # Dask's own INFO lines (nannies, plugins) would drown the progress bars.
+    for name in ("distributed", "distributed.scheduler", "distributed.nanny",
+                 "distributed.worker", "distributed.core", "distributed.http.proxy"):
+        logging.getLogger(name).setLevel(logging.WARNING)
 
     if scheduler:
         try:
