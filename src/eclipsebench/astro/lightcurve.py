@@ -11,7 +11,8 @@ mid-eclipse (``F_out`` interpolated to the centre of the occultation).
 Everything that does not depend on the times asked for (the periodic
 steady-state phase curve over one orbit, the eclipse and transit shapes on
 fine grids of offsets) is computed once when the light curve is built;
-calling it interpolates those tables, about 60 ms per million samples.
+calling it interpolates one table of ``L`` over a period (the union of those
+grids), about 30 ms per million samples.
 
 Examples
 --------
@@ -74,6 +75,22 @@ class LightCurve:
     _ratio: np.ndarray = field(repr=False)
     _eclipse: EclipseShape = field(repr=False)
     _transit: TransitShape = field(repr=False)
+    _grid: np.ndarray = field(default=None, repr=False)
+    _table: np.ndarray = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        # one table of L over one period (the union of the phase-curve samples and the
+        # fine eclipse and transit grids), so a call is one mod and one interp
+        p = self.system.period_days
+        t0 = self._t_obs[0]
+        parts = [self._t_obs - t0, [0.0, p]]
+        for shape, t_event in ((self._eclipse, self.t_eclipse_bmjd),
+                               (self._transit, self.t_transit_bmjd)):
+            parts.append(np.mod(t_event + shape._offset - t0, p))
+        grid = np.unique(np.concatenate(parts))
+        t = t0 + grid
+        self._grid = grid / p  # in orbital phase from t0: cheaper to wrap than np.mod
+        self._table = self.stellar_flux(t) + self.planet_flux(t) * self.visible_fraction(t)
 
     # ------------------------------------------------------------------ evaluation
     def _wrap(self, time_bmjd: np.ndarray) -> np.ndarray:
@@ -94,8 +111,11 @@ class LightCurve:
         return self._transit.at(np.asarray(time_bmjd, dtype=float), self.t_transit_bmjd)
 
     def __call__(self, time_bmjd) -> np.ndarray:
-        t = np.asarray(time_bmjd, dtype=float)
-        return self.stellar_flux(t) + self.planet_flux(t) * self.visible_fraction(t)
+        """``L(t)`` at BMJD times (1 = the star alone)."""
+        phase = (np.asarray(time_bmjd, dtype=float) - self._t_obs[0]) * (
+            1.0 / self.system.period_days)
+        phase -= np.floor(phase)
+        return np.interp(phase, self._grid, self._table)
 
     # ------------------------------------------------------------------ events
     def _events(self, t_ref: float, start: float, stop: float) -> list[float]:
