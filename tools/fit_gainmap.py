@@ -15,8 +15,10 @@ Nothing from ``shared/`` is copied into the repository; only coefficients.
 ``builtin``
     The PSF of :class:`eclipsebench.instrument.prf.BuiltinPRF`: its Gaussian
     blur is chosen so that the noise pixels of a star at the mean position of
-    the real XO-3 peak-up AOR (15.09, 15.18) equal the value measured on
-    those frames (``--beta``, 4.60); then stars are rendered without gain on
+    the real XO-3 peak-up AOR (15.09, 15.18), averaged over a Gaussian jitter
+    of ``--jitter`` px RMS per axis (0.088 px, what the default Table-5 FBM
+    gives inside a 2 s frame), equal the value measured on those frames
+    (``--beta``, 4.60); then stars are rendered without gain on
     a grid of *true* positions across pixel (15, 15), their 7x7
     centre-of-light centroids and aperture sums (radius ``--radius``) are
     measured, and the gain polynomial ``G`` in the true sub-pixel phase is
@@ -87,11 +89,17 @@ def fit_pmap_poly(pm, degree):
             "fit_rms": rms, "n_cells": int(mask.sum())}
 
 
-def beta_at(blur_px, obscuration, os_, half_px, x, y):
+def beta_at(blur_px, obscuration, os_, half_px, x, y, jitter_px):
+    """Noise pixels of the frame-averaged image of a star jittering around (x, y)."""
     psf = P.psf_fine(os_, half_px - 0.5, obscuration=obscuration, blur_px=blur_px)
     table = P.pixel_integrated_table(psf, os_)
     prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
-    return float(P.noise_pixels(prf.render([x], [y]))[0])
+    # a fixed 2-D Gauss-Hermite cloud of sub-sample offsets with RMS jitter_px per axis
+    nodes, weights = np.polynomial.hermite_e.hermegauss(7)
+    u, v = np.meshgrid(nodes * jitter_px, nodes * jitter_px)
+    w = np.outer(weights, weights).ravel() / weights.sum() ** 2
+    image = np.tensordot(w, prf.render(x + u.ravel(), y + v.ravel()), axes=1)
+    return float(P.noise_pixels(image[None])[0])
 
 
 def weighted_poly(u, v, target, weights, degree):
@@ -111,6 +119,9 @@ def main(argv=None) -> int:
                     help="weight of gain-map cells with occupancy <= 20")
     ap.add_argument("--obscuration", type=float, default=0.14)
     ap.add_argument("--beta", type=float, default=4.60, help="target noise pixels")
+    ap.add_argument("--jitter", type=float, default=0.088,
+                    help="RMS (px per axis) of the jitter inside a frame that the target "
+                         "noise pixels include (0.088: Table 5's FBM, A_fbm = 0.4 px)")
     ap.add_argument("--step", type=float, default=0.02, help="true-position grid step (px)")
     ap.add_argument("--out", type=Path, default=ROOT / "src" / "eclipsebench" / "data"
                     / "gainmap_ch2.json")
@@ -133,9 +144,9 @@ def main(argv=None) -> int:
 
     # (2) the builtin PSF width
     os_, half = 20, 12.8
-    blur = optimize.brentq(lambda b: beta_at(b, args.obscuration, os_, half, 15.09, 15.18)
-                           - args.beta, 0.0, 1.0, xtol=1e-4)
-    print(f"PSF blur {blur:.4f} px gives noise pixels {args.beta}")
+    blur = optimize.brentq(lambda b: beta_at(b, args.obscuration, os_, half, 15.09, 15.18,
+                                             args.jitter) - args.beta, 0.0, 1.0, xtol=1e-4)
+    print(f"PSF blur {blur:.4f} px gives noise pixels {args.beta} with {args.jitter} px jitter")
     psf = P.psf_fine(os_, half - 0.5, obscuration=args.obscuration, blur_px=blur)
     table = P.pixel_integrated_table(psf, os_)
     prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
@@ -166,6 +177,7 @@ def main(argv=None) -> int:
     result["builtin"] = {
         "obscuration": args.obscuration, "blur_px": float(blur),
         "target_noise_pixels": args.beta, "noise_pixels_position": [15.09, 15.18],
+        "noise_pixels_jitter_rms_px": args.jitter,
         "gain": {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
                  "variable": "true sub-pixel phase about the nearest pixel centre"},
         "aperture_radius_px": args.radius,
