@@ -123,3 +123,23 @@ def test_bad_parameters_raise_input_errors():
     m = model()
     with pytest.raises(InputError, match="t_s"):
         m.offsets(np.array([-1.0]))
+
+
+def test_ten_drawn_epochs_have_table2_like_centroid_statistics():
+    """Main-AOR frame positions of ten Table-5 epochs vs Table 2 (within a factor of 2).
+
+    Table 2 (simulated set): sd_x 0.02-0.03 px, sd_y 0.03-0.10 px,
+    cov_xy -20.9e-4 .. -4.6e-4 px^2. The pre AOR is 11 cubes of 64 frames
+    every 2.008 s, the main AOR starts 120 s after it and has 233 cubes.
+    """
+    main0 = 11 * 64 * 2.008 + 120.0
+    t = main0 + np.arange(233 * 64) * 2.008 + 1.0
+    for epoch in range(10):
+        p = draw_pointing_params(np.random.default_rng([2015, epoch]))
+        m = PointingModel(p, duration_s=t[-1] + 10.0, dt_s=1e-3,
+                          rng=np.random.default_rng([2016, epoch]), aor_starts_s=(0.0, main0))
+        dx, dy = m.smooth_offsets(t)  # the FBM adds 0.007 px per frame, negligible here
+        c = np.cov(dx, dy)
+        assert 0.01 <= np.sqrt(c[0, 0]) <= 0.06
+        assert 0.015 <= np.sqrt(c[1, 1]) <= 0.20
+        assert -41.8e-4 <= c[0, 1] <= -2.3e-4
