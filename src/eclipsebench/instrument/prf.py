@@ -165,39 +165,43 @@ def aperture_flux(images, xc, yc, radius_px: float) -> np.ndarray:
                      for im, x, y in zip(images, xc, yc, strict=True)])
 
 
+def _boxes(images, half: int, around):
+    """The (2 half + 1)^2 boxes (n, m, m) and their corner pixel (i0, j0) per image."""
+    images = np.asarray(images, float)
+    n, ny, nx = images.shape
+    if around is None:
+        flat = np.nanargmax(images.reshape(n, -1), axis=1)
+        j, i = np.divmod(flat, nx)
+    else:
+        i = np.full(n, int(around[0]))
+        j = np.full(n, int(around[1]))
+    i = np.clip(i, half, nx - 1 - half)
+    j = np.clip(j, half, ny - 1 - half)
+    k = np.arange(-half, half + 1)
+    rows = (j[:, None] + k[None, :])[:, :, None]
+    cols = (i[:, None] + k[None, :])[:, None, :]
+    return images[np.arange(n)[:, None, None], rows, cols], i - half, j - half
+
+
 def centroid_col(images, half: int = CENTROID_HALF, around=None):
     """Centre-of-light centroids (paper Eqs. ``x_centroid``, ``y_centroid``).
 
     Over the ``(2 half + 1)^2`` box centred on the brightest pixel (or on the
     integer pixel ``around = (x, y)``) of background-free images (n, ny, nx).
     """
-    images = np.asarray(images, float)
-    n = images.shape[0]
-    xs = np.empty(n)
-    ys = np.empty(n)
-    for k in range(n):
-        im = images[k]
-        if around is None:
-            j, i = np.unravel_index(np.nanargmax(im), im.shape)
-        else:
-            i, j = int(around[0]), int(around[1])
-        box = im[j - half:j + half + 1, i - half:i + half + 1]
-        tot = box.sum()
-        xs[k] = (box.sum(axis=0) * np.arange(i - half, i + half + 1)).sum() / tot
-        ys[k] = (box.sum(axis=1) * np.arange(j - half, j + half + 1)).sum() / tot
+    box, i0, j0 = _boxes(images, half, around)
+    k = np.arange(2 * half + 1)
+    tot = box.sum(axis=(1, 2))
+    xs = i0 + (box.sum(axis=1) * k).sum(axis=1) / tot
+    ys = j0 + (box.sum(axis=2) * k).sum(axis=1) / tot
     return xs, ys
 
 
 def noise_pixels(images, half: int = CENTROID_HALF) -> np.ndarray:
     """Noise pixels ``(sum f)^2 / sum f^2`` over the 7x7 box on the brightest pixel
     (paper Eq. ``noise_pixels``) of background-free images (n, ny, nx)."""
-    images = np.asarray(images, float)
-    out = np.empty(images.shape[0])
-    for k, im in enumerate(images):
-        j, i = np.unravel_index(np.nanargmax(im), im.shape)
-        box = im[j - half:j + half + 1, i - half:i + half + 1]
-        out[k] = box.sum() ** 2 / (box**2).sum()
-    return out
+    box = _boxes(images, half, None)[0]
+    return box.sum(axis=(1, 2)) ** 2 / (box**2).sum(axis=(1, 2))
 
 
 class PRF:
