@@ -74,7 +74,7 @@ from .constants import (
 __all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial",
            "load_gainmap_coefficients", "aperture_weights", "aperture_flux", "centroid_col",
            "noise_pixels", "electrons_per_second_scale", "jy_to_electrons_per_second",
-           "psf_fine", "pixel_integrated_table"]
+           "psf_fine", "pixel_integrated_table", "warm_rescaling"]
 
 CENTROID_HALF = 3
 
@@ -418,9 +418,10 @@ class IrsaPRF(PRF):
             the full array; default the subarray sweet spot (15, 15), i.e.
             full-array (23, 231) whose nearest file is ``col025_row233``.
         gain_rescale : bool
-            Multiply by the committed smooth model of the warm gain map
-            (position-dependent scalar), as the paper did for cryogenic PRFs.
-            The ``warm_2015`` set already contains that rescaling.
+            Rescale the realisations so that aperture photometry follows the
+            warm gain map (:func:`warm_rescaling`), as the paper did for the
+            cryogenic PRFs. The ``warm_2015`` set is said to contain such a
+            rescaling already.
 
         Notes
         -----
@@ -456,13 +457,40 @@ class IrsaPRF(PRF):
         osx, osy = int(hdr.get("PRFXRSMP", 0)), int(hdr.get("PRFYRSMP", 0))
         if osx < 1 or osx != osy:
             raise DataError(best, "expected equal positive PRFXRSMP and PRFYRSMP")
-        gain = None
-        if gain_rescale:
-            gain = GainPolynomial.from_dict(load_gainmap_coefficients()["pmap_poly"])
         obj = cls(np.where(np.isfinite(data), data, 0.0), osx,
-                  (0.5 * (data.shape[1] - 1), 0.5 * (data.shape[0] - 1)), gain=gain)
+                  (0.5 * (data.shape[1] - 1), 0.5 * (data.shape[0] - 1)))
         obj.path = best
+        if gain_rescale:
+            obj.gain = warm_rescaling(obj)
+            obj.scale /= float(obj.render([15.0], [15.0]).sum())
         return obj
+
+
+def warm_rescaling(prf: PRF, *, step_px: float = 0.05, degree: int = 6) -> GainPolynomial:
+    """The gain that makes aperture photometry of ``prf`` follow the warm gain map.
+
+    Paper Appendix A.2: realisations are scaled with respect to each other so
+    that aperture photometry (radius as in ``gainmap_ch2.json``, 3 px) at the
+    7x7 centre-of-light centroid varies like the warm gain map (its committed
+    polynomial ``pmap_poly`` in the centroid phase). Solved on a grid of true
+    sub-pixel positions and fitted with a polynomial of total ``degree`` in
+    the true phase.
+    """
+    coeff = load_gainmap_coefficients()
+    pmap = GainPolynomial.from_dict(coeff["pmap_poly"])
+    radius = float(coeff["builtin"]["aperture_radius_px"])
+    g = np.arange(-0.5, 0.5 + 1e-9, step_px)
+    gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
+    xs, ys = gx.ravel(), gy.ravel()
+    saved, prf.gain = prf.gain, None
+    images = prf.render(xs, ys)
+    prf.gain = saved
+    xc, yc = centroid_col(images, around=(15, 15))
+    ratio = pmap.evaluate(xc, yc) / aperture_flux(images, xc, yc, radius)
+    powers = [(m, t - m) for t in range(degree + 1) for m in range(t, -1, -1)]
+    design = np.stack([(xs - 15.0) ** m * (ys - 15.0) ** n for m, n in powers], axis=-1)
+    c, *_ = np.linalg.lstsq(design, ratio / ratio.mean(), rcond=None)
+    return GainPolynomial(tuple(powers), tuple(float(v) for v in c))
 
 
 def electrons_per_second_scale(prf: PRF, flux_aperture_e: float, radius_px: float = 2.25, *,
