@@ -175,8 +175,10 @@ def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator
     -----
     Between reads the noise carries forward unchanged, so only the reads
     matter: with ``F_r = mean_r + N_{r-1}`` (mean plus the noise so far),
-    ``N_r = N_{r-1} + Poisson(round(F_r)) - round(F_r)`` where ``F_r > 0``
-    (``round(F_r)`` at least 1, as in ``prf_make_dce.pro``).
+    ``N_r = N_{r-1} + Poisson(max(round(F_r), 1)) - round(F_r)`` where
+    ``F_r > 0``, literally as ``prf_make_dce.pro`` (so a read with
+    ``0 < F_r < 0.5`` gains one electron on average; it is carried into the
+    later reads and mostly cancels in ``S_i - P_i``).
     """
     m = np.asarray(reads, dtype=float)
     fn = mode.fowler
@@ -188,8 +190,9 @@ def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator
     for r in range(2 * fn):
         f = m[r] + noise
         positive = f > 0
-        lam = np.where(positive, np.maximum(np.rint(f), 1.0), 1.0)
-        dev = rng.poisson(lam) - lam
+        rounded = np.where(positive, np.rint(f), 0.0)
+        # as prf_make_dce.pro: Poisson(round(F) > 1) - round(F) (mean +1 when round(F) = 0)
+        dev = rng.poisson(np.maximum(rounded, 1.0)) - rounded
         noise = noise + np.where(positive, dev, 0.0)
         values[r] = m[r] + noise
     values = values + rng.normal(0.0, read_noise_e, size=m.shape)
