@@ -94,6 +94,9 @@ def test_same_time_same_offset_in_any_chunk():
     k = np.array([123, 262_001, 399_000])
     gx = full[0][k]
     np.testing.assert_allclose(m.offsets(k * 1e-3)[0], gx, atol=2e-6)
+    # sparse times spread over many FBM blocks (the block-by-block path)
+    k = np.array([5, 140_000, 270_000, 399_990, 131_071, 131_072])
+    np.testing.assert_allclose(m.offsets(k * 1e-3)[1], full[1][k], atol=2e-6)
     # a fresh model with the same rng seed gives the same bytes
     m2 = PointingModel(draw_pointing_params(np.random.default_rng(7)), duration_s=1000.0,
                        dt_s=1e-3, rng=np.random.default_rng(8), aor_starts_s=(0.0, 400.0))

@@ -345,8 +345,19 @@ class PointingModel:
         return a + (b - a) * frac
 
     # ----- deterministic terms ----------------------------------------------
-    def smooth_offsets(self, t_s) -> tuple[np.ndarray, np.ndarray]:
-        """Jitter sine + wobble + short- and long-term drift (everything but the FBM)."""
+    def long_term_drift(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """The long-term drift alone; it restarts (jumps) at each AOR start."""
+        p = self.params
+        t = np.asarray(t_s, float)
+        idx = np.searchsorted(self.aor_starts_s, t, side="right") - 1
+        t_aor = t - self.aor_starts_s[np.clip(idx, 0, None)]
+        ld = p.a_ld_arcsec_per_hr / PIXEL_SCALE_ARCSEC * t_aor / 3600.0
+        th_ld = np.deg2rad(p.theta_ld_deg)
+        return ld * np.cos(th_ld), ld * np.sin(th_ld)
+
+    def smooth_offsets(self, t_s, *, drift: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Jitter sine + wobble + short-term drift (+ the long-term drift unless
+        ``drift=False``): everything but the FBM."""
         p = self.params
         t = np.asarray(t_s, float)
         jit = p.a_j_px * np.sin(2.0 * np.pi * t / p.p_j_s + p.phi_j_rad)
@@ -360,12 +371,12 @@ class PointingModel:
         sd = (sign * p.a_sd_px / np.sin(p.phi_sd_rad)
               * np.sin(2.0 * np.pi * t / p.p_sd_s + p.phi_sd_rad) * np.exp(-t / tau))
         th_sd = np.deg2rad(p.theta_sd_deg)
-        idx = np.searchsorted(self.aor_starts_s, t, side="right") - 1
-        t_aor = t - self.aor_starts_s[np.clip(idx, 0, None)]
-        ld = p.a_ld_arcsec_per_hr / PIXEL_SCALE_ARCSEC * t_aor / 3600.0
-        th_ld = np.deg2rad(p.theta_ld_deg)
-        dx = jit * np.cos(th_j) + wob * np.cos(th_w) + sd * np.cos(th_sd) + ld * np.cos(th_ld)
-        dy = jit * np.sin(th_j) + wob * np.sin(th_w) + sd * np.sin(th_sd) + ld * np.sin(th_ld)
+        dx = jit * np.cos(th_j) + wob * np.cos(th_w) + sd * np.cos(th_sd)
+        dy = jit * np.sin(th_j) + wob * np.sin(th_w) + sd * np.sin(th_sd)
+        if drift:
+            lx, ly = self.long_term_drift(t)
+            dx = dx + lx
+            dy = dy + ly
         return dx, dy
 
     def offsets(self, t_s) -> tuple[np.ndarray, np.ndarray]:
@@ -383,9 +394,10 @@ class PointingModel:
     def offsets_grid(self, start_index: int, n: int) -> tuple[np.ndarray, np.ndarray]:
         """Offsets at the model samples ``t = (start_index + i) dt``, ``i = 0 .. n-1``.
 
-        Fast path for regular sampling: the deterministic terms (periods of
-        60 s and more) are evaluated every 50 ms and linearly interpolated
-        (error below 1e-6 px), the FBM is taken sample by sample. Identical
+        Fast path for regular sampling: the continuous deterministic terms
+        (periods of 60 s and more) are evaluated every 50 ms and linearly
+        interpolated (error below 1e-6 px); the long-term drift, which jumps
+        at AOR starts, and the FBM are taken sample by sample. Identical
         across chunkings for the same indices.
         """
         if start_index < 0 or n < 0 or (start_index + n - 1) * self.dt_s > self.duration_s + self.dt_s:
@@ -396,7 +408,9 @@ class PointingModel:
         c0 = int(np.floor(t[0] / step)) if n else 0
         c1 = int(np.floor(t[-1] / step)) + 1 if n else 0
         tc = np.arange(c0, c1 + 1) * step
-        sx, sy = self.smooth_offsets(tc)
-        # interpolate inside each coarse cell; the coarse grid is anchored at t = 0
+        # continuous terms on a coarse grid anchored at t = 0, interpolated; the
+        # long-term drift (which jumps at AOR starts) and the FBM sample by sample
+        sx, sy = self.smooth_offsets(tc, drift=False)
+        lx, ly = self.long_term_drift(t)
         fbm = self.fbm_samples(start_index, n)
-        return np.interp(t, tc, sx) + fbm[0], np.interp(t, tc, sy) + fbm[1]
+        return (np.interp(t, tc, sx) + lx + fbm[0], np.interp(t, tc, sy) + ly + fbm[1])
