@@ -1,8 +1,8 @@
 """Point response functions (PRFs) of IRAC channel 2 (paper Appendix A.2).
 
 A PRF here is a table ``C(dy, dx)`` of the charge a pixel collects when the
-star sits ``(dx, dy)`` pixels *from* it (the pixel-integrated PSF times the
-intra-pixel response), sampled ``oversample`` times per pixel. A star at
+star sits ``(dx, dy)`` pixels *from* it (the PSF integrated over the pixel),
+sampled ``oversample`` times per pixel. A star at
 ``(x, y)`` (0-based pixel coordinates, centre of the first pixel at 0) gives
 pixel ``(px, py)`` the value ``G(x, y) C(py - y, px - x)``, interpolated with
 cubic B-splines; ``G`` is an optional position-dependent scalar gain (the warm
@@ -22,7 +22,8 @@ Two PRFs:
 :class:`BuiltinPRF`
     The package's own: the polychromatic (4.0-5.0 um) PSF of an 85 cm
     telescope with a central obstruction, blurred by a Gaussian (detector
-    diffusion; its width makes the noise pixels match real XO-3 frames),
+    diffusion; its width makes the noise pixels of frames jittered by the
+    default pointing model match real XO-3 frames),
     sampled at 1/20 px and integrated over 1.2" pixels, times the intra-pixel
     gain: a smooth function ``G`` of the star's sub-pixel position fitted so
     that aperture photometry across the sweet-spot pixel follows the warm
@@ -34,8 +35,9 @@ Two PRFs:
     aperture flux of a star can only vary as ``a0 + a1 cos(2 pi x) + ...``
     with the first harmonic damped by the optical MTF (a few %) and the
     blur; reproducing the 5% peak-to-peak gain map that way needs a pixel
-    response varying by more than 100% (tried in ``tools/fit_gainmap.py``
-    history: the least-squares response went negative). IRACSIM did the same
+    response varying by more than 100% (a least-squares fit of a Legendre
+    pixel response, tried while building this model, ran from -1500 to
+    +2800). IRACSIM did the same
     for its warm PRFs (Appendix A.2: the realisations were scaled with
     respect to each other).
 :class:`IrsaPRF`
