@@ -124,6 +124,10 @@ def test_from_config_section():
     lc = light_curve_from_config(SystemSection())
     assert lc.system.name == "XO-3b" and lc.depth_ppm == pytest.approx(1875.0)
     assert lc.options["tau_rad_days"] == 1.0 and lc.options["flux_ratio_model"] == "monochromatic"
+    raw = light_curve_from_config(SystemSection(tau_rad_days=0.0, fix_depth_ppm=0.0,
+                                                quadrature="iracsim2015"))
+    assert raw.options["quadrature"] == "iracsim2015"
+    assert raw.model_depth_ppm == pytest.approx(1863.1, abs=1.0)
 
 
 def test_section_4_2_linear_and_quadratic_biases(challenge):

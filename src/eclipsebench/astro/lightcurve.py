@@ -223,6 +223,7 @@ def light_curve_from_config(section, **overrides) -> LightCurve:
     system = get_system(section.name, section.catalogue or None)
     kwargs = dict(albedo=section.albedo, tau_rad_days=section.tau_rad_days,
                   omega_rot=section.omega_rot, flux_ratio_model=section.flux_ratio_model,
-                  wavelength_um=section.wavelength_um, fix_depth_ppm=section.fix_depth_ppm)
+                  wavelength_um=section.wavelength_um, fix_depth_ppm=section.fix_depth_ppm,
+                  quadrature=getattr(section, "quadrature", "gauss"))
     kwargs.update(overrides)
     return light_curve_function(system, **kwargs)
