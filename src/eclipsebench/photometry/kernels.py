@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .overlap import pixel_overlap
+from .overlap import _signed_area
 
 # Columns of the scalar output array of measure_frames.
 COLUMNS = ("peak_x", "peak_y", "bg0", "x_col", "y_col", "noise_pixels", "x_gauss", "y_gauss",
@@ -59,7 +59,8 @@ def _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters, buf):
     """Annulus statistics about (xc, yc) over pixels whose centres lie in [r_in, r_out].
 
     Returns (mean, sigma-clipped median, clipped standard deviation, number of
-    pixels used by the mean). Non-finite pixels are skipped. ``buf`` is scratch
+    pixels used by the mean); with ``clip_iters <= 0`` only the mean (the
+    median and deviation are NaN). Non-finite pixels are skipped. ``buf`` is scratch
     space at least as large as the number of pixels in the annulus.
     """
     ny, nx = img.shape
@@ -84,6 +85,8 @@ def _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters, buf):
     if n == 0:
         return np.nan, np.nan, np.nan, 0
     mean = total / n
+    if clip_iters <= 0:  # the mean only
+        return mean, np.nan, np.nan, n
     vals = np.sort(buf[:n])
     lo = 0
     hi = n  # current sample is vals[lo:hi]
@@ -256,12 +259,40 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
     dey = np.empty(n)
     dexs = np.empty(n)
     deys = np.empty(n)
-    jac = np.empty(npar)
     jtj = np.empty((npar, npar))
     jtr = np.empty(npar)
     a = np.empty((npar, npar))
     step = np.empty(npar)
     trial = np.empty(npar)
+    # The model A Ex_i Ey_j + C is separable, so every Jacobian column is
+    # coef * U[i] * V[j] with U, V taken from per-axis vectors (value,
+    # d/dcentre, d/dwidth, ones): J^T J entries are products of 1-D sums.
+    xb = np.empty((4, n))
+    yb = np.empty((4, n))
+    sxx = np.empty((4, 4))
+    syy = np.empty((4, 4))
+    ry = np.empty((4, n))
+    res = np.empty((n, n))
+    cx_idx = np.empty(npar, dtype=np.int64)
+    cy_idx = np.empty(npar, dtype=np.int64)
+    coef = np.empty(npar)
+    # column q: (x vector, y vector); A multiplies all but the amplitude and constant
+    cx_idx[0] = 0
+    cy_idx[0] = 0
+    cx_idx[1] = 1
+    cy_idx[1] = 0
+    cx_idx[2] = 0
+    cy_idx[2] = 1
+    if fixed:
+        cx_idx[3] = 3
+        cy_idx[3] = 3
+    else:
+        cx_idx[3] = 2
+        cy_idx[3] = 0
+        cx_idx[4] = 0
+        cy_idx[4] = 2
+        cx_idx[5] = 3
+        cy_idx[5] = 3
     chi2 = _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
     lam = 1e-3
     converged = False
@@ -269,30 +300,47 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
     for _ in range(max_iter):
         if not fresh:  # a rejected trial overwrote them
             chi2 = _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
-        for q in range(npar):
-            jtr[q] = 0.0
-            for k in range(npar):
-                jtj[q, k] = 0.0
         c = p[3] if fixed else p[5]
+        for i in range(n):
+            xb[0, i] = ex[i]
+            xb[1, i] = dex[i]
+            xb[2, i] = dexs[i]
+            xb[3, i] = 1.0
+            yb[0, i] = ey[i]
+            yb[1, i] = dey[i]
+            yb[2, i] = deys[i]
+            yb[3, i] = 1.0
+        for u in range(4):
+            for v in range(u, 4):
+                su = 0.0
+                sv = 0.0
+                for i in range(n):
+                    su += xb[u, i] * xb[v, i]
+                    sv += yb[u, i] * yb[v, i]
+                sxx[u, v] = su
+                sxx[v, u] = su
+                syy[u, v] = sv
+                syy[v, u] = sv
         for j in range(n):
             for i in range(n):
-                r = d[j, i] - (p[0] * ex[i] * ey[j] + c)
-                jac[0] = ex[i] * ey[j]
-                jac[1] = p[0] * dex[i] * ey[j]
-                jac[2] = p[0] * ex[i] * dey[j]
-                if fixed:
-                    jac[3] = 1.0
-                else:
-                    jac[3] = p[0] * dexs[i] * ey[j]
-                    jac[4] = p[0] * ex[i] * deys[j]
-                    jac[5] = 1.0
-                for q in range(npar):
-                    jtr[q] += jac[q] * r
-                    for k in range(q, npar):
-                        jtj[q, k] += jac[q] * jac[k]
+                res[j, i] = d[j, i] - (p[0] * ex[i] * ey[j] + c)
+        for b in range(4):
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += res[j, i] * yb[b, j]
+                ry[b, i] = acc
         for q in range(npar):
-            for k in range(q):
-                jtj[q, k] = jtj[k, q]
+            coef[q] = 1.0 if (q == 0 or cx_idx[q] == 3) else p[0]
+        for q in range(npar):
+            acc = 0.0
+            for i in range(n):
+                acc += xb[cx_idx[q], i] * ry[cy_idx[q], i]
+            jtr[q] = coef[q] * acc
+            for k in range(q, npar):
+                v = coef[q] * coef[k] * sxx[cx_idx[q], cx_idx[k]] * syy[cy_idx[q], cy_idx[k]]
+                jtj[q, k] = v
+                jtj[k, q] = v
         improved = False
         fresh = False
         while lam < 1e12:
@@ -317,7 +365,7 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
                         lam = max(lam * 0.1, 1e-9)
                         improved = True
                         fresh = True
-                        if (abs(step[1]) < 1e-6 and abs(step[2]) < 1e-6) or (
+                        if (abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5) or (
                                 chi2_old - chi2 <= 1e-14 * chi2_old):
                             converged = True
                         break
@@ -403,8 +451,12 @@ def _frame_lsq_asym(img, px, py, bg, grid_h, win_r):
 def _frame_apertures(img, xc, yc, radii, sums, areas):
     """Exact-overlap aperture sums for each radius (``sums[k] = sum w f``, ``areas[k] = sum w``).
 
-    Pixels outside the image contribute nothing (as in photutils); a
-    non-finite pixel with non-zero weight makes that radius's sum NaN.
+    For each radius the signed quadrant areas ``S`` are evaluated once per
+    pixel corner (shared by the four pixels that meet there); a pixel's
+    overlap is ``S11 - S01 - S10 + S00``. Pixels entirely inside get weight 1
+    and pixels entirely outside are skipped exactly. Pixels outside the image
+    contribute nothing (as in photutils); a non-finite pixel with non-zero
+    weight makes that radius's sum NaN.
     """
     ny, nx = img.shape
     nr = radii.shape[0]
@@ -425,35 +477,51 @@ def _frame_apertures(img, xc, yc, radii, sums, areas):
             sums[k] = np.nan
             areas[k] = np.nan
         return
-    j0 = max(int(math.floor(yc - rmax - 0.5)), 0)
-    j1 = min(int(math.ceil(yc + rmax + 0.5)), ny - 1)
-    i0 = max(int(math.floor(xc - rmax - 0.5)), 0)
-    i1 = min(int(math.ceil(xc + rmax + 0.5)), nx - 1)
-    for j in range(j0, j1 + 1):
-        y0 = j - 0.5 - yc
-        y1 = j + 0.5 - yc
-        ady = max(abs(j - yc) - 0.5, 0.0)
-        fdy = abs(j - yc) + 0.5
-        for i in range(i0, i1 + 1):
-            x0 = i - 0.5 - xc
-            x1 = i + 0.5 - xc
-            adx = max(abs(i - xc) - 0.5, 0.0)
-            fdx = abs(i - xc) + 0.5
-            dmin2 = adx * adx + ady * ady
-            dmax2 = fdx * fdx + fdy * fdy
-            v = img[j, i]
-            for k in range(nr):
-                r = radii[k]
-                r2 = r * r
-                if dmin2 >= r2:
+    side = int(2.0 * rmax + 4.0)
+    corners = np.empty((side, side))
+    for k in range(nr):
+        r = radii[k]
+        if not (r > 0.0):
+            sums[k] = np.nan
+            areas[k] = np.nan
+            continue
+        r2 = r * r
+        # pixels i with i + 1/2 > xc - r and i - 1/2 < xc + r
+        i0 = max(int(math.floor(xc - r - 0.5)) + 1, 0)
+        i1 = min(int(math.ceil(xc + r + 0.5)) - 1, nx - 1)
+        j0 = max(int(math.floor(yc - r - 0.5)) + 1, 0)
+        j1 = min(int(math.ceil(yc + r + 0.5)) - 1, ny - 1)
+        if i1 < i0 or j1 < j0:
+            continue
+        for a in range(j1 - j0 + 2):
+            cy = j0 - 0.5 + a - yc
+            for b in range(i1 - i0 + 2):
+                corners[a, b] = _signed_area(i0 - 0.5 + b - xc, cy, r)
+        s = 0.0
+        ar = 0.0
+        for j in range(j0, j1 + 1):
+            a = j - j0
+            ady = max(abs(j - yc) - 0.5, 0.0)
+            fdy = abs(j - yc) + 0.5
+            for i in range(i0, i1 + 1):
+                adx = max(abs(i - xc) - 0.5, 0.0)
+                if adx * adx + ady * ady >= r2:
                     continue
-                if dmax2 <= r2:
+                fdx = abs(i - xc) + 0.5
+                if fdx * fdx + fdy * fdy <= r2:
                     w = 1.0
                 else:
-                    w = pixel_overlap(x0, x1, y0, y1, r)
-                if w > 0.0:
-                    sums[k] += w * v
-                    areas[k] += w
+                    b = i - i0
+                    w = (corners[a + 1, b + 1] - corners[a + 1, b] - corners[a, b + 1]
+                         + corners[a, b])
+                    if w <= 0.0:
+                        continue
+                    if w > 1.0:
+                        w = 1.0
+                s += w * img[j, i]
+                ar += w
+        sums[k] = s
+        areas[k] = ar
 
 
 # ----------------------------------------------------------------------------- the whole set
@@ -501,7 +569,7 @@ def measure_frames(frames, guess_x, guess_y, stamp_x, stamp_y, search_half, box_
             continue
         out[f, 0] = px
         out[f, 1] = py
-        bg0, _m, _s, _n = _frame_annulus(img, float(px), float(py), r_in, r_out, 0.0, 1, buf)
+        bg0, _m, _s, _n = _frame_annulus(img, float(px), float(py), r_in, r_out, 0.0, 0, buf)
         out[f, 2] = bg0
         xcol, ycol, beta = _frame_col(img, px, py, box_half, bg0)
         out[f, 3] = xcol
