@@ -116,3 +116,23 @@ def test_cli_json_summary_and_bad_values(tmp_path, capsys):
         err = capsys.readouterr().err
         assert code == 2, override
         assert key in err and err.count("\n") == 1
+
+
+def test_systematics_free_twin_holds_the_star_at_its_peakup_position(runs, tmp_path):
+    cfg = load_config(None, TINY + ["challenge.seed=7", "simulation.pointing_motion=false",
+                                    "simulation.flat_gain=true"])
+    res = simulate_challenge(cfg, tmp_path, workers=1, calibration=False)
+    row = res.truth_rows[0]
+    lc = Table.read(tmp_path / "lightcurves" / "epoch_01.ecsv")
+    for key, label in ((20150000, "pre"), (20150001, "main")):
+        aor = lc[lc["aorkey"] == key]
+        assert np.all(aor["x_true"] == row[f"x0_{label}_px"])
+        assert np.all(aor["y_true"] == row[f"y0_{label}_px"])
+    # only the two peak-ups differ: the spread is that of two positions
+    assert row["x_sd"] == pytest.approx(np.std(lc["x_true"]))
+    # the twin has the same peak-ups, pointing parameters and eclipse as its parent
+    parent = runs["a"][1].truth_rows[0]
+    for key in ("x0_pre_px", "y0_main_px", "ptg_a_sd_px", "ptg_theta_w_deg", "start_bmjd"):
+        assert row[key] == parent[key], key
+    with fits.open(tmp_path / "r20150000/ch2/bcd/SPITZER_I2_20150000_0000_0000_1_bcd.fits") as h:
+        assert h[0].header["SIMPTG"] is False and h[0].header["SIMFLAT"] is True
