@@ -119,7 +119,8 @@ def test_kr_pmap_matches_brute_force_and_closed_form_scale(tmp_path, use_np):
     cal = load_calibration_table(path)
     data = _random_epoch()
     astro = 1 + 1e-3 * np.cos(np.arange(len(data)) / 70.0)
-    model = get_method("kr-pmap")(data, pmap=str(path), k=15, use_noise_pixels=use_np)
+    model = get_method("kr-pmap")(data, pmap=str(path), k=15, use_noise_pixels=use_np,
+                                  match_noise_pixels=False)
     scales = [np.std(data.x), np.std(data.y)] + ([np.std(np.sqrt(data.noise_pixels))] if use_np else [])
     gain = _brute_kr(data.x, data.y, data.noise_pixels if use_np else None, cal.x, cal.y,
                      cal.noise_pixels, cal.flux, 15, scales, exclude_self=False) / cal.flux.mean()
@@ -129,6 +130,33 @@ def test_kr_pmap_matches_brute_force_and_closed_form_scale(tmp_path, use_np):
     best = minimize_scalar(chi2, bracket=(9e4, 1.1e5), tol=1e-12).x
     np.testing.assert_allclose(model.predict(astro), best * astro * gain, rtol=1e-8)
     assert model.n_effective_params() == 1
+
+
+def test_kr_pmap_removes_the_noise_pixel_offset_of_the_calibration_set(tmp_path):
+    # Calibration noise pixels are a smooth function of position; the science
+    # frames' are the same function plus 0.3 (longer exposures, more smear).
+    g = np.random.default_rng(8)
+    n = 20000
+    cx, cy = g.uniform(14.9, 15.3, n), g.uniform(14.8, 15.2, n)
+
+    def beta(x, y):
+        return 4.0 + 2.0 * (x - 15.1) ** 2 + 3.0 * (y - 15.0) ** 2
+
+    flux = 2e5 * (1 + 0.01 * (cx - 15.1) - 0.02 * (cy - 15.0) ** 2)
+    path = _write_table(tmp_path / "cal.fits", x=cx, y=cy, noise_pixels=beta(cx, cy), flux=flux,
+                        flux_err=np.sqrt(flux))
+    data = _random_epoch()
+    shifted = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
+                        x=data.x, y=data.y, noise_pixels=beta(data.x, data.y) + 0.3)
+    same = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
+                     x=data.x, y=data.y, noise_pixels=beta(data.x, data.y))
+    matched = get_method("kr-pmap")(shifted, pmap=str(path))
+    assert matched.noise_pixels_offset == pytest.approx(0.3, abs=0.002)
+    reference = get_method("kr-pmap")(same, pmap=str(path), match_noise_pixels=False)
+    np.testing.assert_allclose(matched.gain, reference.gain, rtol=2e-5)
+    unmatched = get_method("kr-pmap")(shifted, pmap=str(path), match_noise_pixels=False)
+    assert np.max(np.abs(unmatched.gain - reference.gain)) > 10 * np.max(
+        np.abs(matched.gain - reference.gain))
 
 
 def test_kr_pmap_finds_the_simulation_calibration_set(epoch_sys, simdir):

@@ -54,7 +54,7 @@ def central_stamp(pixels: np.ndarray, size: int) -> np.ndarray:
         raise InputError(f"pixel stamps: {a[0].size} values per frame is not a square stamp")
     if size > m or (m - size) % 2:
         raise InputError(f"method 'pld': cannot take a {size}x{size} stamp from {m}x{m} stamps "
-                         "(the table has too small a stamp)")
+                         "(read the table's 5x5 stamps with reduce.stamp = \"stamp5\")")
     a = a.reshape(n, m, m)
     o = (m - size) // 2
     return a[:, o:o + size, o:o + size].reshape(n, size * size)
