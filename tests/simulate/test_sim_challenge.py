@@ -28,14 +28,15 @@ def _hashes(root: Path) -> dict[str, str]:
 def runs(tmp_path_factory):
     base = tmp_path_factory.mktemp("sim")
     out = {}
-    for name, seed in (("a", 7), ("b", 7), ("c", 8)):
+    for name, seed, workers in (("a", 7, 1), ("b", 7, 2), ("c", 8, 1)):
         cfg = load_config(None, TINY + [f"challenge.seed={seed}"])
-        res = simulate_challenge(cfg, base / name, workers=1)
+        res = simulate_challenge(cfg, base / name, workers=workers)
         out[name] = (base / name, res)
     return out
 
 
 def test_same_seed_same_bytes_different_seed_different_data(runs):
+    """Run b used two worker processes, run a one: the bytes must not care."""
     (a, ra), (b, _), (c, _) = runs["a"], runs["b"], runs["c"]
     ha, hb, hc = _hashes(a), _hashes(b), _hashes(c)
     assert ha == hb

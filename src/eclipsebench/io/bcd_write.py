@@ -18,11 +18,11 @@ from .atomic import write_bytes
 from .header_template import (
     IRAC_TURN_ON_MJD_UTC,
     BcdHeaderInfo,
-    Card,
     bcd_cards,
     bunc_cards,
     cube_cards,
-    format_header,
+    end_header,
+    format_cards,
     sim_cards,
 )
 
@@ -85,9 +85,11 @@ class AorWriter:
     def __init__(self, root: str | Path, info: BcdHeaderInfo):
         self.root = Path(root)
         self.info = info
-        self._bcd_before, self._bcd_after = bcd_cards(info)
-        self._bcd_sim = sim_cards(info)
-        self._bunc_before, self._bunc_after = bunc_cards(info)
+        before, after = bcd_cards(info)
+        self._bcd_before, self._bcd_after = format_cards(before), format_cards(after)
+        self._sim = format_cards(sim_cards(info))
+        before, after = bunc_cards(info)
+        self._bunc_before, self._bunc_after = format_cards(before), format_cards(after)
 
     def with_info(self, **changes) -> AorWriter:
         """A writer for the same folder with some header values changed."""
@@ -104,12 +106,11 @@ class AorWriter:
         times, ids = cube_cards(date_obs=date_obs, mjd_obs=mjd_obs, bmjd_obs=bmjd_obs,
                                 aintbeg=aintbeg, atimeend=atimeend, expid=expid,
                                 aorkey=self.info.aorkey, xy_mean=pairs)
-        bcd_cards_all: list[Card] = (self._bcd_before + times + self._bcd_after + ids
-                                     + self._bcd_sim)
-        bunc_ids = [c for c in ids if not c[0].startswith("XYMEAN")]
-        bunc_all: list[Card] = (self._bunc_before + times + self._bunc_after + bunc_ids
-                                + self._bcd_sim)
-        return format_header(bcd_cards_all), format_header(bunc_all)
+        t = format_cards(times)
+        bunc_ids = format_cards(c for c in ids if not c[0].startswith("XYMEAN"))
+        h_bcd = end_header(self._bcd_before + t + self._bcd_after + format_cards(ids) + self._sim)
+        h_bunc = end_header(self._bunc_before + t + self._bunc_after + bunc_ids + self._sim)
+        return h_bcd, h_bunc
 
     def write_cube(self, *, expid: int, bcd_mjysr: np.ndarray, bunc_mjysr: np.ndarray,
                    bmjd_obs: float, mjd_obs: float, date_obs: str,

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Card", "format_card", "format_header", "BcdHeaderInfo", "bcd_cards", "bunc_cards",
+__all__ = ["Card", "format_card", "format_cards", "end_header", "format_header", "BcdHeaderInfo", "bcd_cards", "bunc_cards",
            "cube_cards", "sim_cards", "IRAC_TURN_ON_MJD_UTC", "XO3_RA_DEG", "XO3_DEC_DEG", "CD_MATRIX_DEG"]
 
 Card = tuple[str, object, str]
@@ -83,15 +83,20 @@ def format_card(key: str, value: object = None, comment: str = "") -> bytes:
     return data
 
 
+def format_cards(cards: Iterable[Card]) -> bytes:
+    """The 80-byte cards of ``cards``, concatenated (no END, no padding)."""
+    return b"".join(format_card(key, value, comment) for key, value, comment in cards)
+
+
+def end_header(card_bytes: bytes) -> bytes:
+    """Append END and blank padding to a multiple of 2880 bytes."""
+    out = card_bytes + b"END".ljust(80)
+    return out + b" " * ((-len(out)) % 2880)
+
+
 def format_header(cards: Iterable[Card]) -> bytes:
     """A complete FITS header (cards, END, blank padding to 2880 bytes)."""
-    out = bytearray()
-    for key, value, comment in cards:
-        out += format_card(key, value, comment)
-    out += b"END".ljust(80)
-    pad = (-len(out)) % 2880
-    out += b" " * pad
-    return bytes(out)
+    return end_header(format_cards(cards))
 
 
 @dataclass(frozen=True)

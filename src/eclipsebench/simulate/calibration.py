@@ -32,7 +32,8 @@ from ..seeding import rng
 from .render import fowler_uniform
 from .star import make_star_imager
 
-__all__ = ["write_calibration_set", "simulate_calibration", "measure_stamps",
+__all__ = ["write_calibration_set", "write_calibration_table", "simulate_calibration",
+           "calibration_chunk", "concat_chunks", "n_chunks", "measure_stamps",
            "aperture_weight_table", "CHUNK_FRAMES", "STAMP_HALF", "FRAMES_PER_POINTING"]
 
 CHUNK_FRAMES = 16384
@@ -131,70 +132,90 @@ def measure_stamps(stamps_e: np.ndarray, *, radius_px: float, annulus_px: tuple[
             "flux_err": flux_err, "background": bg}
 
 
-def simulate_calibration(cfg: Config, *, n_frames: int | None = None,
-                         mode: ReadoutMode = SUB_0P1S, flux_aperture_e: float = CALIBRATION_FLUX_E
-                         ) -> dict[str, np.ndarray]:
-    """Simulate and measure the calibration star (see the module docstring).
+def calibration_chunk(cfg: Config, chunk: int, n_total: int | None = None, *,
+                      mode: ReadoutMode = SUB_0P1S,
+                      flux_aperture_e: float = CALIBRATION_FLUX_E) -> dict[str, np.ndarray]:
+    """Simulate and measure frames ``chunk * 16384 ...`` of the calibration set.
 
     Pointings of 64 frames are centred uniformly at random within a square of
     side ``simulation.calibration_box_px`` around the sweet-spot pixel centre
     (15, 15); frames scatter about their pointing by 0.01 px. Streams:
-    ``("simulate", "calibration", chunk, "positions"|"photon"|"read")``, chunks
-    of 16,384 frames, so the output depends on the seed only.
+    ``("simulate", "calibration", chunk, "positions"|"photon"|"read")``, so the
+    output depends on the seed only, not on how chunks are spread over workers.
     """
     from ..simulate.challenge import read_noise_of
 
     sim = cfg.simulation
     seed = cfg.challenge.seed
-    n_total = sim.calibration_frames if n_frames is None else int(n_frames)
+    n_total = sim.calibration_frames if n_total is None else int(n_total)
+    n = min(CHUNK_FRAMES, n_total - chunk * CHUNK_FRAMES)
     star = make_star_imager(cfg)
     e_per_unit = star.electrons_per_unit(flux_aperture_e)
     ticks_exp = mode.fowler + mode.wait
     sky_e = star.sky_e_per_px(sim.background_e_per_px, sim.flux_aperture_e,
                               sim.background_reference)
-    bg_per_tick = sky_e * (mode.t_exp_s / ((cfg.observation.fowler
-                                                             + cfg.observation.wait)
-                                                            * cfg.observation.sample_time_s))
-    bg_per_tick /= ticks_exp
-    read_e = read_noise_of(cfg)
-    read_sigma = read_e * np.sqrt(2.0 / mode.fowler)
+    obs = cfg.observation
+    bg_per_tick = sky_e * mode.t_exp_s / ((obs.fowler + obs.wait) * obs.sample_time_s) / ticks_exp
+    read_sigma = read_noise_of(cfg) * np.sqrt(2.0 / mode.fowler)
     w = fowler_weights(mode).astype(float)
     var_per_e = float((w**2).sum() / (mode.fowler**2 * ticks_exp))
-    table = aperture_weight_table(sim.aperture_radius_px)
-    box = sim.calibration_box_px
-    out: dict[str, list[np.ndarray]] = {k: [] for k in ("x", "y", "noise_pixels", "flux",
-                                                       "flux_err", "x_true", "y_true",
-                                                       "background")}
-    n_chunks = -(-n_total // CHUNK_FRAMES)
-    for c in range(n_chunks):
-        n = min(CHUNK_FRAMES, n_total - c * CHUNK_FRAMES)
-        g = rng(seed, "simulate", "calibration", c, "positions")
-        n_point = -(-n // FRAMES_PER_POINTING)
-        centres = 15.0 + box * (g.random((n_point, 2)) - 0.5)
-        pos = np.repeat(centres, FRAMES_PER_POINTING, axis=0)[:n]
-        pos = pos + g.normal(0.0, JITTER_PX, size=pos.shape)
-        x_true, y_true = pos[:, 0], pos[:, 1]
-        stamps, x0, y0 = star.prf.render_stamp(x_true, y_true, half=STAMP_HALF)
-        rate = stamps * (e_per_unit / ticks_exp) + bg_per_tick
-        frames = fowler_uniform(rate, mode, rng(seed, "simulate", "calibration", c, "photon"))
-        frames += rng(seed, "simulate", "calibration", c, "read").standard_normal(
-            frames.shape) * read_sigma
-        m = measure_stamps(frames, radius_px=sim.aperture_radius_px, annulus_px=(3.0, 7.0),
-                           var_per_e=var_per_e, read_var_e2=read_sigma**2, weight_table=table)
-        out["x"].append(x0 + STAMP_HALF + m["x_off"])
-        out["y"].append(y0 + STAMP_HALF + m["y_off"])
-        for k in ("noise_pixels", "flux", "flux_err", "background"):
-            out[k].append(m[k])
-        out["x_true"].append(x_true)
-        out["y_true"].append(y_true)
-    return {k: (np.concatenate(v) if v else np.zeros(0)) for k, v in out.items()}
+    table = _weight_table(sim.aperture_radius_px)
+
+    g = rng(seed, "simulate", "calibration", chunk, "positions")
+    n_point = -(-n // FRAMES_PER_POINTING)
+    centres = 15.0 + sim.calibration_box_px * (g.random((n_point, 2)) - 0.5)
+    pos = np.repeat(centres, FRAMES_PER_POINTING, axis=0)[:n]
+    pos = pos + g.normal(0.0, JITTER_PX, size=pos.shape)
+    x_true, y_true = pos[:, 0], pos[:, 1]
+    stamps, x0, y0 = star.prf.render_stamp(x_true, y_true, half=STAMP_HALF)
+    rate = stamps * (e_per_unit / ticks_exp) + bg_per_tick
+    frames = fowler_uniform(rate, mode, rng(seed, "simulate", "calibration", chunk, "photon"))
+    frames += rng(seed, "simulate", "calibration", chunk, "read").standard_normal(
+        frames.shape) * read_sigma
+    m = measure_stamps(frames, radius_px=sim.aperture_radius_px, annulus_px=(3.0, 7.0),
+                       var_per_e=var_per_e, read_var_e2=read_sigma**2, weight_table=table)
+    return {"x": x0 + STAMP_HALF + m["x_off"], "y": y0 + STAMP_HALF + m["y_off"],
+            "noise_pixels": m["noise_pixels"], "flux": m["flux"], "flux_err": m["flux_err"],
+            "x_true": x_true, "y_true": y_true, "background": m["background"]}
+
+
+_TABLES: dict[float, tuple[np.ndarray, float]] = {}
+
+
+def _weight_table(radius_px: float) -> tuple[np.ndarray, float]:
+    table = _TABLES.get(radius_px)
+    if table is None:
+        table = _TABLES[radius_px] = aperture_weight_table(radius_px)
+    return table
+
+
+def n_chunks(cfg: Config, n_total: int | None = None) -> int:
+    """Chunks of 16,384 frames in the calibration set."""
+    n_total = cfg.simulation.calibration_frames if n_total is None else int(n_total)
+    return -(-n_total // CHUNK_FRAMES)
+
+
+def simulate_calibration(cfg: Config, *, n_frames: int | None = None) -> dict[str, np.ndarray]:
+    """The whole calibration set in this process (see :func:`calibration_chunk`)."""
+    parts = [calibration_chunk(cfg, c, n_frames) for c in range(n_chunks(cfg, n_frames))]
+    return concat_chunks(parts)
+
+
+def concat_chunks(parts: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Concatenate chunk results (in chunk order)."""
+    keys = ("x", "y", "noise_pixels", "flux", "flux_err", "x_true", "y_true", "background")
+    return {k: (np.concatenate([p[k] for p in parts]) if parts else np.zeros(0)) for k in keys}
 
 
 def write_calibration_set(cfg: Config, out_dir: str | Path) -> str:
     """Simulate the calibration set and write ``DIR/calibration/pmap_calibration.fits``."""
+    return write_calibration_table(cfg, simulate_calibration(cfg), out_dir)
+
+
+def write_calibration_table(cfg: Config, data: dict[str, np.ndarray], out_dir: str | Path) -> str:
+    """Write measured calibration frames to ``DIR/calibration/pmap_calibration.fits``."""
     from astropy.table import Table
 
-    data = simulate_calibration(cfg)
     table = Table({k: data[k] for k in ("x", "y", "noise_pixels", "flux", "flux_err",
                                         "x_true", "y_true", "background")})
     for k in ("x", "y", "x_true", "y_true"):

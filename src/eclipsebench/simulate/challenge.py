@@ -20,7 +20,6 @@ A rerun skips complete AORs and epochs.
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, fields
@@ -52,6 +51,7 @@ __all__ = ["simulate_challenge", "ChallengeResult", "pointing_ranges_from_config
            "readout_from_config", "frame_model_from_config", "STATE_DIR"]
 
 STATE_DIR = ".simstate"
+CAL_CHUNKS_PER_TASK = 3
 TRUTH_COLUMNS = ("epoch", "aorkey_pre", "aorkey_main", "start_bmjd", "t_ecl_bmjd", "depth_ppm",
                  "x_mean", "x_sd", "y_mean", "y_sd", "xy_cov", "n_frames")
 log = get_logger("simulate")
@@ -306,13 +306,13 @@ def _run_aor_task(task: _AorTask) -> tuple[int, int]:
     return task.plan.epoch, task.aor_index
 
 
-def _run_calibration_task(cfg: Config, out_dir: str) -> str:
+def _run_calibration_task(cfg: Config, chunks: list[int]) -> tuple[list[int], list[dict]]:
     from ..errors import InputError
-    from .calibration import write_calibration_set
+    from .calibration import calibration_chunk
 
     try:
-        return write_calibration_set(cfg, out_dir)
-    except InputError as exc:
+        return chunks, [calibration_chunk(cfg, c) for c in chunks]
+    except InputError as exc:  # ConfigError/DataError do not survive pickling
         raise InputError(str(exc)) from None
 
 
@@ -450,27 +450,32 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
     todo.sort(key=lambda t: -t.plan.aors[t.aor_index].n_cubes)
 
     cal_path = None
-    bar = progress(total=len(todo) + int(cal_needed), desc="simulate", unit="task")
-    if workers > 1 and len(todo) + int(cal_needed) > 1:
+    from .calibration import concat_chunks, n_chunks, write_calibration_table
+
+    cal_tasks = ([list(range(c, min(c + CAL_CHUNKS_PER_TASK, n_chunks(cfg))))
+                  for c in range(0, n_chunks(cfg), CAL_CHUNKS_PER_TASK)] if cal_needed else [])
+    cal_parts: dict[int, dict] = {}
+    bar = progress(total=len(todo) + len(cal_tasks), desc="simulate", unit="task")
+    if workers > 1 and len(todo) + len(cal_tasks) > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
             futures = [pool.submit(_run_aor_task, t) for t in todo]
-            if cal_needed:
-                futures.append(pool.submit(_run_calibration_task, cfg, str(out)))
+            futures += [pool.submit(_run_calibration_task, cfg, ch) for ch in cal_tasks]
             for fut in as_completed(futures):
                 res = fut.result()
-                if isinstance(res, (str, os.PathLike)):
-                    cal_path = Path(res)
+                if isinstance(res[1], list):
+                    cal_parts.update(zip(res[0], res[1], strict=True))
                 bar.update(1)
     else:
         for t in todo:
             simulate_aor(t.cfg, t.plan, t.aor_index, t.out_dir, t.seed, light_curve=lc)
             bar.update(1)
-        if cal_needed:
-            from .calibration import write_calibration_set
-
-            cal_path = Path(write_calibration_set(cfg, str(out)))
+        for ch in cal_tasks:
+            cal_parts.update(zip(*_run_calibration_task(cfg, ch), strict=True))
             bar.update(1)
     bar.close()
+    if cal_needed:
+        data = concat_chunks([cal_parts[c] for c in sorted(cal_parts)])
+        cal_path = Path(write_calibration_table(cfg, data, out))
 
     for plan in plans:
         if plan.epoch not in rows:

@@ -118,24 +118,32 @@ def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
     nf = dx.shape[0]
     n_max = mode.n_max
     span = model.subsamples_per_tick
-    # sub-sample s of tick k is grid sample k n + s, s = 0 .. span - 1
-    idx = (np.arange(n_max)[:, None] * n + np.arange(span)[None, :]).ravel()
-    sx = dx[:, idx].reshape(nf, n_max, span)
-    sy = dy[:, idx].reshape(nf, n_max, span)
+    if span == n:
+        sx = dx[:, :n_max * n].reshape(nf, n_max, n)
+        sy = dy[:, :n_max * n].reshape(nf, n_max, n)
+    else:  # sub-sample s of tick k is grid sample k n + s, s = 0 .. span - 1
+        idx = (np.arange(n_max)[:, None] * n + np.arange(span)[None, :]).ravel()
+        sx = dx[:, idx].reshape(nf, n_max, span)
+        sy = dy[:, idx].reshape(nf, n_max, span)
     w = fowler_weights(mode).astype(float)
-    tick_x = sx.mean(axis=2)
-    tick_y = sy.mean(axis=2)
-    x_mean = tick_x @ w / w.sum()
-    y_mean = tick_y @ w / w.sum()
-    ux = sx - x_mean[:, None, None]
-    uy = sy - y_mean[:, None, None]
+    # power sums per tick, then shifted to the frame mean (offsets are < 2 px,
+    # so the shift loses nothing in float64)
+    s1x = sx.sum(axis=2)
+    s1y = sy.sum(axis=2)
+    sxx = np.einsum("ftk,ftk->ft", sx, sx)
+    sxy = np.einsum("ftk,ftk->ft", sx, sy)
+    syy = np.einsum("ftk,ftk->ft", sy, sy)
+    x_mean = (s1x @ w) / (span * w.sum())
+    y_mean = (s1y @ w) / (span * w.sum())
+    mx = x_mean[:, None]
+    my = y_mean[:, None]
     moments = np.empty((nf, n_max, N_MOMENTS))
     moments[:, :, 0] = span / n
-    moments[:, :, 1] = ux.sum(axis=2) / n
-    moments[:, :, 2] = uy.sum(axis=2) / n
-    moments[:, :, 3] = (ux * ux).sum(axis=2) / n
-    moments[:, :, 4] = (ux * uy).sum(axis=2) / n
-    moments[:, :, 5] = (uy * uy).sum(axis=2) / n
+    moments[:, :, 1] = (s1x - span * mx) / n
+    moments[:, :, 2] = (s1y - span * my) / n
+    moments[:, :, 3] = (sxx - 2 * mx * s1x + span * mx * mx) / n
+    moments[:, :, 4] = (sxy - mx * s1y - my * s1x + span * mx * my) / n
+    moments[:, :, 5] = (syy - 2 * my * s1y + span * my * my) / n
     return x_mean, y_mean, moments
 
 
