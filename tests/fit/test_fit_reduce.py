@@ -124,3 +124,21 @@ def test_method_hooks_extra_variance_and_hyperparameters(monkeypatch, polygain, 
     # alternation: called at least once, stops when the solution no longer moves
     assert 1 <= len(calls) <= 5
     assert hooked.depth_ppm == pytest.approx(plain.depth_ppm, abs=1e-3)
+
+
+def test_method_can_opt_out_of_the_prayer_bead(monkeypatch, polygain, xo3_epoch):
+    from typing import ClassVar
+
+    from eclipsebench.decorrelate import base
+
+    class NoBead(polygain):
+        name: ClassVar[str] = "test-polygain-nobead"
+        use_prayer_bead: ClassVar[bool] = False
+
+    monkeypatch.setitem(base._REGISTRY, NoBead.name, NoBead)
+    table = xo3_epoch["table"](seed=9)[::4]
+    res = reduce_epoch(table, NoBead.name, options=ReduceSection(prayer_bead_shifts=4))
+    assert res.depth_err_prayer_bead_ppm is None
+    assert res.depth_err_method == "jacobian_beta"
+    with_bead = reduce_epoch(table, polygain.name, options=ReduceSection(prayer_bead_shifts=4))
+    assert with_bead.depth_err_prayer_bead_ppm > 0

@@ -118,6 +118,11 @@ class Systematics(ABC):
     #: The eclipse shape the fitter uses when ``[reduce] eclipse_shape = "auto"``:
     #: "physical" (the orbit's) or "box" (the faithful default of SP(K2)).
     default_eclipse_shape: ClassVar[str] = "physical"
+    #: Whether the fitter's prayer-bead error applies to this method. A method
+    #: whose model follows the correlated noise itself (a GP's conditional
+    #: mean) leaves residuals that are not the noise the bead should shift,
+    #: and may set this to False (its errors then come from the Jacobian and MCMC).
+    use_prayer_bead: ClassVar[bool] = True
 
     def __init__(self, data: EpochData, **options: Any) -> None:
         missing = [c for c in self.requires if getattr(data, c, None) is None]

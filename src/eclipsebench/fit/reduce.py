@@ -309,7 +309,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     jac_tecl = fit.error("t_ecl_bmjd")
 
     pb_depth = pb_tecl = None
-    if errors and options.prayer_bead_shifts > 0:
+    if errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True):
         beads = prayer_bead(systematics, astro_model, fit, n_shifts=options.prayer_bead_shifts)
         pb_depth = float(np.std(beads[:, 0], ddof=1))
         pb_tecl = float(np.std(beads[:, 1], ddof=1))
