@@ -140,3 +140,22 @@ def test_unreadable_table_is_a_data_error(tmp_path):
     bad.write_text("nope")
     with pytest.raises(DataError, match="t.fits"):
         read_photometry(bad)
+
+
+def test_centroid_outliers_catch_bad_pixels_not_pointing_excursions(tmp_path, make_bcd,
+                                                                     gaussian_prf):
+    rng = np.random.default_rng(8)
+    n = 128
+    xs = 15.1 + 0.01 * rng.standard_normal(n)
+    ys = 15.0 + 0.01 * rng.standard_normal(n)
+    ys[50:90] -= 0.08 * np.sin(np.linspace(0, np.pi, 40))  # a 40-frame pointing excursion
+    cube = np.stack([gaussian_prf(x, y, 0.6, 7e4) for x, y in zip(xs, ys, strict=True)]) + 5.0
+    cube = rng.poisson(cube).astype(float)
+    cube[100, 17, 12] += 3000.0  # a hit in the box corner (CR rejection switched off)
+    make_bcd(tmp_path, cube)
+    opt = PhotometrySection(cosmic_ray_window=0)
+    (_, table), = photometry_tables(tmp_path, opt)
+    flag = np.asarray(table["flag"])
+    assert flag[100] & FLAG_BITS["centroid_outlier"]
+    assert not np.any(flag[50:90] & FLAG_BITS["centroid_outlier"])
+    assert np.count_nonzero(flag & FLAG_BITS["centroid_outlier"]) <= 2

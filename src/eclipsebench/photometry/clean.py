@@ -31,7 +31,8 @@ FLAG_DESCRIPTIONS = {
     "cosmic_ray": "a pixel of the centroid box or apertures deviated from its running median "
                   "in time (replaced by that median)",
     "bimsk": "a pixel of the centroid box or apertures has a fatal bimsk bit",
-    "centroid_outlier": "x or y deviates from its running median by more than outlier_sigma",
+    "centroid_outlier": "the center-of-light minus Gaussian centroid difference (x or y) "
+                        "deviates from its running median by more than outlier_sigma",
     "flux_outlier": "flux deviates from its running median by more than outlier_sigma",
     "fit_failed": "the Gaussian centroid fit did not converge",
     "no_star": "no finite brightest pixel, non-positive net flux, or non-finite measurements",

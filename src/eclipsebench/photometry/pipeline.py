@@ -157,8 +157,10 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
     flag[failed & ~bad] |= FLAG_BITS["fit_failed"]
     if opt.outlier_window > 0:
         ok = flag == 0
-        cen = outliers(m["x"], opt.outlier_window, opt.outlier_sigma, ok) | outliers(
-            m["y"], opt.outlier_window, opt.outlier_sigma, ok)
+        # true pointing motion (drifts, excursions) moves both centroids alike; a bad
+        # pixel or an unflagged hit pulls the center of light and the Gaussian apart
+        cen = outliers(m["x_col"] - m["x_gauss"], opt.outlier_window, opt.outlier_sigma, ok) | \
+            outliers(m["y_col"] - m["y_gauss"], opt.outlier_window, opt.outlier_sigma, ok)
         flag[cen & ok] |= FLAG_BITS["centroid_outlier"]
         flx = outliers(m["flux"], opt.outlier_window, opt.outlier_sigma, ok)
         flag[flx & ok] |= FLAG_BITS["flux_outlier"]
