@@ -146,3 +146,29 @@ def test_cli_radius_and_radii_options(tmp_path, make_bcd, make_star_cube):
     assert np.array_equal(t["background"], t["background_median"])
     assert t.meta["RADIUS"] == 3.1
     assert np.all(t["flux"][1:] > t["flux_r3p00"][1:])
+
+
+def test_full_array_frames_are_cut_about_the_star_and_reported_in_detector_pixels(
+        tmp_path, gaussian_prf):
+    from astropy.io import fits
+
+    e_per_mjysr = 3.71 * 10.4 / 0.1253
+    for k, (x, y) in enumerate([(100.3, 140.7), (100.35, 140.62), (100.28, 140.75)]):
+        img = gaussian_prf(x, y, 0.6, 5e4, shape=(256, 256)) + 20.0
+        h = fits.Header()
+        h.update({"CHNLNUM": 2, "BMJD_OBS": 57000.0 + k * 14 / 86400, "FRAMTIME": 12.0,
+                  "EXPTIME": 10.4, "SAMPTIME": 0.2, "GAIN": 3.71, "FLUXCONV": 0.1253,
+                  "BUNIT": "MJy/sr", "READMODE": "FULL", "AORKEY": 777, "EXPID": k,
+                  "DCENUM": 0, "AFOWLNUM": 8, "AWAITPER": 44, "RONOISE": 9.4})
+        path = tmp_path / f"SPITZER_I2_777_{k:04d}_0000_1_bcd.fits"
+        fits.PrimaryHDU((img / e_per_mjysr).astype(np.float32), header=h).writeto(path)
+    (_, table), = photometry_tables(tmp_path, PhotometrySection(centroid="gauss"))
+    assert len(table) == 3 and np.all(table["flag"] == 0)  # no first-frame flag for full array
+    assert table["x"][0] == pytest.approx(100.3, abs=0.01)
+    assert table["y"][0] == pytest.approx(140.7, abs=0.01)
+    assert np.all(table["stamp_x"] == 100) and np.all(table["stamp_y"] == 141)
+    assert table["flux_r4p00"][0] == pytest.approx(5e4, rel=2e-3)
+    # mid-exposure of a full-array frame: (2 FN + WT + 1) / 2 x 0.2 s = 6.1 s after the start
+    from astropy.time import Time
+    expected = Time(57000.0 + 6.1 / 86400, format="mjd", scale="utc").tdb.mjd
+    assert table["time_bmjd"][0] == pytest.approx(expected, abs=1e-8)

@@ -121,7 +121,8 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
     cube : ndarray
         (n, ny, nx) pixel values of consecutive frames.
     window : int
-        Running-median window in frames (odd).
+        Running-median window in frames (odd); with fewer valid frames than
+        that, nothing is rejected.
     nsigma : float
         Threshold in robust sigmas of each pixel's residuals from its running
         median (1.4826 x MAD over the whole series).
@@ -147,7 +148,7 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
         return cube.copy(), hits
     use = np.ones(n, dtype=bool) if valid is None else np.asarray(valid, bool)
     idx = np.flatnonzero(use)
-    if idx.size < 3:
+    if idx.size < max(int(window), 3):  # too few frames for a running median in time
         return cube.copy(), hits
     sub = cube[idx]
     finite = np.isfinite(sub)
