@@ -72,6 +72,9 @@ def test_irsa_prf_pre_aor_matches_the_real_one(real, shared_irac, tmp_path):
     assert sim["peak"] == pytest.approx(real["peak"], rel=0.10)
     assert sim["background"] == pytest.approx(real["background"], rel=0.30)
     assert sim["scatter"] == pytest.approx(real["scatter"], rel=0.20)
+    header = fits.getheader(next(tmp_path.glob("r20150000/ch2/bcd/*_0000_0000_1_bcd.fits")))
+    assert header["SIMPRF"] == "irsa:warm_2015_ch2"  # no absolute paths in headers
+    assert str(shared_irac) not in repr(header)
 
 
 def test_builtin_prf_pre_aor_peak_and_background(real, tmp_path):

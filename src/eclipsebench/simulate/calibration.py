@@ -30,7 +30,7 @@ from ..instrument.fowler import fowler_weights
 from ..io.atomic import atomic_path
 from ..seeding import rng
 from .render import fowler_uniform
-from .star import make_star_imager
+from .star import make_star_imager, prf_label
 
 __all__ = ["write_calibration_set", "write_calibration_table", "simulate_calibration",
            "calibration_chunk", "concat_chunks", "n_chunks", "measure_stamps",
@@ -225,8 +225,9 @@ def write_calibration_table(cfg: Config, data: dict[str, np.ndarray], out_dir: s
                        "AWAITPER": SUB_0P1S.wait, "SAMPTIME": SUB_0P1S.sample_time_s,
                        "APRADIUS": cfg.simulation.aperture_radius_px,
                        "ANNULUS": "3-7 px (clipped to 11x11 stamp)",
-                       "FLUXAPE": CALIBRATION_FLUX_E, "NOISEMOD": cfg.simulation.noise_model,
-                       "SIMPRF": cfg.simulation.prf, "BUNIT": "electrons per frame", "SIMFLAT": cfg.simulation.flat_gain,
+                       "FLUXAPE": CALIBRATION_FLUX_E, "NOISEMOD": "physical",
+                       "SIMPRF": prf_label(cfg.simulation.prf), "BUNIT": "electrons per frame",
+                       "SIMFLAT": cfg.simulation.flat_gain,
                        "COMMENT": "eclipsebench simulated calibration star for KR/Pmap"})
     path = Path(out_dir) / "calibration" / "pmap_calibration.fits"
     with atomic_path(path) as tmp:

@@ -45,7 +45,7 @@ from ..progress import get_logger, progress
 from ..seeding import rng
 from .plan import SECONDS_PER_DAY, AORPlan, EpochPlan, plan_challenge
 from .render import FrameModel, render_frames, stamp_origin, tick_moments
-from .star import StarImager, make_star_imager
+from .star import StarImager, make_star_imager, prf_label
 
 __all__ = ["simulate_challenge", "ChallengeResult", "pointing_ranges_from_config",
            "readout_from_config", "frame_model_from_config", "STATE_DIR"]
@@ -171,7 +171,7 @@ def _header_info(cfg: Config, aor: AORPlan, seed: int, mode: ReadoutMode, ra: fl
         frames_per_cube=obs.frames_per_cube, fluxconv=sim.fluxconv,
         gain_e_per_dn=sim.gain_e_per_dn, read_noise_e=read_noise_e, ra_deg=ra, dec_deg=dec,
         star_x_px=aor.x0_px, star_y_px=aor.y0_px, pointing_motion=sim.pointing_motion,
-        flat_gain=sim.flat_gain, prf=sim.prf)
+        flat_gain=sim.flat_gain, prf=prf_label(sim.prf))
 
 
 def _target(cfg: Config) -> tuple[float, float, str]:

@@ -28,10 +28,18 @@ from ..errors import ConfigError, InputError
 from ..instrument.prf import PRF, BuiltinPRF, IrsaPRF, aperture_flux
 from .render import N_MOMENTS
 
-__all__ = ["StarImager", "make_star_imager", "make_prf"]
+__all__ = ["StarImager", "make_star_imager", "make_prf", "prf_label"]
 
 _PRF_CACHE: dict[tuple, PRF] = {}
 ANNULUS_PX = (3.0, 7.0)
+
+
+def prf_label(name: str) -> str:
+    """``simulation.prf`` without folders (headers carry no absolute paths)."""
+    name = name.strip()
+    if name.startswith("irsa:"):
+        return "irsa:" + Path(name[5:].rstrip("/")).name
+    return name
 
 
 def make_prf(name: str, *, flat_gain: bool = False) -> PRF:
