@@ -86,3 +86,18 @@ def test_bad_options_are_named(shape):
     m = AstroModel(TIME, None, phase="flat", shape=shape())
     with pytest.raises(InputError, match="outside the data"):
         m.initial(t_ecl_bmjd=56999.0)
+
+
+def test_box_duration_of_a_real_system_even_from_a_short_span():
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.astro.eclipse import EclipseShape
+    from eclipsebench.astro.orbit import eclipse_time_bmjd
+
+    system = get_system("XO-3b")
+    t_ecl = eclipse_time_bmjd(system, 57000.0)
+    fine = t_ecl + np.arange(-0.1, 0.1, 0.5 / 86400)
+    v = EclipseShape(fine, system).visible_fraction(t_ecl)
+    expected = np.ptp(fine[v < 0.5])
+    short = t_ecl + np.linspace(-0.03, 0.03, 200)  # shorter than the eclipse
+    m = AstroModel(short, system, phase="flat", eclipse_shape="box")
+    assert m.box_duration_d == pytest.approx(expected, abs=2 / 86400)

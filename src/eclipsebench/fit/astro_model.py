@@ -174,9 +174,7 @@ class AstroModel:
         self.box_duration_d = None
         if eclipse_shape == "box":
             if box_duration_d is None:
-                mid = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
-                box_duration_d = _half_depth_duration(self.time_bmjd,
-                                                      np.asarray(shape.visible_fraction(mid)))
+                box_duration_d = self._measure_box_duration(system, shape)
                 if box_duration_d is None:
                     raise InputError("eclipse_shape 'box': the data do not cover a whole eclipse "
                                      "centred in the time span, so its duration cannot be "
@@ -188,6 +186,21 @@ class AstroModel:
             + _RAMP_NAMES[ramp]
         self.n_phase = len(_PHASE_NAMES[phase])
         self.n_ramp = len(_RAMP_NAMES[ramp])
+
+    def _measure_box_duration(self, system: Any, shape: VisibleFraction) -> float | None:
+        """Half-depth duration of the physical eclipse.
+
+        With a system: on a fine grid (half a period wide, 20,001 points)
+        around one of its eclipses. Without one: on the data times, with the
+        eclipse placed at the middle of the data.
+        """
+        if system is not None and self.period_d:
+            from ..astro.eclipse import EclipseShape
+            mid = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
+            grid = mid + np.linspace(-0.25, 0.25, 20001) * self.period_d
+            return _half_depth_duration(grid, EclipseShape(grid, system).visible_fraction(mid))
+        mid = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
+        return _half_depth_duration(self.time_bmjd, np.asarray(shape.visible_fraction(mid)))
 
     def __len__(self) -> int:
         return len(self.names)
