@@ -99,12 +99,15 @@ def test_all_nan_frame_and_nan_pixel_are_flagged_not_dropped(tmp_path, make_bcd,
     cube[10] = np.nan           # a whole frame
     cube[20, 15, 15] = np.nan   # one pixel inside the aperture
     cube[30, 2, 2] = np.nan     # one pixel far from the star: harmless
+    cube[31, 15, 21] = np.nan   # in the background annulus only: skipped, harmless
     make_bcd(tmp_path, cube)
     (_, table), = photometry_tables(tmp_path, PhotometrySection())
     assert len(table) == 64
     flag = np.asarray(table["flag"])
     assert flag[10] & FLAG_BITS["nonfinite"] and flag[20] & FLAG_BITS["nonfinite"]
-    assert flag[30] == 0
+    assert flag[30] == 0 and flag[31] == 0
+    assert np.isfinite(table["background"][31]) and table["background_npix"][31] < \
+        table["background_npix"][32]
     assert np.isnan(table["flux"][10]) and np.isnan(table["flux"][20])
     assert table.meta["FLAGCNT"]["nonfinite"] == 2
 

@@ -27,7 +27,7 @@ FLAG_BITS = {
 }
 FLAG_DESCRIPTIONS = {
     "first_frame": "first frame of a subarray cube (first-frame effect), dropped by default",
-    "nonfinite": "a non-finite pixel inside the centroid box or the largest aperture",
+    "nonfinite": "a non-finite pixel reached the centroid box or an aperture (all-NaN frames too)",
     "cosmic_ray": "a pixel of the centroid box or apertures deviated from its running median "
                   "in time (replaced by that median)",
     "bimsk": "a pixel of the centroid box or apertures has a fatal bimsk bit",

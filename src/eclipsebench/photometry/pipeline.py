@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +38,7 @@ from .table import make_table
 __all__ = ["AorStack", "load_aor", "process_epoch", "find_simdir", "photometry_tables"]
 
 _LOG = get_logger("photometry")
+_RADIUS_COLUMN = re.compile(r"^flux_r\d+p\d\d$")
 _X_COLUMNS = ("x", "x_col", "x_gauss", "x_gfix", "x_lsq", "peak_x")
 _Y_COLUMNS = ("y", "y_col", "y_gauss", "y_gfix", "y_lsq", "peak_y")
 
@@ -124,8 +126,10 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
     if opt.drop_first_frame:
         flag[stack.first] |= FLAG_BITS["first_frame"]
     rmax = max(max(opt.radii_px), opt.radius_px)
+    # the centroid box and the largest aperture when the star is within 1 px of its
+    # usual pixel (pixel corners included)
     region = _region((ny, nx), stack.star_x, stack.star_y,
-                     max((opt.box_px // 2) * np.sqrt(2.0), rmax) + opt.search_px)
+                     max((opt.box_px // 2 + 0.5) * np.sqrt(2.0), rmax + 0.75) + 1.0)
     frames = stack.frames_e
     if opt.cosmic_ray_window > 0:
         reach = int(np.ceil(opt.annulus_px[1])) + opt.search_px + 1
@@ -139,13 +143,18 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
             frames[:, y0:y1, x0:x1] = cleaned
             hit_region = (hits & region[None, y0:y1, x0:x1]).any(axis=(1, 2))
             flag[hit_region] |= FLAG_BITS["cosmic_ray"]
-    nonfinite = ~np.isfinite(frames[:, region]).all(axis=1)
-    flag[nonfinite] |= FLAG_BITS["nonfinite"]
+    has_nonfinite = ~np.isfinite(frames.reshape(n, -1)).all(axis=1)
     if stack.bad_mask is not None:
         flag[stack.bad_mask[:, region].any(axis=1)] |= FLAG_BITS["bimsk"]
     m = measure_stack(frames, guess_x=stack.star_x, guess_y=stack.star_y, stamp_x=stamp_x,
                       stamp_y=stamp_y, options=opt, fowler=stack.fowler, wait=stack.wait,
                       read_noise_e=stack.read_noise_e)
+    # a non-finite pixel matters when it reached a measurement (box or apertures)
+    rmax_name = max((k for k in m if _RADIUS_COLUMN.match(k)),
+                    key=lambda k: float(k[6:].replace("p", ".")))
+    reached = ~np.all([np.isfinite(m[k]) for k in ("x_col", "noise_pixels", "x_gauss",
+                                                   rmax_name, "flux")], axis=0)
+    flag[has_nonfinite & reached] |= FLAG_BITS["nonfinite"]
     key = ("x", "y", "flux", "flux_err", "background", "noise_pixels")
     bad = ~np.all([np.isfinite(m[k]) for k in key], axis=0) | ~(m["flux"] > 0)
     flag[bad & ((flag & FLAG_BITS["nonfinite"]) == 0)] |= FLAG_BITS["no_star"]
