@@ -200,6 +200,12 @@ def epoch_sys(simdir) -> SyntheticEpoch:
 
 
 @pytest.fixture(scope="session")
+def epoch_small(simdir) -> SyntheticEpoch:
+    """The first 4,000 frames' worth of the same set-up (interface tests of every method)."""
+    return make_epoch(n_frames=4000, meta={"SIMDIR": str(simdir)})
+
+
+@pytest.fixture(scope="session")
 def epoch_flat(tmp_path_factory) -> SyntheticEpoch:
     """The same pointing with the intra-pixel sensitivity switched off (flat pixels)."""
     d = tmp_path_factory.mktemp("simdir_flat")
