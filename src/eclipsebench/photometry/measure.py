@@ -156,9 +156,7 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
         widths = 0.5 * (first[ok, kernels.IDX["width_x"]] + first[ok, kernels.IDX["width_y"]])
         widths = widths[np.isfinite(widths)]
         width = float(np.median(widths)) if widths.size else 0.7
-    fixed = float(width) if (width is not None and opt.centroid == "gauss-fixed") else 0.0
-    if opt.centroid != "gauss-fixed" and width is not None:
-        fixed = float(width)
+    fixed = float(width) if width is not None else 0.0  # 0: no fixed-width fit
     out, ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5 = run(fixed, code)
 
     col = {name: out[:, k] for name, k in kernels.IDX.items()}
