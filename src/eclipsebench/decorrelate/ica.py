@@ -294,6 +294,19 @@ class IndependentComponents(Systematics):
         fit_w = f0 * aw + self._q @ (self._q.T @ (self.data.flux * self._sw - f0 * aw))
         return fit_w / self._sw
 
+    def with_flux(self, flux: np.ndarray) -> IndependentComponents:
+        """The same components with ``flux`` replaced (for the prayer bead).
+
+        The components come from the pixel stamps, which the prayer bead does
+        not shift, so FastICA is not rerun; only the linear projection is.
+        """
+        import copy
+        from dataclasses import replace
+        new = copy.copy(self)
+        new.data = replace(self.data, flux=np.asarray(flux, dtype=float))
+        new._prepare_projection()
+        return new
+
     def extra_depth_variance(self, astro: np.ndarray, dastro_ddepth: np.ndarray) -> float:
         """Variance of the depth over the bootstrap ICA restarts (component-separation error).
 
