@@ -236,16 +236,19 @@ def pmap_gain(pmap: CalibrationSet | GriddedPmap, x: np.ndarray, y: np.ndarray,
 
 
 def noise_pixels_offset(pmap: CalibrationSet, x: np.ndarray, y: np.ndarray,
-                        noise_pixels: np.ndarray, *, k: int) -> float:
+                        noise_pixels: np.ndarray, *, k: int, tree: cKDTree | None = None) -> float:
     """Median offset of the science noise pixels from the calibration set's at the same (x, y).
 
     The calibration star's frames may be shorter exposures than the science
     frames (0.1 s against 2 s for the warm pmap), so pointing jitter smears
     the science PSF more and raises its noise pixels by a near-constant
     amount. Each science frame is compared with the mean noise pixels of its
-    ``k`` nearest calibration frames in (x, y).
+    ``k`` nearest calibration frames in (x, y) (``tree``: a k-d tree of the
+    calibration (x, y), if already built).
     """
-    _, idx = cKDTree(np.column_stack([pmap.x, pmap.y])).query(np.column_stack([x, y]), k=k)
+    if tree is None:
+        tree = cKDTree(np.column_stack([pmap.x, pmap.y]))
+    _, idx = tree.query(np.column_stack([x, y]), k=k)
     idx = np.asarray(idx).reshape(len(x), -1)
     return float(np.median(np.asarray(noise_pixels, float) - pmap.noise_pixels[idx].mean(axis=1)))
 
@@ -332,9 +335,11 @@ class KernelRegressionPmap(Systematics):
                 raise InputError("method 'kr-pmap' with use_noise_pixels: needs the column "
                                  "noise_pixels in the photometry table (or use_noise_pixels=false)")
             _check_finite("noise_pixels", self.name, beta)
+            tree_xy = cKDTree(np.column_stack([self.pmap.x, self.pmap.y]))
             self.noise_pixels_offset = 0.0
             if beta is not None and match_np:
-                self.noise_pixels_offset = noise_pixels_offset(self.pmap, x, y, beta, k=k)
+                self.noise_pixels_offset = noise_pixels_offset(self.pmap, x, y, beta, k=k,
+                                                               tree=tree_xy)
                 beta = np.asarray(beta, float) - self.noise_pixels_offset
                 if np.any(beta <= 0):
                     raise InputError(f"--pmap {path}: the science noise pixels minus their offset "
@@ -344,8 +349,7 @@ class KernelRegressionPmap(Systematics):
             if not np.all(self.scales > 0):
                 raise InputError("method 'kr-pmap': a kernel coordinate does not vary over the "
                                  "epoch (zero standard deviation)")
-            dist, _ = cKDTree(np.column_stack([self.pmap.x, self.pmap.y])).query(
-                np.column_stack([x, y]), k=1)
+            dist, _ = tree_xy.query(np.column_stack([x, y]), k=1)
             far = dist > max_d
             self.n_low_occupancy = 0
         if far.any():
