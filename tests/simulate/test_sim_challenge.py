@@ -85,6 +85,11 @@ def test_truth_lightcurves_and_headers_agree(runs):
     assert np.all(np.abs(cal["x"] - 15.0) < 0.6) and np.all(cal["flux_err"] > 0)
 
 
+def test_config_toml_is_the_effective_configuration(runs):
+    root, _ = runs["c"]
+    assert load_config(root / "config.toml") == load_config(None, TINY + ["challenge.seed=8"])
+
+
 def test_rerun_resumes_and_regenerates_identical_files(runs, tmp_path):
     root, _ = runs["a"]
     cfg = load_config(None, TINY + ["challenge.seed=7"])

@@ -188,8 +188,8 @@ def _target(cfg: Config) -> tuple[float, float, str]:
 
 
 def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Path, seed: int,
-                 *, light_curve: Callable | None = None, star: StarImager | None = None
-                 ) -> dict[str, np.ndarray]:
+                 *, light_curve: Callable | None = None, star: StarImager | None = None,
+                 show_progress: bool = True) -> dict[str, np.ndarray]:
     """Render and write every cube of one AOR; return its per-frame truth.
 
     The truth arrays (``time_bmjd``, ``flux_true`` = L(t), ``x_true``,
@@ -228,9 +228,11 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
 
     truth = {k: [] for k in ("time_bmjd", "flux_true", "x_true", "y_true", "expid", "frame",
                              "sky_e_per_px")}
-    bar = progress(range(aor.n_cubes), desc=f"epoch {plan.epoch} r{aor.aorkey}",
-                   total=aor.n_cubes, unit="cube")
-    for c in bar:
+    cubes = range(aor.n_cubes)
+    if show_progress:
+        cubes = progress(cubes, desc=f"epoch {plan.epoch} r{aor.aorkey}", total=aor.n_cubes,
+                         unit="cube")
+    for c in cubes:
         starts = frame_starts[c]
         nf = starts.size
         if pointing is not None:
@@ -300,7 +302,8 @@ def _run_aor_task(task: _AorTask) -> tuple[int, int]:
     from ..errors import InputError
 
     try:
-        simulate_aor(task.cfg, task.plan, task.aor_index, task.out_dir, task.seed)
+        simulate_aor(task.cfg, task.plan, task.aor_index, task.out_dir, task.seed,
+                     show_progress=False)
     except InputError as exc:  # ConfigError/DataError do not survive pickling
         raise InputError(str(exc)) from None
     return task.plan.epoch, task.aor_index
@@ -455,7 +458,8 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
     cal_tasks = ([list(range(c, min(c + CAL_CHUNKS_PER_TASK, n_chunks(cfg))))
                   for c in range(0, n_chunks(cfg), CAL_CHUNKS_PER_TASK)] if cal_needed else [])
     cal_parts: dict[int, dict] = {}
-    bar = progress(total=len(todo) + len(cal_tasks), desc="simulate", unit="task")
+    bar = progress(total=len(todo) + len(cal_tasks), desc="simulate (AORs, calibration)",
+                   unit="task")
     if workers > 1 and len(todo) + len(cal_tasks) > 1:
         with ProcessPoolExecutor(max_workers=workers) as pool:
             futures = [pool.submit(_run_aor_task, t) for t in todo]
