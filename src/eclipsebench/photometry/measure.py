@@ -33,6 +33,8 @@ from . import kernels
 
 __all__ = ["radius_name", "variable_name", "measure_stack", "flux_uncertainty"]
 
+_CHUNK = 8192  # frames converted to float64 and measured per kernel call
+
 
 def radius_name(radius_px: float) -> str:
     """Column suffix of an aperture radius: 2.25 -> ``"r2p25"``."""
@@ -90,7 +92,8 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
     Parameters
     ----------
     frames_e : ndarray
-        Frames, float32 or float64; non-finite pixels are allowed.
+        Frames (any float dtype; measured in float64 chunks of 8192 frames);
+        non-finite pixels are allowed.
     guess_x, guess_y : int or array of int
         Pixel about which the brightest pixel is searched (within
         ``options.search_px``), one for all frames or one per frame.
@@ -117,9 +120,6 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
     frames = np.asarray(frames_e)
     if frames.ndim != 3:
         raise ValueError(f"frames_e: expected (n, ny, nx), got shape {frames.shape}")
-    if frames.dtype not in (np.float32, np.float64):
-        frames = frames.astype(np.float64)
-    frames = np.ascontiguousarray(frames)
     n = frames.shape[0]
     gx = _as_index(guess_x, n, "guess_x")
     gy = _as_index(guess_y, n, "guess_y")
@@ -142,12 +142,18 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
         var_radii = np.empty((n, nv))
         stamp3 = np.empty((n, 3, 3))
         stamp5 = np.empty((n, 5, 5))
-        kernels.measure_frames(
-            frames, gx, gy, sx, sy, int(opt.search_px), int(opt.box_px // 2),
-            float(opt.annulus_px[0]), float(opt.annulus_px[1]), float(opt.clip_sigma),
-            int(opt.clip_iters), radii_arr, var_a, var_b, float(fixed_width), int(centroid_code),
-            opt.background == "median", int(opt.gauss_max_iter), opt.centroid == "lsq-asym",
-            out, ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5)
+        # float64 chunks: one compiled specialisation, bounded extra memory
+        for a in range(0, n, _CHUNK):
+            b = min(a + _CHUNK, n)
+            chunk = np.ascontiguousarray(frames[a:b], dtype=np.float64)
+            kernels.measure_frames(
+                chunk, gx[a:b], gy[a:b], sx[a:b], sy[a:b], int(opt.search_px),
+                int(opt.box_px // 2), float(opt.annulus_px[0]), float(opt.annulus_px[1]),
+                float(opt.clip_sigma), int(opt.clip_iters), radii_arr, var_a, var_b,
+                float(fixed_width), int(centroid_code), opt.background == "median",
+                int(opt.gauss_max_iter), opt.centroid == "lsq-asym", out[a:b], ap_sums[a:b],
+                ap_areas[a:b], var_sums[a:b], var_areas[a:b], var_radii[a:b], stamp3[a:b],
+                stamp5[a:b])
         return out, ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5
 
     if opt.centroid == "gauss-fixed" and width is None:

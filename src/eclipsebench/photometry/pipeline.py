@@ -48,7 +48,7 @@ class AorStack:
     """One AOR's frames in electrons, cut to a window about the star."""
 
     aorkey: int
-    frames_e: np.ndarray       # (n, ny, nx) float64, electrons per pixel
+    frames_e: np.ndarray       # (n, ny, nx) float32, electrons per pixel
     bad_mask: np.ndarray | None  # (n, ny, nx) bool: fatal bimsk bits
     time_bmjd: np.ndarray
     expid: np.ndarray
@@ -80,7 +80,8 @@ def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
     ``window_px`` square about the brightest pixel of the median frame.
     """
     infos = [c.info for c in cubes]
-    data = np.concatenate([c.data.astype(np.float64) * c.info.electrons_per_mjysr for c in cubes])
+    # float32 like the files (7 significant digits; sums are done in float64 in the kernels)
+    data = np.concatenate([c.data * np.float32(c.info.electrons_per_mjysr) for c in cubes])
     masks = None
     if all(c.mask is not None for c in cubes):
         masks = np.concatenate([(c.mask & int(options.bimsk_bits)) != 0 for c in cubes])
@@ -119,7 +120,11 @@ def _region(shape: tuple[int, int], x: int, y: int, radius: float) -> np.ndarray
 
 def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
                 stamp_y: int) -> dict[str, np.ndarray]:
-    """Clean and measure one AOR; returns table columns in detector coordinates."""
+    """Clean and measure one AOR; returns table columns in detector coordinates.
+
+    Pixels that the cosmic-ray rejection replaces are replaced in
+    ``stack.frames_e`` itself.
+    """
     opt = options
     n, ny, nx = stack.frames_e.shape
     flag = np.zeros(n, dtype=np.int64)
@@ -139,8 +144,7 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
                                            opt.cosmic_ray_sigma, valid=~stack.first,
                                            read_var_e2=2.0 * stack.read_noise_e**2 / stack.fowler)
         if hits.any():
-            frames = frames.copy()
-            frames[:, y0:y1, x0:x1] = cleaned
+            frames[:, y0:y1, x0:x1] = cleaned  # the stack is ours: repair in place
             hit_region = (hits & region[None, y0:y1, x0:x1]).any(axis=(1, 2))
             flag[hit_region] |= FLAG_BITS["cosmic_ray"]
     has_nonfinite = ~np.isfinite(frames.reshape(n, -1)).all(axis=1)
