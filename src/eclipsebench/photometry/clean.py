@@ -141,29 +141,33 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
     hits : ndarray of bool
         (n, ny, nx), True where a pixel was replaced.
     """
-    cube = np.asarray(cube, dtype=float)
+    cube = np.asarray(cube)
     n = cube.shape[0]
+    cleaned = np.array(cube, dtype=np.result_type(cube.dtype, np.float32), copy=True)
     hits = np.zeros(cube.shape, dtype=bool)
     if window <= 0 or n < 3:
-        return cube.copy(), hits
+        return cleaned, hits
     use = np.ones(n, dtype=bool) if valid is None else np.asarray(valid, bool)
     idx = np.flatnonzero(use)
     if idx.size < max(int(window), 3):  # too few frames for a running median in time
-        return cube.copy(), hits
-    sub = cube[idx]
-    finite = np.isfinite(sub)
-    fill = nanmedian0(np.where(finite, sub, np.nan))
-    filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
+        return cleaned, hits
     size = min(int(window), idx.size) | 1
-    med = median_filter(filled, size=(size, 1, 1), mode="nearest")
-    resid = np.where(finite, sub - med, np.nan)
-    sigma = robust_sigma(resid, axis=0)
-    floor = np.sqrt(np.clip(med, 0.0, None) + float(read_var_e2))
-    sigma = np.where(np.isfinite(sigma), np.maximum(sigma[None], floor), floor)
-    with np.errstate(invalid="ignore"):
-        bad = finite & (np.abs(resid) > nsigma * np.where(sigma > 0, sigma, np.inf))
-    cleaned = cube.copy()
-    sub_clean = np.where(bad, med, sub)
-    cleaned[idx] = sub_clean
-    hits[idx] = bad
+    # pixels are independent: one row of pixels at a time bounds the temporaries
+    for j in range(cube.shape[1]):
+        sub = np.asarray(cube[idx, j], dtype=float)          # (m, nx)
+        finite = np.isfinite(sub)
+        fill = nanmedian0(np.where(finite, sub, np.nan))
+        filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
+        med = median_filter(filled, size=(size, 1), mode="nearest")
+        resid = np.where(finite, sub - med, np.nan)
+        sigma = robust_sigma(resid, axis=0)
+        floor = np.sqrt(np.clip(med, 0.0, None) + float(read_var_e2))
+        sigma = np.where(np.isfinite(sigma), np.maximum(sigma[None], floor), floor)
+        with np.errstate(invalid="ignore"):
+            bad = finite & (np.abs(resid) > nsigma * np.where(sigma > 0, sigma, np.inf))
+        if bad.any():
+            rows = idx[np.flatnonzero(bad.any(axis=1))]
+            hits[idx, j] = bad
+            cleaned[rows, j] = np.where(hits[rows, j], med[np.searchsorted(idx, rows)],
+                                        cleaned[rows, j])
     return cleaned, hits

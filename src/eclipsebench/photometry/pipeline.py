@@ -73,6 +73,14 @@ def _brightest(image: np.ndarray) -> tuple[int, int] | None:
     return int(i), int(j)
 
 
+def _median_frame(data: np.ndarray, valid: np.ndarray, most: int = 256) -> np.ndarray:
+    """Median of up to ``most`` valid frames spread evenly over the AOR."""
+    idx = np.flatnonzero(valid)
+    if idx.size > most:
+        idx = idx[np.linspace(0, idx.size - 1, most).round().astype(int)]
+    return nanmedian0(data[idx])
+
+
 def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
     """Stack one AOR's cubes (time order), convert to electrons, cut a window.
 
@@ -89,7 +97,7 @@ def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
     valid = ~first if options.drop_first_frame and (~first).any() else np.ones(first.size, bool)
     x_off = y_off = 0
     if not infos[0].subarray:
-        guess = _brightest(nanmedian0(data[valid]))
+        guess = _brightest(_median_frame(data, valid))
         if guess is not None:
             half = options.window_px // 2
             x_off = int(np.clip(guess[0] - half, 0, data.shape[2] - options.window_px))
@@ -99,7 +107,7 @@ def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
             masks = masks[:, y_off:y_off + options.window_px, x_off:x_off + options.window_px]
     if masks is not None:
         data[masks] = np.nan
-    star = _brightest(nanmedian0(data[valid]))
+    star = _brightest(_median_frame(data, valid))
     if star is None:
         star = (data.shape[2] // 2, data.shape[1] // 2)
     return AorStack(
