@@ -104,8 +104,17 @@ def run(args: argparse.Namespace) -> dict:
     for e in epochs:
         for k, v in e["flagged"].items():
             flagged[k] = flagged.get(k, 0) + v
+    good = [e["flagged"]["good"] for e in epochs]
+
+    def mean_of(key: str) -> float:
+        w = [g for g, e in zip(good, epochs, strict=True) if g and np.isfinite(e[key])]
+        v = [e[key] for g, e in zip(good, epochs, strict=True) if g and np.isfinite(e[key])]
+        return float(np.average(v, weights=w)) if w else float("nan")
+
     return {"out": str(out), "epochs": epochs, "frames": total, "flagged": flagged,
-            "centroid": options.centroid, "radius_px": options.radius_px}
+            "mean_x": mean_of("mean_x"), "mean_y": mean_of("mean_y"),
+            "mean_flux": mean_of("mean_flux"), "centroid": options.centroid,
+            "radius_px": options.radius_px}
 
 
 def format_text(result: dict) -> str:
