@@ -10,7 +10,7 @@ from scipy.stats import multivariate_normal
 
 from eclipsebench.decorrelate import get_method
 from eclipsebench.decorrelate.base import EpochData
-from eclipsebench.decorrelate.gp import HYPER_NAMES, GaussianProcess, bin_epoch, kernel_matrix
+from eclipsebench.decorrelate.gp import OFFSET_NAMES, GaussianProcess, bin_epoch, kernel_matrix
 from eclipsebench.errors import InputError
 from eclipsebench.seeding import rng
 
@@ -127,17 +127,24 @@ def test_agrees_with_pld_within_5_ppm_without_systematics(epoch_flat, synth):
     assert abs(depths[0] - depths[1]) <= 5.0, depths
 
 
-def test_sample_kernel_makes_the_hyperparameters_parameters():
-    m = GaussianProcess(_small(), bin_seconds=None, sample_kernel=True)
-    assert m.param_names == HYPER_NAMES
+def test_sample_kernel_samples_offsets_from_the_ml_kernel():
+    data = _small()
+    m = GaussianProcess(data, bin_seconds=None, sample_kernel=True)
+    assert m.param_names == OFFSET_NAMES
     theta = m.initial_params()
     lo, hi = m.param_bounds()
-    assert theta.shape == (5,) and np.all(lo < theta) and np.all(theta < hi)
+    np.testing.assert_array_equal(theta, np.zeros(5))
+    assert np.all(lo < 0) and np.all(hi > 0)
     astro = np.ones(len(m.data))
     base = m.log_likelihood(astro, theta)
-    other = theta + np.array([0.0, 0.0, 0.0, 0.0, 0.5])
-    assert m.log_likelihood(astro, other) != pytest.approx(base)
+    offset = np.array([0.3, 0.0, -0.2, 0.0, 0.5])
+    # an offset is the same as fixing the shifted hyperparameters
+    ref = GaussianProcess(data, bin_seconds=None, hyperparameters=m.hyper + offset)
+    assert m.log_likelihood(astro, offset) == pytest.approx(ref.log_likelihood(astro), rel=1e-10)
+    assert m.log_likelihood(astro, offset) != pytest.approx(base)
     assert m.log_likelihood(astro, theta) == pytest.approx(base, rel=1e-12)
+    # least squares keeps the ML kernel whatever theta says
+    np.testing.assert_array_equal(m.residuals(astro, offset), m.residuals(astro, theta))
 
 
 def test_with_flux_keeps_the_kernel_and_bins():

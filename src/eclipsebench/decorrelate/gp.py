@@ -41,9 +41,12 @@ fitter (:func:`eclipsebench.fit.leastsq.fit_leastsq`) alternates it with the
 eclipse fit (coordinate ascent on the joint maximum likelihood of Evans et
 al.). Optimising first with ``astro = 1`` (``optimise=True``) lets the time
 kernel learn the eclipse: on the tests' noiseless epoch the depth then came
-out 2400 ppm too low. ``sample_kernel=True`` makes them the method's own
-parameters (``param_names``), so the MCMC samples them too (each step then
-refactorises the covariance).
+out 2400 ppm too low. ``sample_kernel=True`` makes offsets of them from
+their maximum-likelihood values the method's own parameters (``param_names``
+= ``OFFSET_NAMES``, uniform prior of +-3 in each ``ln``), which only the
+likelihood uses, so the MCMC samples them (each step then refactorises the
+covariance: slow, about 64,000 Cholesky factorisations for the default
+sampler) while least squares, which cannot set them, keeps the ML kernel.
 """
 
 from __future__ import annotations
@@ -58,10 +61,15 @@ from scipy.optimize import minimize
 from ..errors import InputError
 from .base import EpochData, Systematics, register
 
-__all__ = ["GaussianProcess", "bin_epoch", "bin_index", "kernel_matrix", "KERNELS", "HYPER_NAMES"]
+__all__ = ["GaussianProcess", "bin_epoch", "bin_index", "kernel_matrix", "KERNELS", "HYPER_NAMES",
+           "OFFSET_NAMES"]
 
 KERNELS = ("squared-exponential", "matern32")
 HYPER_NAMES = ("gp_ln_amp", "gp_ln_len_x", "gp_ln_len_y", "gp_ln_len_t", "gp_ln_white")
+#: Names of the sampled parameters with ``sample_kernel=True``: offsets from the ML values.
+OFFSET_NAMES = ("gp_dln_amp", "gp_dln_len_x", "gp_dln_len_y", "gp_dln_len_t", "gp_dln_white")
+#: Half-width of the uniform prior on each sampled offset (a factor e^3 = 20 either way).
+OFFSET_RANGE = 3.0
 _SQRT3 = np.sqrt(3.0)
 
 
@@ -186,8 +194,8 @@ class GaussianProcess(Systematics):
         Largest number of (binned) points accepted (3000); more raises
         InputError asking to bin.
     sample_kernel : bool
-        Sample the hyperparameters in the MCMC too (default False: held fixed
-        at their maximum-likelihood values, as in the paper).
+        Sample the hyperparameters in the MCMC too, as offsets from their
+        maximum-likelihood values (default False: held fixed, as in the paper).
     hyperparameters : sequence of 5 floats, optional
         Fixed ``ln A, ln l_x, ln l_y, ln l_t, ln s``; skips the optimisation.
     optimise : bool
@@ -243,7 +251,8 @@ class GaussianProcess(Systematics):
         else:
             h = self._hyper_start()
         self.sample_kernel = bool(sample_kernel)
-        self.param_names = HYPER_NAMES if self.sample_kernel else ()
+        self.param_names = OFFSET_NAMES if self.sample_kernel else ()
+        self._offset_cache: tuple[np.ndarray, tuple] | None = None
         self._factorise(h)
         self.ml_info: dict[str, Any] = {}
         if hyperparameters is None and optimise:
@@ -283,26 +292,28 @@ class GaussianProcess(Systematics):
         grads = [2.0 * signal] + [amp2 * d for d in dk] + [np.diag(2.0 * white)]
         return cov, signal, grads
 
-    def _factorise(self, h: np.ndarray) -> None:
+    def _factor(self, h: np.ndarray) -> tuple:
+        """Cholesky factor, signal covariance, GLS weights of F0 and half log-determinant."""
         cov, signal = self._covariance(h)
         try:
             cf = cho_factor(cov, lower=True, check_finite=False)
         except np.linalg.LinAlgError as exc:
             raise InputError(f"gp: covariance not positive definite for hyperparameters "
                              f"{np.round(h, 3).tolist()}") from exc
-        self.hyper = np.array(h, dtype=float)
-        self._cf = cf
-        self._signal = signal
         ones = np.ones(len(cov))
         cinv1 = cho_solve(cf, ones, check_finite=False)
-        self._gls_w = cinv1 / ones.dot(cinv1)
-        self._half_logdet = float(np.sum(np.log(np.diag(cf[0]))))
+        return cf, signal, cinv1 / ones.dot(cinv1), float(np.sum(np.log(np.diag(cf[0]))))
 
-    def _use(self, theta) -> None:
-        if self.sample_kernel and theta is not None and len(theta) == 5:
-            h = np.asarray(theta, dtype=float)
-            if not np.array_equal(h, self.hyper):
-                self._factorise(h)
+    def _factorise(self, h: np.ndarray) -> None:
+        self._cf, self._signal, self._gls_w, self._half_logdet = self._factor(h)
+        self.hyper = np.array(h, dtype=float)
+        self._offset_cache = None
+
+    def _whitened(self, astro: np.ndarray, factor: tuple) -> np.ndarray:
+        cf, _, gls_w, _ = factor
+        yrel = self.flux_rel / self._binned_astro(astro)
+        r = yrel - float(gls_w.dot(yrel))
+        return solve_triangular(cf[0], r, lower=True, check_finite=False)
 
     # ------------------------------------------------------- hyperparameters
     def _neg_log_ml(self, h: np.ndarray, yrel: np.ndarray):
@@ -353,13 +364,13 @@ class GaussianProcess(Systematics):
 
     # ------------------------------------------------------------- interface
     def initial_params(self) -> np.ndarray:
-        """The current (maximum-likelihood) hyperparameters when they are sampled."""
-        return self.hyper.copy() if self.sample_kernel else np.zeros(0)
+        """Zero offsets from the maximum-likelihood hyperparameters (when they are sampled)."""
+        return np.zeros(5) if self.sample_kernel else np.zeros(0)
 
     def param_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds of the sampled hyperparameters (the optimisation's bounds)."""
+        """+-``OFFSET_RANGE`` in each ``ln`` hyperparameter around its ML value."""
         if self.sample_kernel:
-            return self._lo.copy(), self._hi.copy()
+            return np.full(5, -OFFSET_RANGE), np.full(5, OFFSET_RANGE)
         return np.zeros(0), np.zeros(0)
 
     def _binned_astro(self, astro: np.ndarray) -> np.ndarray:
@@ -383,8 +394,8 @@ class GaussianProcess(Systematics):
         ``astro`` is given on the bins (``self.data.time_bmjd``, what a fitter
         uses) or on the original frames; in the second case the conditional
         mean is evaluated at every frame's (x, y, t), in blocks of 2000 frames.
+        Always with the maximum-likelihood kernel (``theta`` is not used).
         """
-        self._use(theta)
         a = np.asarray(astro, dtype=float)
         r, f0 = self._residual_rel(a)
         alpha = cho_solve(self._cf, r, check_finite=False)
@@ -427,10 +438,13 @@ class GaussianProcess(Systematics):
         return flux / (self.predict(a, theta) / a)
 
     def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """Whitened residuals ``L^-1 (y - F0)``; their sum of squares is the GP chi-square."""
-        self._use(theta)
-        r, _ = self._residual_rel(astro)
-        return solve_triangular(self._cf[0], r, lower=True, check_finite=False)
+        """Whitened residuals ``L^-1 (y - F0)``; their sum of squares is the GP chi-square.
+
+        Always with the maximum-likelihood kernel: least squares cannot set
+        kernel parameters (the determinant term is missing), so sampled
+        offsets (``theta``) enter only :meth:`log_likelihood`.
+        """
+        return self._whitened(astro, (self._cf, self._signal, self._gls_w, self._half_logdet))
 
     def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
                        noise_scale: float = 1.0) -> float:
@@ -438,21 +452,24 @@ class GaussianProcess(Systematics):
 
         ``noise_scale`` multiplies the white-noise term (the covariance is then
         refactorised); the method's own white-noise scale makes it redundant,
-        so a fitter should leave it at 1.
+        so a fitter should leave it at 1. With ``sample_kernel``, ``theta``
+        holds offsets of the ``ln`` hyperparameters from their ML values; a
+        non-zero offset refactorises the covariance (cached for the last one).
         """
-        self._use(theta)
-        if noise_scale != 1.0:
-            h = self.hyper.copy()
-            h[4] += np.log(noise_scale)
-            saved = (self.hyper, self._cf, self._signal, self._gls_w, self._half_logdet)
-            self._factorise(h)
-            try:
-                return self.log_likelihood(astro, None)
-            finally:
-                (self.hyper, self._cf, self._signal, self._gls_w, self._half_logdet) = saved
-        w = self.residuals(astro)
+        offset = np.zeros(5)
+        if self.sample_kernel and theta is not None and len(theta) == 5:
+            offset = np.asarray(theta, dtype=float).copy()
+        offset[4] += np.log(noise_scale)
+        if not np.any(offset):
+            factor = (self._cf, self._signal, self._gls_w, self._half_logdet)
+        elif self._offset_cache is not None and np.array_equal(self._offset_cache[0], offset):
+            factor = self._offset_cache[1]
+        else:
+            factor = self._factor(self.hyper + offset)
+            self._offset_cache = (offset, factor)
+        w = self._whitened(astro, factor)
         n = len(w)
-        return float(-0.5 * w.dot(w) - self._half_logdet - n * np.log(self.norm)
+        return float(-0.5 * w.dot(w) - factor[3] - n * np.log(self.norm)
                      - 0.5 * n * np.log(2.0 * np.pi))
 
     def n_effective_params(self) -> int:
