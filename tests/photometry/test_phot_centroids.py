@@ -130,3 +130,24 @@ def test_stamps_are_background_subtracted_pixels(gaussian_prf):
     bg = m["background"][0]
     assert np.allclose(m["stamp3"][0], frames[0, 14:17, 14:17] - bg)
     assert np.allclose(m["stamp5"][0], frames[0, 13:18, 13:18] - bg)
+
+
+def test_annulus_clipped_median_matches_astropy_sigma_clipped_stats():
+    from astropy.stats import sigma_clipped_stats
+
+    rng = np.random.default_rng(21)
+    frames = rng.normal(50.0, 4.0, (40, 32, 32))
+    hot = rng.random(frames.shape) < 0.03
+    frames[hot] += rng.uniform(30, 300, hot.sum())     # outliers the clipping must remove
+    frames[:, 15, 15] = 1e5                             # a "star" pixel so the peak is (15, 15)
+    opt = PhotometrySection(clip_sigma=3.0, clip_iters=5)
+    m = measure_stack(frames, guess_x=15, guess_y=15, options=opt)
+    jj, ii = np.mgrid[:32, :32]
+    for k in range(len(frames)):
+        d2 = (ii - m["x"][k]) ** 2 + (jj - m["y"][k]) ** 2
+        vals = frames[k][(d2 >= 9.0) & (d2 <= 49.0)]
+        mean, med, std = sigma_clipped_stats(vals, sigma=3.0, maxiters=5)
+        assert m["background_median"][k] == pytest.approx(med, rel=1e-12)
+        assert m["background_sigma"][k] == pytest.approx(std, rel=1e-9)
+        assert m["background_mean"][k] == pytest.approx(vals.mean(), rel=1e-12)
+        assert m["background_npix"][k] == vals.size

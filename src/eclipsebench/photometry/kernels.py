@@ -87,24 +87,12 @@ def _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters, buf):
     mean = total / n
     if clip_iters <= 0:  # the mean only
         return mean, np.nan, np.nan, n
-    vals = np.sort(buf[:n])
+    vals = buf[:n]
+    vals.sort()  # in place: buf is scratch space
     lo = 0
-    hi = n  # current sample is vals[lo:hi]
-    med = 0.0
-    std = 0.0
+    hi = n  # the current sample is vals[lo:hi]
     for _ in range(max(clip_iters, 1)):
-        m = hi - lo
-        if m % 2 == 1:
-            med = vals[lo + m // 2]
-        else:
-            med = 0.5 * (vals[lo + m // 2 - 1] + vals[lo + m // 2])
-        s = 0.0
-        s2 = 0.0
-        for k in range(lo, hi):
-            s += vals[k]
-            s2 += vals[k] * vals[k]
-        var = s2 / m - (s / m) ** 2
-        std = math.sqrt(var) if var > 0 else 0.0
+        med, std = _median_std_sorted(vals, lo, hi)
         if clip_sigma <= 0 or std == 0.0:
             break
         new_lo = lo
@@ -113,11 +101,29 @@ def _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters, buf):
         new_hi = hi
         while new_hi > new_lo and vals[new_hi - 1] > med + clip_sigma * std:
             new_hi -= 1
-        if new_lo == lo and new_hi == hi or new_hi - new_lo < 3:
+        if (new_lo == lo and new_hi == hi) or new_hi - new_lo < 3:
             break
         lo = new_lo
         hi = new_hi
+    # statistics of the surviving values (as astropy's sigma_clipped_stats)
+    med, std = _median_std_sorted(vals, lo, hi)
     return mean, med, std, n
+
+
+@njit(cache=True, inline="always")
+def _median_std_sorted(vals, lo, hi):
+    m = hi - lo
+    if m % 2 == 1:
+        med = vals[lo + m // 2]
+    else:
+        med = 0.5 * (vals[lo + m // 2 - 1] + vals[lo + m // 2])
+    s = 0.0
+    s2 = 0.0
+    for k in range(lo, hi):
+        s += vals[k]
+        s2 += vals[k] * vals[k]
+    var = s2 / m - (s / m) ** 2
+    return med, (math.sqrt(var) if var > 0 else 0.0)
 
 
 # ----------------------------------------------------------------------------- centroids
