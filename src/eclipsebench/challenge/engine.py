@@ -264,8 +264,9 @@ def _open_client(workers: int, scheduler: str | None):
     env = _worker_env()
     for k, v in env.items():  # inherited by the worker processes
         os.environ.setdefault(k, v)
+    # ":0": the scheduler's HTTP endpoint on a free port (8787 may be taken by another run)
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=40)
+                           dashboard_address=":0", silence_logs=40)
     return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"
 
 
