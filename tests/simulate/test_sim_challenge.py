@@ -104,6 +104,15 @@ def test_rerun_resumes_and_regenerates_identical_files(runs, tmp_path):
     assert res.skipped_aors == 1 and _hashes(root) == before
 
 
+def test_rerun_with_another_configuration_is_refused(runs, capsys):
+    root, _ = runs["c"]
+    args = ["simulate", "--out", str(root), "--seed", "9", "--no-calibration"]
+    for s in TINY:
+        args += ["--set", s]
+    assert main(args) == 2
+    assert "different configuration" in capsys.readouterr().err
+
+
 def test_cli_json_summary_and_bad_values(tmp_path, capsys):
     args = ["simulate", "--out", str(tmp_path / "x"), "--epochs", "1", "--json", "--seed", "3",
             "--no-calibration"]

@@ -432,7 +432,14 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
     make_star_imager(cfg)  # fail early on a bad PRF choice
     for epoch in range(1, cfg.challenge.epochs + 1):
         draw_epoch_pointing(cfg, epoch, seed)  # ... and on bad pointing ranges
-    write_text(out / "config.toml", dump_toml(to_mapping(cfg)))
+    config_text = dump_toml(to_mapping(cfg))
+    existing = out / "config.toml"
+    if existing.is_file() and existing.read_text() != config_text:
+        from ..errors import InputError
+
+        raise InputError(f"--out {out}: holds a challenge simulated with a different "
+                         "configuration (see its config.toml); choose another folder")
+    write_text(existing, config_text)
     plans = plan_challenge(cfg.observation, cfg.challenge.epochs, lc.system.period_days, seed)
 
     rows: dict[int, dict] = {}
