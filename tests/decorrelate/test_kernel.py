@@ -189,6 +189,15 @@ def test_kr_pmap_refuses_frames_the_map_does_not_cover(tmp_path):
                     x=data.x + 1.0, y=data.y, noise_pixels=data.noise_pixels)
     with pytest.raises(InputError, match="max_distance_px"):
         get_method("kr-pmap")(far, pmap=str(path))
+    # A few uncovered frames are tolerated and counted.
+    x = data.x.copy()
+    x[:3] += 1.0
+    few = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
+                    x=x, y=data.y, noise_pixels=data.noise_pixels)
+    model = get_method("kr-pmap")(few, pmap=str(path))
+    assert model.n_uncovered == 3 and np.all(np.isfinite(model.gain))
+    with pytest.raises(InputError, match="max_uncovered_fraction"):
+        get_method("kr-pmap")(few, pmap=str(path), max_uncovered_fraction=0.0)
 
 
 def _write_grid(folder, suffix="test_0001.fits", n=41):

@@ -280,8 +280,12 @@ class KernelRegressionPmap(Systematics):
         wrong positions.
     max_distance_px : float, default 0.1
         Frames whose nearest calibration point (gridded map: grid edge) is
-        farther than this in (x, y) raise InputError: the map does not
-        cover them.
+        farther than this in (x, y) are "uncovered": the map says little about
+        them, and they get the value of the nearest calibration data. Their
+        number is kept in ``n_uncovered``.
+    max_uncovered_fraction : float, default 0.05
+        More uncovered frames than this fraction raise InputError (a map of
+        another pixel, or a pointing far off the sweet spot).
     min_occupancy : float, default 0
         Gridded map only: frames where the interpolated occupancy is below
         this raise InputError (the IRSA code's ``THRESHOLD_VAL``, 20 there,
@@ -296,7 +300,7 @@ class KernelRegressionPmap(Systematics):
     def __init__(self, data: EpochData, **options: Any) -> None:
         super().__init__(data, **options)
         known = {"pmap", "k", "use_noise_pixels", "match_noise_pixels", "max_distance_px",
-                 "min_occupancy"}
+                 "max_uncovered_fraction", "min_occupancy"}
         unknown = set(self.options) - known
         if unknown:
             raise InputError(f"method 'kr-pmap': unknown option(s) {', '.join(sorted(unknown))} "
@@ -307,6 +311,10 @@ class KernelRegressionPmap(Systematics):
         max_d = float(self.options.get("max_distance_px", 0.1))
         if not max_d > 0:
             raise InputError(f"method 'kr-pmap': option max_distance_px expected > 0, got {max_d}")
+        max_frac = float(self.options.get("max_uncovered_fraction", 0.05))
+        if not 0 <= max_frac <= 1:
+            raise InputError("method 'kr-pmap': option max_uncovered_fraction expected 0..1, "
+                             f"got {max_frac}")
         path = find_pmap_path(self.options.get("pmap"), data.meta)
         self.pmap = load_pmap(path)
         self.pmap_path = str(path)
@@ -352,9 +360,11 @@ class KernelRegressionPmap(Systematics):
             dist, _ = tree_xy.query(np.column_stack([x, y]), k=1)
             far = dist > max_d
             self.n_low_occupancy = 0
-        if far.any():
-            raise InputError(f"--pmap {path}: {int(far.sum())} of {len(x)} frames lie more than "
-                             f"{max_d} px from the calibration data (max_distance_px)")
+        self.n_uncovered = int(far.sum())
+        if self.n_uncovered > max_frac * len(x):
+            raise InputError(f"--pmap {path}: {self.n_uncovered} of {len(x)} frames lie more than "
+                             f"{max_d} px from the calibration data (max_distance_px), more than "
+                             f"max_uncovered_fraction={max_frac}")
         self.k = k
         self.gain = pmap_gain(self.pmap, x, y, beta, k=k, scales=self.scales)
         self._flux = np.asarray(data.flux, float)
