@@ -103,3 +103,26 @@ def test_cli_json_prints_the_summary(tiny_run, capsys):
 def test_cli_unknown_method_exits_2(tmp_path, capsys):
     assert main(["run", "--out", str(tmp_path), "--methods", "nope"]) == 2
     assert "run.methods" in capsys.readouterr().err
+
+
+def test_a_method_refusing_an_epoch_is_recorded_not_fatal(tiny_run, tmp_path, monkeypatch):
+    cfg, root, _, _ = tiny_run
+    for name in ("simulation", "photometry", "results"):
+        shutil.copytree(root / name, tmp_path / name)
+    shutil.copy(root / "run_config.toml", tmp_path / "run_config.toml")
+    lay = Layout(tmp_path)
+    lay.result("bliss", 2).unlink()
+
+    import eclipsebench.fit.reduce as fit_reduce
+
+    def refuse(*args, **kwargs):
+        raise InputError("--pmap cal.fits: 7 frames lie outside the calibration data")
+
+    monkeypatch.setattr(fit_reduce, "reduce_epoch", refuse)
+    summary, report = run_challenge(cfg, tmp_path, workers=1)
+    assert sorted(report.ran) == ["reduce/bliss/epoch_02", "stats"]
+    assert json.loads(lay.result("bliss", 2).read_text())["failed"] is True
+    assert summary["failures"] == [{"method": "bliss", "epoch": 2, "error":
+                                    "--pmap cal.fits: 7 frames lie outside the calibration data"}]
+    assert summary["methods_excluded"] == ["bliss"] and list(summary["methods"]) == ["pld"]
+    assert len(Table.read(lay.depths, format="ascii.ecsv")) == 3

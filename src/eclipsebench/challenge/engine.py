@@ -289,8 +289,10 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, *, workers,
                     continue
                 if all(d in done for d in task.deps):
                     waiting.remove(key)
+                    # no retries: a task that raises would raise again; a task whose
+                    # worker died is rescheduled by Dask itself (allowed-failures)
                     fut = client.submit(_call, task.func, task.args, key=f"{key}#{time.time_ns()}",
-                                        pure=False, retries=1)
+                                        pure=False)
                     futures[fut.key] = key
                     ac.add(fut)
 

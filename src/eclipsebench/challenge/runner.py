@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import Config, dump_toml, to_mapping
-from ..errors import ConfigError, InputError
+from ..errors import ConfigError, DataError, InputError
 from ..io.atomic import atomic_path, write_json, write_text
 from ..progress import get_logger
 from .engine import RunReport, Task, run_tasks
@@ -177,12 +177,25 @@ def _system(cfg: Config):
 
 def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int,
                 out_path: str) -> None:
-    """Reduce one epoch with one method; write the light curve, then the result JSON."""
+    """Reduce one epoch with one method; write the light curve, then the result JSON.
+
+    A method that refuses the epoch's data (an :class:`InputError`, e.g.
+    frames outside KR/Pmap's calibration coverage) is an outcome of the
+    benchmark, not a crash: the JSON records ``failed`` and the message, the
+    statistics leave that epoch out and list it, and a rerun does not retry it
+    (it would fail the same way).
+    """
     from ..fit.reduce import reduce_epoch
 
-    result = reduce_epoch(table_path, method, options=cfg.reduce, system=_system(cfg), seed=seed,
-                          epoch=epoch)
     out = Path(out_path)
+    try:
+        result = reduce_epoch(table_path, method, options=cfg.reduce, system=_system(cfg),
+                              seed=seed, epoch=epoch)
+    except InputError as exc:
+        log.warning("%s epoch %d: %s", method, epoch, exc)
+        write_json(out, {"method": method, "epoch": epoch, "failed": True, "error": str(exc),
+                         "depth_ppm": None, "depth_err_ppm": None})
+        return
     with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
         result.lightcurve_table().write(tmp, format="ascii.ecsv")
     write_json(out, result.to_dict())
@@ -211,15 +224,25 @@ def _truth_rows(sim_dir: Path):
 
 
 def _collect_depths(layout: Layout, methods: list[str], epochs: list[int], flat: bool):
+    """The depth table of the usable results, and the failures (method, epoch, error)."""
     from astropy.table import Table
 
-    rows = []
+    rows, failures = [], []
     for m in methods:
         for e in epochs:
-            res = json.loads(layout.result(m, e, flat).read_text())
-            rows.append((m, e, float(res["depth_ppm"]), float(res["depth_err_ppm"])))
-    return Table(rows=rows, names=["method", "epoch", "depth_ppm", "error_ppm"],
-                 dtype=[str, int, float, float])
+            path = layout.result(m, e, flat)
+            res = json.loads(path.read_text())
+            depth, err = res.get("depth_ppm"), res.get("depth_err_ppm")
+            if res.get("failed") or depth is None or err is None or not (
+                    np.isfinite(depth) and np.isfinite(err) and err > 0):
+                failures.append({"method": m, "epoch": e,
+                                 "error": res.get("error") or f"no usable depth ({depth}) "
+                                                              f"and error ({err})"})
+                continue
+            rows.append((m, e, float(depth), float(err)))
+    table = Table(rows=rows or None, names=["method", "epoch", "depth_ppm", "error_ppm"],
+                  dtype=[str, int, float, float])
+    return table, failures
 
 
 def _f_in(cfg: Config, tables: dict[int, object], truth) -> float:
@@ -259,7 +282,13 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
     from .photon import analytic_photon_limit, empirical_photon_limit
 
     layout = Layout(Path(root))
-    depths = _collect_depths(layout, methods, epochs, flat=False)
+    depths, failures = _collect_depths(layout, methods, epochs, flat=False)
+    counts = {m: int(np.sum(depths["method"] == m)) for m in methods}
+    scored = [m for m in methods if counts[m] >= 2]
+    if not scored:
+        raise DataError(layout.root / "results", "no method has usable depths in 2 or more "
+                                                 "epochs; see the 'error' of the result files")
+    excluded = [m for m in methods if m not in scored]
     with atomic_path(layout.depths) as tmp:
         depths.write(tmp, format="ascii.ecsv")
     truth = _truth_rows(layout.sim())
@@ -279,17 +308,20 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
         annulus_px=tuple(cfg.photometry.annulus_px), **_readout(cfg))
     empirical = None
     if plm is not None:
-        flat = _collect_depths(layout, [plm], epochs, flat=True)
+        flat, flat_failures = _collect_depths(layout, [plm], epochs, flat=True)
         empirical = empirical_photon_limit(flat["depth_ppm"], flat["error_ppm"])
         empirical["method"] = plm
+        empirical["failures"] = flat_failures
     sigma = analytic["sigma_phot_ppm"]
-    summary = summarize(depths, sigma_phot_ppm=sigma, truth_ppm=truth_ppm, methods=methods,
+    summary = summarize(depths, sigma_phot_ppm=sigma, truth_ppm=truth_ppm, methods=scored,
                         seed=cfg.challenge.seed, n_bootstrap=cfg.run.bootstrap)
     summary.update({
         "challenge": cfg.challenge.name,
         "seed": cfg.challenge.seed,
         "epochs": epochs,
-        "method_names": methods,
+        "method_names": scored,
+        "failures": failures,
+        "methods_excluded": excluded,
         "sigma_phot_ppm_analytic": sigma,
         "sigma_phot_ppm_empirical": None if empirical is None else empirical["sigma_phot_ppm"],
         "photon_limit": {"used": "analytic", "analytic": analytic, "empirical": empirical},

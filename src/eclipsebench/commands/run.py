@@ -85,6 +85,11 @@ def format_text(result: dict) -> str:
     if cover:
         lines.append("1-sigma coverage of the truth: "
                      + ", ".join(f"{m} {c:.2f}" for m, c in cover.items()))
+    for f in result.get("failures", []):
+        lines.append(f"not scored: {f['method']} epoch {f['epoch']}: {f['error']}")
+    if result.get("methods_excluded"):
+        lines.append("methods left out (fewer than 2 usable epochs): "
+                     + ", ".join(result["methods_excluded"]))
     run = result.get("_run")
     if run:
         lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "
