@@ -128,3 +128,21 @@ def test_phase_curve_is_not_taken_by_the_detrend(epoch_flat, synth):
     # measured: +16.5 ppm dividing the fitted astro out, +31.4 ppm detrending the raw flux
     assert abs(got[True] - epoch_flat.depth_ppm) <= 20.0, got
     assert abs(got[False] - epoch_flat.depth_ppm) > 1.5 * abs(got[True] - epoch_flat.depth_ppm)
+
+
+def test_mask_kept_when_the_fitted_curve_does_not_isolate_an_eclipse(epoch_flat):
+    """A fitted phase swing larger than the eclipse must not mask the whole series.
+
+    Simulated epoch 7 of the default challenge ran into this: its fitted quadratic
+    phase curve spanned more than the eclipse depth, and the half-range window of
+    the fitted curve covered nearly every frame.
+    """
+    data = epoch_flat.data
+    t = data.time_bmjd
+    m = SegmentedPolynomial(data)
+    before = m.mask_window_bmjd
+    swing = 1.0 + 5e-3 * ((t - t.mean()) / np.ptp(t)) ** 2  # U-shaped, no eclipse in it
+    m.optimise_hyperparameters(swing)
+    assert m.mask_window_bmjd == before
+    outside = (t < before[0]) | (t > before[1])
+    assert outside.sum() > len(t) // 3

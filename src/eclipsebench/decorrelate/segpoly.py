@@ -361,8 +361,13 @@ class SegmentedPolynomial(Systematics):
             t_in, t_out = time[inside[0]], time[inside[-1]]
             pad = self.options.get("mask_pad", 0.2) * (t_out - t_in)
             window = (float(t_in - pad), float(t_out + pad))
-            if self.mask_window_bmjd is None or not np.allclose(
-                    window, self.mask_window_bmjd, rtol=0, atol=1e-7):
+            left = np.count_nonzero((time < window[0]) | (time > window[1]))
+            if left < max(self._settings["min_fit"], len(time) // 3):
+                # The fitted curve's phase variation exceeds its eclipse, so its
+                # half-range level does not isolate the eclipse: keep the mask.
+                window = self.mask_window_bmjd
+            if window is not None and (self.mask_window_bmjd is None or not np.allclose(
+                    window, self.mask_window_bmjd, rtol=0, atol=1e-7)):
                 self.mask_window_bmjd = window
                 redo = True
         if not redo:
