@@ -486,14 +486,25 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
 
 
 def _guard(cfg: Config, layout: Layout) -> None:
-    """Refuse to resume into a folder that holds a run of another configuration."""
+    """Refuse to resume into a folder that holds a run of another configuration.
+
+    The stored configuration is read back through the current schema, so keys
+    added since (with their defaults) do not count as a difference.
+    """
+    from ..config import from_mapping, load_toml
+
     text = dump_toml(summary_config(cfg))
     if layout.run_config.is_file():
-        if layout.run_config.read_text() != text:
+        try:
+            stored = summary_config(from_mapping(Config, load_toml(layout.run_config)))
+        except InputError:
+            stored = None
+        if stored != summary_config(cfg):
             raise InputError(f"{layout.root}: holds a run with a different configuration "
                              f"(see {layout.run_config.name}); use another --out or remove it")
-    else:
-        write_text(layout.run_config, text)
+        if layout.run_config.read_text() == text:
+            return
+    write_text(layout.run_config, text)
 
 
 def run_challenge(cfg: Config, root: str | Path, *, workers: int | None = None,
