@@ -59,6 +59,14 @@ def positive_int(minimum: int = 1):
     return parse
 
 
+def method_list(text: str) -> list[str]:
+    """An argparse type for ``a,b,c``: a non-empty list of method names."""
+    names = [m.strip() for m in text.split(",") if m.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("expected a comma-separated list of method names")
+    return names
+
+
 def add_config_options(parser: argparse.ArgumentParser, *, config_positional: bool = True) -> None:
     """CONFIG and ``--set section.key=value``, shared by commands that read a config."""
     if config_positional:

@@ -6,18 +6,11 @@ import argparse
 from pathlib import Path
 
 from ..config import load_config
-from .options import add_config_options, positive_int
+from .options import add_config_options, method_list, positive_int
 
 NAME = "run"
 HELP = ("Run the data challenge end to end on Dask: simulate every epoch, photometry, every method "
         "on every epoch, statistics (Tables 3-4), photon limits and the report; resumable.")
-
-
-def _methods(text: str) -> list[str]:
-    names = [m.strip() for m in text.split(",") if m.strip()]
-    if not names:
-        raise argparse.ArgumentTypeError("expected a comma-separated list of method names")
-    return names
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -29,7 +22,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="challenge seed (challenge.seed)")
     p.add_argument("--epochs", type=positive_int(), metavar="K",
                    help="number of simulated epochs (challenge.epochs); e.g. 200 for Monte Carlo")
-    p.add_argument("--methods", type=_methods, metavar="A,B,...",
+    p.add_argument("--methods", type=method_list, metavar="A,B,...",
                    help="methods to run (run.methods; default: every registered method)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=positive_int(), metavar="N",

@@ -7,19 +7,12 @@ import argparse
 from ..report.tables import format_text_table
 from ..stats.depth_table import read_depth_table
 from ..stats.summary import summarize
-from .options import nonnegative_float, positive_float, positive_int
+from .options import method_list, nonnegative_float, positive_float, positive_int
 
 NAME = "stats"
 HELP = ("Per-method eclipse-depth statistics (weighted mean, f_dis, repeatability, reliability, "
         "accuracy), closest matches, t-tests and ANOVA from a CSV/ECSV depth table "
         "(Ingalls et al. 2016, Sections 3.2-3.5).")
-
-
-def _methods(text: str) -> list[str]:
-    names = [m.strip() for m in text.split(",") if m.strip()]
-    if not names:
-        raise argparse.ArgumentTypeError("expected a comma-separated list of method names")
-    return names
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -29,7 +22,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="photon-noise limit of one depth (gives reliability r and accuracy a)")
     p.add_argument("--truth", type=nonnegative_float(), metavar="PPM",
                    help="true eclipse depth (gives RMSE, bias, accuracy a and coverage)")
-    p.add_argument("--methods", type=_methods, metavar="A,B,...",
+    p.add_argument("--methods", type=method_list, metavar="A,B,...",
                    help="only these methods (also for the t-tests and ANOVA)")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
                    help="seed of the bootstrap resampling")
