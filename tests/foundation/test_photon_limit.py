@@ -4,8 +4,12 @@ import math
 
 import pytest
 
-from eclipsebench.stats.photon_limit import (eclipse_depth_photon_noise, fowler_variance,
-                                             frame_snr, photon_limit)
+from eclipsebench.stats.photon_limit import (
+    eclipse_depth_photon_noise,
+    fowler_variance,
+    frame_snr,
+    photon_limit,
+)
 
 
 def gf_variance_by_hand(F, FN, WT, rn):

@@ -11,8 +11,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from .base import (apply_overrides, check, dump_toml, from_mapping, load_toml, parse_override,
-                   to_mapping)
+from .base import (
+    apply_overrides,
+    check,
+    dump_toml,
+    from_mapping,
+    load_toml,
+    parse_override,
+    to_mapping,
+)
 from .photometry import PhotometrySection
 from .reduce import ReduceSection
 from .run import ChallengeSection, RunSection

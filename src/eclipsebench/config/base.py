@@ -122,7 +122,7 @@ def from_mapping(cls: type, mapping: Mapping[str, Any], prefix: str = "") -> Any
             dotted = f"{prefix}.{key}" if prefix else key
             raise ConfigError(dotted, "unknown key (known: " + ", ".join(sorted(fields)) + ")")
     kwargs = {}
-    for name, field in fields.items():
+    for name in fields:
         if name in mapping:
             dotted = f"{prefix}.{name}" if prefix else name
             kwargs[name] = _coerce(mapping[name], hints[name], dotted)
