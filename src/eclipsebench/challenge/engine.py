@@ -133,9 +133,21 @@ def _order(by_key: dict[str, Task]) -> list[str]:
 
 
 def _call(func: Callable[..., object], args: tuple) -> float:
-    t0 = time.perf_counter()
-    func(*args)
-    return time.perf_counter() - t0
+    # Every task runs single-threaded wherever it runs (in this process, a local
+    # worker or a remote scheduler's): multi-threaded BLAS splits sums differently,
+    # and the same seed must give the same bytes with any number of workers.
+    import numba
+    from threadpoolctl import threadpool_limits
+
+    previous = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        with threadpool_limits(limits=1):
+            t0 = time.perf_counter()
+            func(*args)
+            return time.perf_counter() - t0
+    finally:
+        numba.set_num_threads(previous)
 
 
 class _Bars:
