@@ -20,7 +20,6 @@ Executors:
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -273,12 +272,12 @@ def _open_client(workers: int, scheduler: str | None):
             return Client(scheduler, timeout="20s"), None, f"dask scheduler {scheduler}"
         except OSError as exc:
             raise InputError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
-    env = _worker_env()
-    for k, v in env.items():  # inherited by the worker processes
-        os.environ.setdefault(k, v)
-    # ":0": the scheduler's HTTP endpoint on a free port (8787 may be taken by another run)
+    # The single-thread environment goes to the worker processes only: changing
+    # NUMBA_NUM_THREADS in this process after numba started its threads makes
+    # every later compilation here fail. ":0": the scheduler's HTTP endpoint on a
+    # free port (8787 may be taken by another run).
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=":0", silence_logs=40)
+                           dashboard_address=":0", silence_logs=40, env=_worker_env())
     return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"
 
 
