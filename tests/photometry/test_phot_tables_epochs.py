@@ -83,7 +83,7 @@ def test_simulated_inputs_use_epoch_headers_and_record_simdir(tmp_path, make_bcd
                                                               capsys):
     sim = tmp_path / "challenge"
     (sim / "calibration").mkdir(parents=True)
-    (sim / "truth.ecsv").write_text("# placeholder truth for the folder walk\n")
+    (sim / "truth.ecsv").write_text("# marks the simulation root for the folder walk\n")
     # two AORs 5 days apart but labelled as one epoch, and one AOR of epoch 2 the same day
     _write_aor(sim / "r10" / "ch2" / "bcd", make_bcd, make_star_cube, aorkey=10, n_cubes=1,
                start_bmjd=57000.0, seed=1, SIMULATE=True, EPOCH=1)
