@@ -22,15 +22,15 @@ Prints medians; the ratio to the reference is what counts.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 import tracemalloc
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from _timing import median_seconds  # noqa: E402
 
 from eclipsebench.instrument import fowler as F  # noqa: E402
 from eclipsebench.instrument.constants import SUB_2S  # noqa: E402
@@ -40,15 +40,6 @@ from eclipsebench.instrument.prf import BuiltinPRF  # noqa: E402
 EPOCH_S = 9 * 3600.0
 DT_S = 1e-3
 CHUNK = 128_512
-
-
-def timed(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def bench_pointing(repeat):
@@ -71,8 +62,8 @@ def bench_pointing(repeat):
             acc += z[0, 0]
         return acc
 
-    t_model = timed(run, repeat)
-    t_ref = timed(ref, repeat)
+    t_model = median_seconds(run, repeat)
+    t_ref = median_seconds(ref, repeat)
     tracemalloc.start()
     run()
     peak = tracemalloc.get_traced_memory()[1]
@@ -90,10 +81,10 @@ def bench_fowler(repeat):
     reads = np.broadcast_to(reads.reshape(2 * mode.fowler, 1, 1, 1),
                             (2 * mode.fowler,) + shape).copy()
     rng = np.random.default_rng(4)
-    t_grouped = timed(lambda: F.fowler_sample(groups, mode, rng, 9.4, grouped=True), repeat)
-    t_ticks = timed(lambda: F.fowler_sample_ticks(q, mode, rng, 9.4), repeat)
-    t_irac = timed(lambda: F.fowler_sample_iracsim2015(reads, mode, rng, 16.8), repeat)
-    t_ref = timed(lambda: rng.poisson(groups), repeat)
+    t_grouped = median_seconds(lambda: F.fowler_sample(groups, mode, rng, 9.4, grouped=True), repeat)
+    t_ticks = median_seconds(lambda: F.fowler_sample_ticks(q, mode, rng, 9.4), repeat)
+    t_irac = median_seconds(lambda: F.fowler_sample_iracsim2015(reads, mode, rng, 16.8), repeat)
+    t_ref = median_seconds(lambda: rng.poisson(groups), repeat)
     return int(groups.size), t_grouped, t_ticks, t_irac, t_ref
 
 
@@ -104,7 +95,7 @@ def bench_prf(repeat):
     x = 15.15 + 0.1 * rng.standard_normal(n)
     y = 15.2 + 0.1 * rng.standard_normal(n)
     prf.render_taylor(x[:4], y[:4])  # compile
-    t_prf = timed(lambda: prf.render_taylor(x, y, half=6), repeat)
+    t_prf = median_seconds(lambda: prf.render_taylor(x, y, half=6), repeat)
     g = np.arange(-6, 7, dtype=float)
 
     def ref():
@@ -112,7 +103,7 @@ def bench_prf(repeat):
         v = (g[None, :] - (y - 15)[:, None]) ** 2
         return np.exp(-0.5 * (u[:, None, :] + v[:, :, None]))
 
-    t_ref = timed(ref, repeat)
+    t_ref = median_seconds(ref, repeat)
     return n, t_prf, t_ref
 
 

@@ -5,11 +5,11 @@ Run: ``python bench/bench_lightcurve.py`` (also part of ``make bench``).
 
 from __future__ import annotations
 
-import statistics
 import time
 
 import batman
 import numpy as np
+from _timing import median_seconds
 
 from eclipsebench.astro.bias import epoch_times
 from eclipsebench.astro.catalogue import get_system
@@ -21,13 +21,7 @@ REPEAT = 7
 
 
 def median_time(fn, repeat=REPEAT):
-    fn()  # warm up
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+    return median_seconds(fn, repeat, warmup=True)
 
 
 def main() -> None:

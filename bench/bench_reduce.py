@@ -165,12 +165,14 @@ def main(argv=None) -> int:
                     res = reduce_epoch(table, name, options=opts, seed=1)
                     times.append(time.perf_counter() - t0)
                 dt = float(np.median(times))
+                extra = ""
+                if res.depth_err_separation_ppm:
+                    extra = f"  (ICA separation error {res.depth_err_separation_ppm:.1f} ppm)"
                 print(f"{name:<10s} {sampler:<8s} {dt:8.2f} {dt / ref:10.3g} "
                       f"{res.depth_ppm - DEPTH * 1e6:11.1f} {res.depth_err_ppm:8.1f} "
-                      f"{res.depth_err_method:>14s} {res.beta_red:6.2f}", flush=True)
+                      f"{res.depth_err_method:>14s} {res.beta_red:6.2f}{extra}", flush=True)
         if args.recovery:
             print("\nnoiseless recovery (quadratic phase, leastsq, no prayer bead): depth - truth, ppm")
-            opts = ReduceSection(prayer_bead_shifts=0)
             flat_dir = Path(tmp) / "flat"
             write_calibration(flat_dir, systematics=False)
             sys_tab = make_table(system, n_frames=args.frames, noise=0.0, simdir=tmp)
@@ -178,10 +180,18 @@ def main(argv=None) -> int:
                                   simdir=str(flat_dir))
             flat_depths = {}
             for name in methods:
-                with_sys = reduce_epoch(sys_tab, name, options=opts).depth_ppm - DEPTH * 1e6
-                flat_depths[name] = reduce_epoch(flat_tab, name, options=opts).depth_ppm
-                print(f"{name:<10s} with systematics {with_sys:8.2f}   without "
-                      f"{flat_depths[name] - DEPTH * 1e6:8.2f}")
+                # The shared (physical) eclipse shape for every method; segpoly also with its
+                # faithful default, the team's box eclipse.
+                shapes = ["physical"] + (["auto"] if name == "segpoly" else [])
+                for shape in shapes:
+                    shape_opts = ReduceSection(prayer_bead_shifts=0, eclipse_shape=shape)
+                    with_sys = reduce_epoch(sys_tab, name, options=shape_opts).depth_ppm
+                    flat = reduce_epoch(flat_tab, name, options=shape_opts).depth_ppm
+                    if shape == "physical":
+                        flat_depths[name] = flat
+                    label = f"{name} ({'box' if shape == 'auto' else shape})"
+                    print(f"{label:<20s} with systematics {with_sys - DEPTH * 1e6:8.2f}   without "
+                          f"{flat - DEPTH * 1e6:8.2f}", flush=True)
             spread = max(flat_depths.values()) - min(flat_depths.values())
             print(f"spread of the no-systematics depths across methods: {spread:.2f} ppm")
     return 0
