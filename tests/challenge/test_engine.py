@@ -48,6 +48,13 @@ def forget(path: str) -> None:
     """Finishes without writing its output."""
 
 
+def record_environment(path: str) -> None:
+    import os
+
+    write_json(path, {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_",
+                                                     "OPENBLAS_NUM_THREADS")})
+
+
 def graph(root: Path, seed: int = 7, n: int = 4, log: Path | None = None):
     log = log or root / "log.txt"
     tasks = [Task(f"n/{e}", "numbers", logged_numbers, (str(root / f"n{e}.json"), seed, e, str(log)),
@@ -116,3 +123,17 @@ def test_two_dask_workers_give_the_same_bytes(tmp_path):
     assert "LocalCluster (2 processes)" in rep.executor and len(rep.ran) == 5
     for name in ["total.json", *[f"n{e}.json" for e in range(4)]]:
         assert (one / name).read_bytes() == (two / name).read_bytes()
+    assert sorted(t.key for t in rep.timeline) == sorted(rep.ran)
+    assert all(t.start_s >= 0 and t.seconds >= 0 and ":" in t.worker for t in rep.timeline)
+    total_start = next(t.start_s for t in rep.timeline if t.key == "total")
+    assert all(t.start_s + t.seconds <= total_start + 1e-3 for t in rep.timeline
+               if t.key != "total")  # dependencies first
+
+
+@pytest.mark.slow
+def test_dask_workers_keep_glibc_malloc_dynamic(tmp_path):
+    """No MALLOC_TRIM_THRESHOLD_ in the workers (it made every task 1.8x slower), one BLAS thread."""
+    out = tmp_path / "env.json"
+    run_tasks([Task("env", "env", record_environment, (str(out),), (out,))], workers=2)
+    env = json.loads(out.read_text())
+    assert env == {"MALLOC_TRIM_THRESHOLD_": None, "OPENBLAS_NUM_THREADS": "1"}

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 
+import numpy as np
 import pytest
 from astropy.table import Table
 
@@ -62,6 +63,10 @@ def test_resume_redoes_only_what_is_missing(tiny_run):
     again, report = run_challenge(cfg, root, workers=1)
     assert sorted(report.ran) == ["reduce/bliss/epoch_02", "stats"]
     assert lay.summary.read_bytes() == before
+    timings = Table.read(lay.timings, format="ascii.ecsv")  # what this invocation ran
+    assert sorted(timings["key"]) == sorted(report.ran)
+    assert list(timings["stage"]) == [k.split("/")[0] for k in timings["key"]]
+    assert np.all(np.diff(timings["start_s"]) >= 0) and np.all(timings["seconds"] >= 0)
 
 
 def test_two_workers_give_the_same_summary(tiny_run, tmp_path):

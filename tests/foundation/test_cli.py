@@ -24,6 +24,19 @@ def test_photon_limit_json_paper_inputs(capsys):
     assert set(result) >= {"sigma_e", "snr_single", "sigma_phot_ppm"}
 
 
+def test_photon_limit_exact_poisson_shot_noise(capsys):
+    """--shot-noise poisson: q (FN + WT - (FN^2-1)/(3 FN)) per pixel, computed here by hand."""
+    code, out, _ = run_cli(capsys, "photon-limit", "--flux-net", "70858", "--flux-aperture",
+                           "70917", "--flux-background", "463", "--shot-noise", "poisson",
+                           "--json")
+    assert code == 0
+    result = json.loads(out)
+    shot = (192 - 63 / 24) / 192  # exact Fowler variance per electron of signal
+    var = (70917 + 463) * shot + 2 * 2 * 9.4**2 / 8
+    assert result["snr_single"] == pytest.approx(70858 / var**0.5, rel=1e-12)
+    assert result["inputs"]["shot_noise"] == "poisson"
+
+
 def test_photon_limit_text_output(capsys):
     code, out, _ = run_cli(capsys, "photon-limit", "--flux-net", "73246", "--flux-aperture",
                            "73358", "--flux-background", "881")

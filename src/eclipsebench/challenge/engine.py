@@ -20,6 +20,8 @@ Executors:
 
 from __future__ import annotations
 
+import os
+import socket
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -28,7 +30,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..progress import get_logger, progress
 
-__all__ = ["Task", "RunReport", "TaskFailed", "run_tasks"]
+__all__ = ["Task", "TaskTiming", "RunReport", "TaskFailed", "run_tasks"]
 
 log = get_logger("challenge")
 
@@ -66,6 +68,28 @@ class Task:
         return bool(self.outputs) and all(Path(p).exists() for p in self.outputs)
 
 
+@dataclass(frozen=True)
+class TaskTiming:
+    """When and where one task ran.
+
+    Attributes
+    ----------
+    key : str
+        The task's key.
+    start_s : float
+        Start, seconds after the run began (same clock in every process).
+    seconds : float
+        Duration of the task's function.
+    worker : str
+        ``host:pid`` of the process that ran it.
+    """
+
+    key: str
+    start_s: float
+    seconds: float
+    worker: str
+
+
 @dataclass
 class RunReport:
     """What a run did: the keys it ran, the keys it found done, the wall time."""
@@ -75,6 +99,14 @@ class RunReport:
     wall_s: float = 0.0
     executor: str = ""
     task_s: dict[str, float] = field(default_factory=dict)
+    timeline: list[TaskTiming] = field(default_factory=list)
+    started_unix: float = 0.0
+
+    def record(self, key: str, timing: tuple[float, float, str]) -> None:
+        """Store what :func:`_call` returned for ``key``."""
+        start_unix, seconds, worker = timing
+        self.task_s[key] = seconds
+        self.timeline.append(TaskTiming(key, start_unix - self.started_unix, seconds, worker))
 
     def stage_seconds(self) -> dict[str, float]:
         """Task time summed per stage prefix (``simulate``, ``reduce``...), seconds."""
@@ -131,7 +163,7 @@ def _order(by_key: dict[str, Task]) -> list[str]:
     return out
 
 
-def _call(func: Callable[..., object], args: tuple) -> float:
+def _call(func: Callable[..., object], args: tuple) -> tuple[float, float, str]:
     # Every task runs single-threaded wherever it runs (in this process, a local
     # worker or a remote scheduler's): multi-threaded BLAS splits sums differently,
     # and the same seed must give the same bytes with any number of workers.
@@ -142,9 +174,10 @@ def _call(func: Callable[..., object], args: tuple) -> float:
     numba.set_num_threads(1)
     try:
         with threadpool_limits(limits=1):
+            start_unix = time.time()
             t0 = time.perf_counter()
             func(*args)
-            return time.perf_counter() - t0
+            return start_unix, time.perf_counter() - t0, f"{socket.gethostname()}:{os.getpid()}"
     finally:
         numba.set_num_threads(previous)
 
@@ -199,7 +232,7 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
     """
     by_key = _check_graph(tasks)
     order = _order(by_key)
-    report = RunReport()
+    report = RunReport(started_unix=time.time())
     done = {k for k in order if by_key[k].done()}
     report.skipped = [k for k in order if k in done]
     todo = [k for k in order if k not in done]
@@ -243,7 +276,7 @@ def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseExc
         if _blocked(task, set(failures)) or not all(d in done for d in task.deps):
             continue  # a dependency failed: not run
         try:
-            report.task_s[key] = _call(task.func, task.args)
+            report.record(key, _call(task.func, task.args))
             _finish(task)
         except Exception as exc:  # collected and re-raised after the others ran
             failures[key] = exc
@@ -276,8 +309,15 @@ def _open_client(workers: int, scheduler: str | None):
     # NUMBA_NUM_THREADS in this process after numba started its threads makes
     # every later compilation here fail. ":0": the scheduler's HTTP endpoint on a
     # free port (8787 may be taken by another run).
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=":0", silence_logs=40, env=_worker_env())
+    # Dask's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers by default;
+    # fixing any glibc malloc threshold turns off its dynamic mmap threshold, so every
+    # array above 128 KiB becomes a fresh mmap whose pages fault in zeroed: our tasks,
+    # which allocate large temporary arrays, then ran 1.8x slower (BENCHMARKS.md).
+    import dask
+
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=":0", silence_logs=40, env=_worker_env())
     return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"
 
 
@@ -312,7 +352,7 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, *, workers,
             key = futures.pop(fut.key)
             task = by_key[key]
             try:
-                report.task_s[key] = fut.result()
+                report.record(key, fut.result())
                 _finish(task)
             except Exception as exc:  # collected and re-raised after the others ran
                 failures[key] = exc

@@ -12,6 +12,8 @@ summary. The run folder ``DIR``::
     DIR/depths.ecsv                        method, epoch, depth_ppm, error_ppm
     DIR/summary.json                       statistics + photon limits + truth + seed + config
     DIR/report/index.html                  figures and tables
+    DIR/timings.ecsv                       when, where and how long each task of the
+                                           last invocation ran (not part of the results)
 
 Each task writes its files atomically, its declared output last, so a task
 is done exactly when that file exists: rerunning after an interruption
@@ -68,6 +70,10 @@ class Layout:
     @property
     def summary(self) -> Path:
         return self.root / "summary.json"
+
+    @property
+    def timings(self) -> Path:
+        return self.root / "timings.ecsv"
 
     @property
     def report(self) -> Path:
@@ -528,4 +534,23 @@ def run_challenge(cfg: Config, root: str | Path, *, workers: int | None = None,
     _guard(cfg, layout)
     report = run_tasks(tasks, workers=cfg.run.workers if workers is None else workers,
                        scheduler=(scheduler if scheduler is not None else cfg.run.scheduler) or None)
+    if report.timeline:
+        write_timings(report, layout.timings)
     return json.loads(layout.summary.read_text()), report
+
+
+def write_timings(report: RunReport, path: Path) -> None:
+    """The tasks' timeline (key, stage, start, seconds, worker) as ECSV, sorted by start."""
+    from astropy.table import Table
+
+    rows = sorted(report.timeline, key=lambda t: t.start_s)
+    table = Table({"key": [t.key for t in rows],
+                   "stage": [t.key.split("/", 1)[0] for t in rows],
+                   "start_s": np.array([t.start_s for t in rows]),
+                   "seconds": np.array([t.seconds for t in rows]),
+                   "worker": [t.worker for t in rows]})
+    table["start_s"].unit = table["seconds"].unit = "s"
+    table.meta["executor"] = report.executor
+    table.meta["wall_s"] = round(report.wall_s, 3)
+    with atomic_path(path) as tmp:
+        table.write(tmp, format="ascii.ecsv")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..stats.photon_limit import photon_limit
+from ..stats.photon_limit import SHOT_NOISE_FORMS, photon_limit
 from .options import nonnegative_float, open_unit_float, positive_float, positive_int
 
 NAME = "photon-limit"
@@ -35,6 +35,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--aperture-pixels", type=positive_float(), metavar="NPIX",
                    help="aperture area in pixels; adds read noise per pixel (default: the paper's "
                         "single read-noise term)")
+    p.add_argument("--shot-noise", choices=SHOT_NOISE_FORMS, default="paper",
+                   help="Fowler shot-noise term: 'paper' (Eq. gar_for_var as printed, default) or "
+                        "'poisson' (exact for Poisson increments, 2.7%% lower for FN=8, WT=184)")
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -44,14 +47,16 @@ def run(args: argparse.Namespace) -> dict:
     result = photon_limit(args.flux_net, args.flux_aperture, args.flux_background,
                           frames=args.frames, depth_ppm=args.depth_ppm, f_in=args.f_in,
                           fowler=args.fowler, wait=args.wait, sample_time_s=args.sample_time,
-                          read_noise_e=args.read_noise, aperture_pixels=args.aperture_pixels)
+                          read_noise_e=args.read_noise, aperture_pixels=args.aperture_pixels,
+                          shot_noise=args.shot_noise)
     out = result.to_dict()
     out.update({"inputs": {"flux_net_e": args.flux_net, "flux_aperture_e": args.flux_aperture,
                            "flux_background_e": args.flux_background, "frames": args.frames,
                            "depth_ppm": args.depth_ppm, "f_in": args.f_in, "fowler": args.fowler,
                            "wait": args.wait, "sample_time_s": args.sample_time,
                            "read_noise_e": args.read_noise,
-                           "aperture_pixels": args.aperture_pixels}})
+                           "aperture_pixels": args.aperture_pixels,
+                           "shot_noise": args.shot_noise}})
     return out
 
 
