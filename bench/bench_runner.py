@@ -3,7 +3,8 @@
 Runs ``eclipsebench run`` (the default XO-3b challenge unless options say
 otherwise) into fresh folders, first with ``--workers 1`` (the reference:
 in-process, synchronous), then with ``--workers 2`` (a LocalCluster of two
-processes), and prints the wall times, the speed-up and the time per stage.
+processes), and prints the wall times, the speed-up, the task seconds per
+stage and how busy each worker was (from the run's ``timings.ecsv`` data).
 Each configuration runs ``--repeats`` times (default 1: a full run takes
 minutes) and the median is reported. The two runs must give the same
 ``summary.json`` bytes; the script says whether they do.
@@ -32,6 +33,12 @@ def one_run(cfg, workers: int, root: Path) -> tuple[float, dict, bytes]:
     t0 = time.perf_counter()
     _, report = run_challenge(cfg, root, workers=workers)
     wall = time.perf_counter() - t0
+    busy: dict[str, float] = {}
+    for t in report.timeline:
+        busy[t.worker] = busy.get(t.worker, 0.0) + t.seconds
+    print(f"  workers={workers} run in {root.name}: wall {wall:.1f} s, task seconds "
+          f"{sum(busy.values()):.1f}, busy per worker "
+          + ", ".join(f"{b / report.wall_s:.0%}" for b in busy.values()), flush=True)
     return wall, report.stage_seconds(), (root / "summary.json").read_bytes()
 
 

@@ -51,8 +51,11 @@ def forget(path: str) -> None:
 def record_environment(path: str) -> None:
     import os
 
-    write_json(path, {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_",
-                                                     "OPENBLAS_NUM_THREADS")})
+    import dask
+
+    env = {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OPENBLAS_NUM_THREADS")}
+    env["profile"] = dask.config.get("distributed.worker.profile.enabled")
+    write_json(path, env)
 
 
 def graph(root: Path, seed: int = 7, n: int = 4, log: Path | None = None):
@@ -132,8 +135,9 @@ def test_two_dask_workers_give_the_same_bytes(tmp_path):
 
 @pytest.mark.slow
 def test_dask_workers_keep_glibc_malloc_dynamic(tmp_path):
-    """No MALLOC_TRIM_THRESHOLD_ in the workers (it made every task 1.8x slower), one BLAS thread."""
+    """No MALLOC_TRIM_THRESHOLD_ (every task ran 1.8x slower) and no statistical profiler
+    (1.17x) in the workers; one BLAS thread."""
     out = tmp_path / "env.json"
     run_tasks([Task("env", "env", record_environment, (str(out),), (out,))], workers=2)
     env = json.loads(out.read_text())
-    assert env == {"MALLOC_TRIM_THRESHOLD_": None, "OPENBLAS_NUM_THREADS": "1"}
+    assert env == {"MALLOC_TRIM_THRESHOLD_": None, "OPENBLAS_NUM_THREADS": "1", "profile": False}

@@ -105,6 +105,15 @@ def test_cli_json_prints_the_summary(tiny_run, capsys):
     assert json.loads(capsys.readouterr().out) == json.loads((root / "summary.json").read_text())
 
 
+def test_out_that_is_a_file_exits_2(tmp_path, capsys):
+    target = tmp_path / "taken"
+    target.write_text("not a run folder")
+    assert main(["run", "--out", str(target), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "exists and is not a folder" in err
+    assert target.read_text() == "not a run folder"
+
+
 def test_cli_unknown_method_exits_2(tmp_path, capsys):
     assert main(["run", "--out", str(tmp_path), "--methods", "nope"]) == 2
     assert "run.methods" in capsys.readouterr().err

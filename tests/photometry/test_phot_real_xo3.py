@@ -56,6 +56,32 @@ def test_centroid_is_on_pixel_15_15_near_table1(real_table):
     assert abs(y - TABLE1_Y) < 2 * TABLE1_SY
 
 
+def test_center_of_light_is_photutils_centroid_com_on_the_real_frames(real_table):
+    """Our x, y are the paper's Eqs. x_centroid, y_centroid exactly (so the Pre AOR's
+    offset from Table 1's two-AOR means is the pointing's, not the centroider's)."""
+    from photutils.centroids import centroid_com
+
+    folder, table = real_table
+    good = np.flatnonzero(np.asarray(table["flag"]) == 0)[::7]
+    cubes = {}
+    for k in good:
+        expid, frame = int(table["expid"][k]), int(table["frame"][k])
+        if expid not in cubes:
+            path = next(folder.glob(f"SPITZER_I2_46466816_{expid:04d}_*_bcd.fits"))
+            with fits.open(path) as hdul:
+                h = hdul[0].header
+                cubes[expid] = hdul[0].data.astype(float) * h["GAIN"] * h["EXPTIME"] / h["FLUXCONV"]
+        img = cubes[expid][frame]
+        px, py = int(table["peak_x"][k]), int(table["peak_y"][k])
+        yy, xx = np.mgrid[0:32, 0:32]
+        d2 = (xx - px) ** 2 + (yy - py) ** 2
+        ring = (d2 >= 9) & (d2 <= 49) & np.isfinite(img)
+        box = img[py - 3:py + 4, px - 3:px + 4] - img[ring].mean()
+        cx, cy = centroid_com(box)
+        assert table["x"][k] == pytest.approx(px - 3 + cx, abs=1e-6)
+        assert table["y"][k] == pytest.approx(py - 3 + cy, abs=1e-6)  # float32 data
+
+
 def test_times_are_mid_exposure_bmjd_tdb(real_table):
     folder, table = real_table
     h = fits.getheader(folder / "SPITZER_I2_46466816_0003_0000_2_bcd.fits")

@@ -313,9 +313,11 @@ def _open_client(workers: int, scheduler: str | None):
     # fixing any glibc malloc threshold turns off its dynamic mmap threshold, so every
     # array above 128 KiB becomes a fresh mmap whose pages fault in zeroed: our tasks,
     # which allocate large temporary arrays, then ran 1.8x slower (BENCHMARKS.md).
+    # The statistical profiler takes the GIL from the task every 10 ms; nobody reads it.
     import dask
 
-    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+                          "distributed.worker.profile.enabled": False}):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=":0", silence_logs=40, env=_worker_env())
     return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"

@@ -529,6 +529,8 @@ def run_challenge(cfg: Config, root: str | Path, *, workers: int | None = None,
         Address of an existing Dask scheduler (default ``run.scheduler``).
     """
     layout = Layout(Path(root))
+    if layout.root.exists() and not layout.root.is_dir():
+        raise InputError(f"--out {layout.root}: exists and is not a folder")
     layout.root.mkdir(parents=True, exist_ok=True)
     tasks = build_tasks(cfg, layout.root)
     _guard(cfg, layout)
