@@ -92,28 +92,26 @@ class TaskTiming:
 
 @dataclass
 class RunReport:
-    """What a run did: the keys it ran, the keys it found done, the wall time."""
+    """What a run did: the keys it ran and found done, each task's timing, the wall time."""
 
     ran: list[str] = field(default_factory=list)
     skipped: list[str] = field(default_factory=list)
     wall_s: float = 0.0
     executor: str = ""
-    task_s: dict[str, float] = field(default_factory=dict)
     timeline: list[TaskTiming] = field(default_factory=list)
     started_unix: float = 0.0
 
     def record(self, key: str, timing: tuple[float, float, str]) -> None:
         """Store what :func:`_call` returned for ``key``."""
         start_unix, seconds, worker = timing
-        self.task_s[key] = seconds
         self.timeline.append(TaskTiming(key, start_unix - self.started_unix, seconds, worker))
 
     def stage_seconds(self) -> dict[str, float]:
         """Task time summed per stage prefix (``simulate``, ``reduce``...), seconds."""
         out: dict[str, float] = {}
-        for key, sec in self.task_s.items():
-            stage = key.split("/", 1)[0]
-            out[stage] = out.get(stage, 0.0) + sec
+        for t in self.timeline:
+            stage = t.key.split("/", 1)[0]
+            out[stage] = out.get(stage, 0.0) + t.seconds
         return out
 
 
