@@ -7,21 +7,28 @@ numbers; ``--json`` prints it as one JSON object on stdout, otherwise
 ``format_text`` (or a key: value listing) is printed.
 
 Exit codes: 0 success; 2 bad input or usage (one line on stderr naming the
-file, key or option and what was expected); 1 unexpected internal error
-(``--debug`` shows the traceback).
+file, key or option and what was expected); 130 interrupted (Ctrl-C: one line
+on stderr; whatever a library prints while it unwinds is dropped); 1
+unexpected internal error (``--debug`` shows the traceback). A command that
+fails or is interrupted leaves no folder it created empty.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import json
 import math
+import os
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 
 from . import __version__
 from .errors import InputError
+from .io.paths import missing_folders, remove_empty_folders
 from .progress import configure
 
 # Listed in the order ``--help`` shows them.
@@ -104,37 +111,115 @@ def _format_default(result: dict) -> str:
     return "\n".join(f"{k:<{width}}  {v}" for k, v in result.items())
 
 
+class _Silenced:
+    """A text stream that drops everything (stands in for stdout/stderr after Ctrl-C)."""
+
+    encoding = "utf-8"
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+
+@contextlib.contextmanager
+def _one_line_interrupt() -> Iterator[None]:
+    """On Ctrl-C, silence stdout and stderr until the interrupt reaches :func:`main`.
+
+    Libraries print while a KeyboardInterrupt unwinds through them (emcee
+    prints the traceback of the likelihood call it was in); the user should
+    see one line. The streams are silenced at the file-descriptor level too,
+    so logging handlers that hold the original streams are quiet as well.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    saved: dict[str, object] = {}
+
+    def handler(signum, frame):
+        if not saved:
+            saved["stdout"], saved["stderr"] = sys.stdout, sys.stderr
+            with contextlib.suppress(Exception):
+                sys.stdout.flush()
+                sys.stderr.flush()
+            fds = {}
+            with contextlib.suppress(OSError):
+                devnull = os.open(os.devnull, os.O_WRONLY)
+                for fd in (1, 2):
+                    fds[fd] = os.dup(fd)
+                    os.dup2(devnull, fd)
+                os.close(devnull)
+            saved["fds"] = fds
+            sys.stdout = sys.stderr = _Silenced()
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if saved:
+            for fd, copy in saved["fds"].items():
+                with contextlib.suppress(OSError):
+                    os.dup2(copy, fd)
+                    os.close(copy)
+            sys.stdout, sys.stderr = saved["stdout"], saved["stderr"]
+
+
+def _usage_line(parser: argparse.ArgumentParser) -> str:
+    names = ", ".join(module.NAME for module in _commands())
+    return (f"{parser.prog}: error: a command is required; usage: {parser.prog} COMMAND "
+            f"[options] with COMMAND one of {names} ({parser.prog} --help describes them)")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``eclipsebench`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
-        parser.print_help()
+        print(_usage_line(parser), file=sys.stderr)
         return 2
     module = args._module
     configure(quiet=args.quiet or args.json)
+    created = [folder for name in ("out", "plot")
+               for folder in missing_folders(getattr(args, name, None))]
     try:
-        result = module.run(args)
+        with _one_line_interrupt():
+            result = module.run(args)
     except InputError as exc:
-        print(f"eclipsebench {module.NAME}: error: {exc}", file=sys.stderr)
+        remove_empty_folders(created)
+        print(f"eclipsebench {module.NAME}: error: {' '.join(str(exc).split())}",
+              file=sys.stderr)
         return 2
     except KeyboardInterrupt:
+        remove_empty_folders(created)
         print(f"eclipsebench {module.NAME}: interrupted; rerun the same command to resume",
               file=sys.stderr)
         return 130
     except Exception as exc:  # the one place that turns a bug into exit code 1
+        remove_empty_folders(created)
         if args.debug:
             raise
-        print(f"eclipsebench {module.NAME}: internal error: {type(exc).__name__}: {exc} "
+        text = " ".join(str(exc).split())
+        print(f"eclipsebench {module.NAME}: internal error: {type(exc).__name__}: {text} "
               "(rerun with --debug for the traceback)", file=sys.stderr)
         return 1
     if result is None:
         return 0
     if args.json:
-        print(json.dumps(_jsonable(result), sort_keys=False))
+        text = json.dumps(_jsonable(result), sort_keys=False)
     else:
-        formatter = getattr(module, "format_text", _format_default)
-        print(formatter(result))
+        text = getattr(module, "format_text", _format_default)(result)
+    try:
+        print(text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. piped into head: the reader has all it wanted
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 

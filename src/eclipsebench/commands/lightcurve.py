@@ -8,7 +8,7 @@ import numpy as np
 
 from ..astro.bias import EPOCH10_START_BMJD
 from ..errors import InputError
-from .options import nonnegative_float, positive_float
+from .options import check_output_path, finite_float, nonnegative_float, positive_float
 
 NAME = "lightcurve"
 HELP = ("Model light curve L(t) of a star and planet (Cowan & Agol thermal phase curve, "
@@ -20,7 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="planet name from the catalogue (e.g. XO-3b, 'HD 189733b')")
     p.add_argument("--catalogue", metavar="FILE.toml", default=None,
                    help="a user catalogue of systems (TOML), searched before the built-in one")
-    p.add_argument("--start", type=float, default=EPOCH10_START_BMJD, metavar="BMJD",
+    p.add_argument("--start", type=finite_float(), default=EPOCH10_START_BMJD, metavar="BMJD",
                    help="first sample, BMJD_TDB (default: the paper's simulated epoch 10)")
     p.add_argument("--hours", type=positive_float(), default=8.8, metavar="H",
                    help="length of the light curve in hours")
@@ -30,7 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="Bond albedo, 0 <= A < 1")
     p.add_argument("--tau-rad", type=nonnegative_float(), default=1.0, metavar="DAYS",
                    help="radiative time at the periastron sub-stellar temperature (0: instantaneous)")
-    p.add_argument("--omega-rot", type=float, default=1.0, metavar="W",
+    p.add_argument("--omega-rot", type=finite_float(), default=1.0, metavar="W",
                    help="gas angular velocity in units of the periastron orbital angular velocity")
     p.add_argument("--flux-ratio-model", choices=("monochromatic", "tophat"),
                    default="monochromatic",
@@ -50,7 +50,12 @@ def run(args: argparse.Namespace) -> dict:
     from ..astro.catalogue import get_system
     from ..astro.lightcurve import light_curve_function
     from ..astro.orbit import BMJD_OFFSET
+    from ..io.paths import check_plot_path
 
+    if args.out:
+        check_output_path(args.out, "--out", "file")
+    if args.plot:
+        check_plot_path(args.plot, "--plot")
     if not 0.0 <= args.albedo < 1.0:
         raise InputError(f"--albedo: expected 0 <= A < 1, got {args.albedo}")
     system = get_system(args.system, args.catalogue)

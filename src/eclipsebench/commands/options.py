@@ -5,6 +5,11 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..io.paths import check_output_path
+
+__all__ = ["check_output_path", "finite_float", "positive_float", "nonnegative_float",
+           "open_unit_float", "positive_int", "method_list", "add_config_options"]
+
 
 def _number(text: str) -> float:
     try:
@@ -14,6 +19,11 @@ def _number(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
     return value
+
+
+def finite_float():
+    """An argparse type accepting any finite number (not nan, not inf)."""
+    return _number
 
 
 def positive_float():

@@ -13,7 +13,7 @@ from ..photometry.clean import flag_counts
 from ..photometry.pipeline import photometry_tables, replace_options
 from ..photometry.table import write_photometry
 from ..progress import progress
-from .options import positive_float, positive_int
+from .options import check_output_path, positive_float, positive_int
 
 NAME = "photometry"
 HELP = ("Measure IRAC BCD cubes (archive or simulated): centroids, noise pixels, apertures, "
@@ -58,9 +58,10 @@ def _options(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> dict:
-    options = _options(args)
     out = Path(args.out)
     as_file = out.suffix.lower() in (".fits", ".fit", ".fts")
+    check_output_path(out, "--out", "file" if as_file else "folder")
+    options = _options(args)
     bar = None
 
     def on_start(total: int):

@@ -41,9 +41,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..errors import InputError
+
     if (args.frames is None) != (args.depth_ppm is None):
-        from ..errors import InputError
         raise InputError("--frames and --depth-ppm: give both to compute sigma_phot_ppm")
+    if args.flux_aperture < args.flux_net:
+        raise InputError(f"--flux-aperture {args.flux_aperture:g}: expected at least --flux-net "
+                         f"{args.flux_net:g} (the aperture flux is the net flux plus the "
+                         "background in the aperture)")
     result = photon_limit(args.flux_net, args.flux_aperture, args.flux_background,
                           frames=args.frames, depth_ppm=args.depth_ppm, f_in=args.f_in,
                           fowler=args.fowler, wait=args.wait, sample_time_s=args.sample_time,

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..config.base import parse_override
 from ..errors import InputError
 from ..fit.astro_model import ECLIPSE_SHAPES, PHASE_MODELS, RAMP_MODELS
-from .options import positive_float, positive_int
+from .options import check_output_path, positive_float, positive_int
 
 NAME = "reduce"
 HELP = ("Fit one epoch's photometry table with one decorrelation method and the shared "
@@ -112,18 +112,28 @@ def lightcurve_path(result_path: str | Path) -> Path:
 def run(args: argparse.Namespace) -> dict:
     from ..fit.reduce import reduce_epoch, select_phase_model
     from ..io.atomic import atomic_path, write_json
+    from ..io.paths import check_plot_path
 
     table_path = Path(args.table)
     if not table_path.is_file():
         raise InputError(f"{table_path}: no such photometry table")
+    out = Path(args.out) if args.out else table_path.with_name(
+        f"{table_path.stem}.{args.method}.json")
+    lc_path = lightcurve_path(out)
+    check_output_path(out, "--out", "file")
+    check_output_path(lc_path, "--out (its light curve)", "file")
+    if args.plot:
+        check_plot_path(args.plot, "--plot")
     options, system = _options(args)
     method_options = _method_options(args.method_options)
     result = reduce_epoch(str(table_path), args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
                           method_options=method_options)
-    out = Path(args.out) if args.out else table_path.with_name(
-        f"{table_path.stem}.{args.method}.json")
-    lc_path = lightcurve_path(out)
+    error = result.depth_err_ppm
+    if error is None or not math.isfinite(error) or error <= 0:
+        raise InputError(f"{table_path}: the {args.method} fit gives depth "
+                         f"{result.depth_ppm:.1f} +- {error} ppm: a zero or non-finite error "
+                         "is not a result (constant flux or a degenerate fit); nothing written")
     summary = result.to_dict()
     if args.compare_phases:
         sel = select_phase_model(str(table_path), args.method, options=options, system=system,
@@ -138,7 +148,11 @@ def run(args: argparse.Namespace) -> dict:
         plot_reduced_lightcurve(result, args.plot)
         summary["plot_file"] = str(args.plot)
     summary = _clean(summary)
-    write_json(out, summary)
+    try:
+        write_json(out, summary)
+    except BaseException:
+        lc_path.unlink(missing_ok=True)  # no light curve without its result
+        raise
     summary["result_file"] = str(out)
     return summary
 

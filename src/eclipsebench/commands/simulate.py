@@ -6,7 +6,7 @@ import argparse
 
 from ..config import load_config, replace
 from ..errors import InputError
-from .options import add_config_options, positive_int
+from .options import add_config_options, check_output_path, positive_int
 
 NAME = "simulate"
 HELP = ("Simulate Spitzer/IRAC channel-2 subarray BCD cubes of an eclipsing planet with known "
@@ -30,6 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> dict:
     from ..simulate.challenge import simulate_challenge
 
+    check_output_path(args.out, "--out", "folder")
     cfg = load_config(args.config, args.overrides)
     challenge = cfg.challenge
     if args.seed is not None:

@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import csv
+from pathlib import Path
 
+import numpy as np
+
+from ..errors import DataError
 from ..report.tables import format_text_table
 from ..stats.depth_table import read_depth_table
 from ..stats.summary import summarize
@@ -30,7 +35,49 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="bootstrap resamples for the intervals on R, r and a (0: none)")
 
 
+_BOMS = {b"\xef\xbb\xbf": "UTF-8", b"\xff\xfe": "UTF-16", b"\xfe\xff": "UTF-16"}
+
+
+def _check_text(path: Path) -> None:
+    """Refuse a byte-order mark (it glues itself to the first column's name)."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(4)
+    except OSError:
+        return  # read_depth_table names the file and the problem
+    for bom, encoding in _BOMS.items():
+        if head.startswith(bom):
+            raise DataError(path, f"starts with a {encoding} byte-order mark; expected plain "
+                                  "UTF-8 text without one (save it as 'CSV UTF-8' without BOM)")
+
+
+def _check_methods(path: Path) -> None:
+    """Refuse a row whose method name is blank (astropy would read it as masked '--')."""
+    try:
+        if path.suffix.lower() == ".ecsv":
+            from astropy.table import Table
+
+            column = Table.read(path, format="ascii.ecsv")["method"]
+            mask = np.asarray(getattr(column, "mask", np.zeros(len(column), bool)), bool)
+            names = ["" if m else str(v) for v, m in zip(column, mask, strict=True)]
+        else:
+            with path.open(newline="", encoding="utf-8") as fh:
+                rows = list(csv.reader(line for line in fh if line.strip()))
+            header = [h.strip() for h in rows[0]]
+            col = header.index("method")
+            names = [r[col] if col < len(r) else "" for r in rows[1:]]
+    except Exception:
+        return  # read_depth_table names the file and the problem
+    for row, name in enumerate(names, start=1):
+        if not name.strip():
+            raise DataError(path, f"column 'method': blank method name in row {row} "
+                                  "(expected a method name in every row)")
+
+
 def run(args: argparse.Namespace) -> dict:
+    path = Path(args.depths)
+    _check_text(path)
+    _check_methods(path)
     table = read_depth_table(args.depths)
     return summarize(table, sigma_phot_ppm=args.sigma_phot, truth_ppm=args.truth,
                      methods=args.methods, seed=args.seed, n_bootstrap=args.bootstrap)

@@ -194,14 +194,27 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file, turning any failure into one line naming the file."""
     p = Path(path)
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
+        data = p.read_bytes()
     except FileNotFoundError:
         raise InputError(f"{p}: no such configuration file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{p}: not valid TOML ({exc})") from None
+    except IsADirectoryError:
+        raise InputError(f"{p}: is a folder; expected a configuration file (TOML)") from None
     except OSError as exc:
         raise InputError(f"{p}: cannot read ({exc.strerror})") from None
+    for bom, encoding in ((b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16"),
+                          (b"\xef\xbb\xbf", "UTF-8 with a byte-order mark")):
+        if data.startswith(bom):
+            raise InputError(f"{p}: the file is {encoding}; expected a UTF-8 TOML file "
+                             "without a byte-order mark")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{p}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset "
+                         f"{exc.start}); expected a UTF-8 TOML file") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{p}: not valid TOML ({exc})") from None
 
 
 def _toml_value(v: Any) -> str:

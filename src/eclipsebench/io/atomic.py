@@ -3,16 +3,22 @@
 Everything is written to a temporary file in the destination folder and then
 renamed over the destination (``os.replace`` is atomic on POSIX), so an
 interrupted run leaves either the old file, the complete new one, or nothing.
+A write that fails (a full disk, a read-only folder) is a
+:class:`~eclipsebench.errors.DataError` naming the destination; the temporary
+file is removed.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+from ..errors import DataError
 
 __all__ = ["atomic_path", "write_bytes", "write_text", "write_json"]
 
@@ -35,21 +41,36 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     'hello'
     """
     dest = Path(path)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(
-        prefix=f".{dest.name}.", suffix=".tmp" + (suffix if suffix is not None else dest.suffix),
-        dir=dest.parent,
-    )
+    try:
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(
+            prefix=f".{dest.name}.",
+            suffix=".tmp" + (suffix if suffix is not None else dest.suffix), dir=dest.parent)
+    except OSError as exc:
+        raise DataError(dest, f"cannot write ({_reason(exc)})") from None
     os.close(fd)
     tmp = Path(tmp_name)
     tmp.unlink()  # writers such as astropy refuse to overwrite an existing file
     try:
         yield tmp
         os.replace(tmp, dest)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError):
+            raise DataError(dest, f"cannot write ({_reason(exc)}); nothing was written") \
+                from None
         raise
+
+
+def _reason(exc: OSError) -> str:
+    """``strerror`` of an OSError, or its text when it has none (e.g. numpy's short writes)."""
+    if exc.errno == errno.ENOSPC:
+        return "no space left on the device"
+    if exc.strerror:
+        return exc.strerror
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
