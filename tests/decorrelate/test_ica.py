@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from eclipsebench.decorrelate import get_method
+from eclipsebench.decorrelate.base import MethodContext
 from eclipsebench.decorrelate.ica import IndependentComponents, separate, wavelet_coefficients
 from eclipsebench.errors import InputError
 from eclipsebench.seeding import rng
@@ -70,13 +71,16 @@ def test_agrees_with_pld_within_5_ppm_without_systematics(epoch_flat, synth):
     assert abs(depths[0] - depths[1]) <= 5.0, depths
 
 
+CTX = MethodContext(seed=3, epoch=1, method="ica")
+
+
 def test_separation_error_from_bootstrap_restarts(epoch_sys, synth):
     g = rng(9, "tests", "ica", "noise")
     d = epoch_sys.data.subset(np.arange(4000, 11000))
     pix = d.pixels + np.sqrt(np.clip(d.pixels, 1, None)) * g.standard_normal(d.pixels.shape)
     flux = d.flux + np.sqrt(d.flux) * g.standard_normal(len(d))
     noisy = dataclasses.replace(d, pixels=pix, flux=flux)
-    m = IndependentComponents(noisy, n_restarts=3, seed=3, epoch=1, max_iter=400)
+    m = IndependentComponents(noisy, n_restarts=3, max_iter=400, context=CTX)
     astro = synth.eclipse_curve(d.time_bmjd, epoch_sys.t_ecl_bmjd, epoch_sys.depth_ppm)
     dastro = (synth.eclipse_curve(d.time_bmjd, epoch_sys.t_ecl_bmjd, 1e6) - 1.0)
     var = m.extra_depth_variance(astro, dastro)
@@ -84,7 +88,7 @@ def test_separation_error_from_bootstrap_restarts(epoch_sys, synth):
     assert IndependentComponents(noisy, n_restarts=0, max_iter=400).extra_depth_variance(
         astro, dastro) == 0.0
     # same seed, same components; the seed enters FastICA
-    again = IndependentComponents(noisy, n_restarts=0, seed=3, epoch=1, max_iter=400)
+    again = IndependentComponents(noisy, n_restarts=0, max_iter=400, context=CTX)
     np.testing.assert_array_equal(again.components, m.components)
 
 

@@ -8,7 +8,7 @@ from astropy.io import fits
 from scipy.optimize import minimize_scalar
 
 from eclipsebench.decorrelate import get_method
-from eclipsebench.decorrelate.base import EpochData
+from eclipsebench.decorrelate.base import EpochData, MethodContext
 from eclipsebench.decorrelate.pmap import (
     GriddedPmap,
     interpolate_grid,
@@ -17,6 +17,13 @@ from eclipsebench.decorrelate.pmap import (
 )
 from eclipsebench.errors import DataError, InputError
 
+
+
+def _kr_pmap(data, pmap, **options):
+    """KR/Pmap built as the reducer builds it: the calibration set loaded into the context."""
+    cls = get_method("kr-pmap")
+    context = MethodContext(method="kr-pmap", resources=cls.load_resources(data, {"pmap": pmap}))
+    return cls(data, context=context, **options)
 
 def _random_epoch(n=400, seed=3, meta=None):
     g = np.random.default_rng(seed)
@@ -84,7 +91,7 @@ def test_kr_data_effective_params_is_smoother_trace():
 
 def test_kr_data_options():
     data = _random_epoch()
-    with pytest.raises(InputError, match="option k"):
+    with pytest.raises(InputError, match="option 'k'"):
         get_method("kr-data")(data, k=0)
     with pytest.raises(InputError, match="unknown option"):
         get_method("kr-data")(data, neighbours=5)
@@ -119,7 +126,7 @@ def test_kr_pmap_matches_brute_force_and_closed_form_scale(tmp_path, use_np):
     cal = load_calibration_table(path)
     data = _random_epoch()
     astro = 1 + 1e-3 * np.cos(np.arange(len(data)) / 70.0)
-    model = get_method("kr-pmap")(data, pmap=str(path), k=15, use_noise_pixels=use_np,
+    model = _kr_pmap(data, str(path), k=15, use_noise_pixels=use_np,
                                   match_noise_pixels=False)
     scales = [np.std(data.x), np.std(data.y)] + ([np.std(np.sqrt(data.noise_pixels))] if use_np else [])
     gain = _brute_kr(data.x, data.y, data.noise_pixels if use_np else None, cal.x, cal.y,
@@ -150,28 +157,28 @@ def test_kr_pmap_removes_the_noise_pixel_offset_of_the_calibration_set(tmp_path)
                         x=data.x, y=data.y, noise_pixels=beta(data.x, data.y) + 0.3)
     same = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                      x=data.x, y=data.y, noise_pixels=beta(data.x, data.y))
-    matched = get_method("kr-pmap")(shifted, pmap=str(path))
+    matched = _kr_pmap(shifted, str(path))
     assert matched.noise_pixels_offset == pytest.approx(0.3, abs=0.002)
-    reference = get_method("kr-pmap")(same, pmap=str(path), match_noise_pixels=False)
+    reference = _kr_pmap(same, str(path), match_noise_pixels=False)
     np.testing.assert_allclose(matched.gain, reference.gain, rtol=2e-5)
-    unmatched = get_method("kr-pmap")(shifted, pmap=str(path), match_noise_pixels=False)
+    unmatched = _kr_pmap(shifted, str(path), match_noise_pixels=False)
     assert np.max(np.abs(unmatched.gain - reference.gain)) > 10 * np.max(
         np.abs(matched.gain - reference.gain))
 
 
 def test_kr_pmap_finds_the_simulation_calibration_set(epoch_sys, simdir):
     model = get_method("kr-pmap")(epoch_sys.data)
-    assert model.pmap_path == str(simdir / "calibration" / "pmap_calibration.fits")
+    assert model.diagnostics()["pmap"] == str(simdir / "calibration" / "pmap_calibration.fits")
 
 
 def test_kr_pmap_without_any_pmap_is_a_clear_error(tmp_path):
     data = _random_epoch()
-    with pytest.raises(InputError, match="--pmap PATH"):
+    with pytest.raises(InputError, match="needs a pmap"):
         get_method("kr-pmap")(data)
     with pytest.raises(InputError, match="does not exist"):
         get_method("kr-pmap")(_random_epoch(meta={"SIMDIR": str(tmp_path)}))
     with pytest.raises(InputError, match="no such file"):
-        get_method("kr-pmap")(data, pmap=str(tmp_path / "nope.fits"))
+        _kr_pmap(data, str(tmp_path / "nope.fits"))
 
 
 def test_calibration_table_problems_are_data_errors(tmp_path):
@@ -188,16 +195,16 @@ def test_kr_pmap_refuses_frames_the_map_does_not_cover(tmp_path):
     far = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                     x=data.x + 1.0, y=data.y, noise_pixels=data.noise_pixels)
     with pytest.raises(InputError, match="max_distance_px"):
-        get_method("kr-pmap")(far, pmap=str(path))
+        _kr_pmap(far, str(path))
     # A few uncovered frames are tolerated and counted.
     x = data.x.copy()
     x[:3] += 1.0
     few = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                     x=x, y=data.y, noise_pixels=data.noise_pixels)
-    model = get_method("kr-pmap")(few, pmap=str(path))
+    model = _kr_pmap(few, str(path))
     assert model.n_uncovered == 3 and np.all(np.isfinite(model.gain))
     with pytest.raises(InputError, match="max_uncovered_fraction"):
-        get_method("kr-pmap")(few, pmap=str(path), max_uncovered_fraction=0.0)
+        _kr_pmap(few, str(path), max_uncovered_fraction=0.0)
 
 
 def _write_grid(folder, suffix="test_0001.fits", n=41):
@@ -219,7 +226,7 @@ def test_gridded_pmap_is_interpolated(tmp_path):
     assert isinstance(load_pmap(next(folder.glob("pmap_*.fits"))), GriddedPmap)
     data = _random_epoch()
     astro = np.ones(len(data))
-    model = get_method("kr-pmap")(data, pmap=str(folder))
+    model = _kr_pmap(data, str(folder))
     # The gain is linear, so bilinear interpolation reproduces it exactly.
     expected_gain = 1 + 0.01 * (data.x - 15.0) + 0.02 * (data.y - 15.0)
     np.testing.assert_allclose(model.gain, expected_gain, rtol=1e-12)
@@ -228,12 +235,12 @@ def test_gridded_pmap_is_interpolated(tmp_path):
     assert model.n_low_occupancy == 0          # occupancy 51 below y = 15.3, 1 above
     high = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                      x=data.x, y=data.y + 0.4)
-    n_low = get_method("kr-pmap")(high, pmap=str(folder)).n_low_occupancy
+    n_low = _kr_pmap(high, str(folder)).n_low_occupancy
     # Beyond one cell above the step every frame is low, one cell below none is.
     assert np.sum(high.y > 15.3 + 1 / 41) <= n_low <= np.sum(high.y > 15.3 - 1 / 41)
     assert n_low > 300
     with pytest.raises(InputError, match="min_occupancy"):
-        get_method("kr-pmap")(_random_epoch(n=400, seed=9), pmap=str(folder), min_occupancy=1e9)
+        _kr_pmap(_random_epoch(n=400, seed=9), str(folder), min_occupancy=1e9)
 
 
 def test_gridded_pmap_with_a_missing_companion(tmp_path):

@@ -42,8 +42,8 @@ class PolyGain(Systematics):
     name: ClassVar[str] = "test-polygain"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
 
-    def __init__(self, data: EpochData, **options) -> None:
-        super().__init__(data, **options)
+    def __init__(self, data: EpochData, options=None, *, context=None, **kwargs) -> None:
+        super().__init__(data, options, context=context, **kwargs)
         a = design(data.x, data.y)
         w = 1.0 / data.flux_err
         self._a = a

@@ -42,6 +42,8 @@ def _type_name(tp: Any) -> str:
         args = get_args(tp)
         inner = _type_name(args[0]) if args else "value"
         return f"a list of {inner}"
+    if origin is dict:
+        return "a table"
     if origin in (typing.Union, types.UnionType):
         return " or ".join(_type_name(a) for a in get_args(tp) if a is not type(None))
     return {int: "an integer", float: "a number", str: "a string", bool: "true or false"}.get(
@@ -66,6 +68,11 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         if value not in get_args(tp):
             raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
         return value
+    if origin is dict:
+        if not isinstance(value, Mapping):
+            raise ConfigError(key, f"expected a table, got {value!r}")
+        _, inner = get_args(tp) or (str, Any)
+        return {str(k): _coerce(v, inner, f"{key}.{k}") for k, v in value.items()}
     if origin in (list, tuple):
         if not isinstance(value, (list, tuple)):
             raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
@@ -145,6 +152,8 @@ def to_mapping(obj: Any) -> dict[str, Any]:
             return {f.name: plain(getattr(v, f.name)) for f in dataclasses.fields(v)}
         if isinstance(v, tuple):
             return [plain(x) for x in v]
+        if isinstance(v, Mapping):
+            return {k: plain(x) for k, x in v.items()}
         return v
     return plain(obj)
 
@@ -230,21 +239,32 @@ def _toml_value(v: Any) -> str:
 
 
 def dump_toml(mapping: Mapping[str, Any]) -> str:
-    """Write a two-level mapping (sections of scalars and lists) as TOML."""
+    """Write a mapping of sections (scalars, lists and nested tables) as TOML.
+
+    Empty nested tables are left out.
+
+    Examples
+    --------
+    >>> print(dump_toml({"reduce": {"phase": "flat", "options": {"bliss": {"k": 1}}}}), end="")
+    [reduce]
+    phase = "flat"
+    <BLANKLINE>
+    [reduce.options.bliss]
+    k = 1
+    """
     lines: list[str] = []
-    scalars = {k: v for k, v in mapping.items() if not isinstance(v, Mapping)}
-    for k, v in scalars.items():
-        if v is not None:
-            lines.append(f"{k} = {_toml_value(v)}")
-    for section, table in mapping.items():
-        if not isinstance(table, Mapping):
-            continue
-        if lines:
-            lines.append("")
-        lines.append(f"[{section}]")
-        for k, v in table.items():
-            if isinstance(v, Mapping):
-                raise TypeError("nested tables deeper than one level are not written")
-            if v is not None:
-                lines.append(f"{k} = {_toml_value(v)}")
+
+    def write(path: tuple[str, ...], node: Mapping[str, Any]) -> None:
+        scalars = [(k, v) for k, v in node.items()
+                   if not isinstance(v, Mapping) and v is not None]
+        if len(path) == 1 or (path and scalars):
+            if lines:
+                lines.append("")
+            lines.append("[" + ".".join(path) + "]")
+        lines.extend(f"{k} = {_toml_value(v)}" for k, v in scalars)
+        for k, v in node.items():
+            if isinstance(v, Mapping) and (v or not path):
+                write(path + (k,), v)
+
+    write((), mapping)
     return "\n".join(lines) + "\n"

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, field
+from typing import Any, Literal
 
 from .base import check
 
@@ -41,6 +41,10 @@ class ReduceSection:
         Pixel stamp handed to pixel-level methods (PLD, ICA).
     max_nfev : int
         Cap on function evaluations of one least-squares fit.
+    options : dict
+        Per-method options, ``[reduce.options.<method>]`` tables (the keys of
+        each method's ``Options``; ``docs/methods.md``). Checked against the
+        method's options when the reduce stage builds the method.
     """
 
     phase: Literal["flat", "linear", "quadratic", "sinusoid"] = "quadratic"
@@ -56,6 +60,7 @@ class ReduceSection:
     radius_px: float = 0.0
     stamp: Literal["stamp3", "stamp5"] = "stamp3"
     max_nfev: int = 200
+    options: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def validate(self) -> None:
         check(self.mcmc_walkers >= 4 and self.mcmc_walkers % 2 == 0, "mcmc_walkers",

@@ -1,4 +1,4 @@
-"""The interface every systematics model implements, and the registry.
+"""The interface every systematics model implements, its options and context, and the registry.
 
 A method models the instrument's correlated noise; one astrophysical model
 (eclipse, phase curve, ramp; :mod:`eclipsebench.fit`) is shared by all of
@@ -12,24 +12,49 @@ or non-parametric pieces (PLD coefficients, BLISS knots, kernel-regression
 averages, ICA component weights) are solved *inside* ``predict`` for the
 given ``astro``, as the original methods do.
 
+A method is built from three things (``docs/architecture.md``, "the method seam"):
+
+* the epoch's data (:class:`EpochData`, arrays only);
+* its options, a frozen dataclass (``cls.Options``, a :class:`MethodOptions`)
+  validated at the edge: an unknown or ill-typed option is one
+  :class:`~eclipsebench.errors.InputError` naming it;
+* a :class:`MethodContext`: the random streams of this run, epoch and method,
+  and the resources the caller already loaded (a calibration set, as arrays).
+
 Work that does not depend on fitted parameters (knot assignment, neighbour
 lists, design matrices, kernel factorisations) happens once in ``__init__``,
 as batman's ``TransitModel`` does; ``predict`` is the cheap call a fitter
-repeats thousands of times.
+repeats thousands of times. :meth:`Systematics.diagnostics` reports what the
+build found (sparse knots, low occupancy, separation errors) so that it
+reaches the result file, as lightkurve's correctors keep theirs.
+
+Methods register by name with :func:`register`; other packages add theirs
+through the entry-point group ``eclipsebench.methods`` (name = method name,
+value = ``module:Class``), loaded the first time the registry is read.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from importlib.metadata import entry_points
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ..errors import InputError
+from ..config.base import from_mapping
+from ..errors import ConfigError, InputError
+from ..seeding import rng, spawn_ints
 
-__all__ = ["EpochData", "Systematics", "register", "get_method", "available_methods"]
+__all__ = ["EpochData", "MethodOptions", "MethodContext", "Systematics", "register",
+           "get_method", "method_class", "available_methods", "parse_method_options",
+           "ENTRY_POINT_GROUP"]
+
+#: The entry-point group through which other packages register methods.
+ENTRY_POINT_GROUP = "eclipsebench.methods"
 
 
 @dataclass(frozen=True)
@@ -89,27 +114,178 @@ class EpochData:
                          aorkey=take(self.aorkey), meta=dict(self.meta))
 
 
+@dataclass(frozen=True)
+class MethodOptions:
+    """Base of every method's options: a frozen dataclass, one field per option.
+
+    A subclass declares typed fields with defaults and may add range checks
+    in ``validate`` (raise :class:`~eclipsebench.errors.ConfigError` naming
+    the field, with :func:`eclipsebench.config.check`). Build one with
+    :func:`parse_method_options`, which checks names and types.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class KnnOptions(MethodOptions):
+    ...     k: int = 50
+    >>> KnnOptions().to_dict()
+    {'k': 50}
+    """
+
+    def validate(self) -> None:
+        """Range checks beyond the field types (default: none)."""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The options as a JSON-able dict (tuples become lists)."""
+        def plain(v):
+            return [plain(x) for x in v] if isinstance(v, tuple) else v
+        return {f.name: plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
+
+
+def parse_method_options(cls: type[Systematics], options: Any = None, *,
+                         prefix: str | None = None) -> MethodOptions:
+    """``cls.Options`` from None, a mapping or an options instance, validated.
+
+    Parameters
+    ----------
+    cls : type
+        The method class (its ``Options`` and ``name`` are used).
+    options : None, Mapping or MethodOptions
+        The options to check; None gives the defaults.
+    prefix : str, optional
+        A configuration path (``"reduce.options.bliss"``): errors are then
+        :class:`~eclipsebench.errors.ConfigError` naming the dotted key.
+        Without it, errors name the method and the option.
+
+    Raises
+    ------
+    InputError
+        An unknown option, a value of the wrong type or out of range.
+
+    Examples
+    --------
+    >>> from eclipsebench.decorrelate import get_method
+    >>> parse_method_options(get_method("kr-data"), {"k": 30}).k
+    30
+    >>> parse_method_options(get_method("kr-data"), {"kk": 30})
+    Traceback (most recent call last):
+    ...
+    eclipsebench.errors.InputError: method 'kr-data' option 'kk': unknown option (known: k, use_noise_pixels)
+    """
+    opts_cls = cls.Options
+    if isinstance(options, opts_cls):
+        mapping = options.to_dict()
+    elif isinstance(options, MethodOptions):
+        raise InputError(f"method '{cls.name}' options: expected {opts_cls.__name__}, "
+                         f"got {type(options).__name__}")
+    elif options is None:
+        mapping = {}
+    elif isinstance(options, Mapping):
+        mapping = {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in options.items()}
+    else:
+        raise InputError(f"method '{cls.name}' options: expected a mapping of option names "
+                         f"to values, got {type(options).__name__}")
+    if prefix is not None:
+        return from_mapping(opts_cls, mapping, prefix=prefix)
+    try:
+        return from_mapping(opts_cls, mapping)
+    except ConfigError as exc:
+        problem = exc.problem.replace("unknown key", "unknown option")
+        raise InputError(f"method '{cls.name}' option '{exc.key}': {problem}") from None
+
+
+@dataclass(frozen=True)
+class MethodContext:
+    """What a method gets from its caller besides data and options.
+
+    Attributes
+    ----------
+    seed : int
+        The run seed.
+    epoch : int
+        The epoch number (0 when unknown).
+    method : str
+        The method's registry name: part of every random stream's key.
+    resources : Mapping
+        Inputs the caller already loaded, by name (``"pmap"``: a calibration
+        set or gridded pixel map, as arrays). A method lists the names it
+        needs in ``Systematics.resources`` and loads them from paths in its
+        ``load_resources`` classmethod, which the caller runs.
+
+    Notes
+    -----
+    The random streams are ``rng(seed, "reduce", epoch, method, *key)``
+    (:mod:`eclipsebench.seeding`): a method asks for one per purpose with
+    :meth:`stream`, so rebuilding the method (the prayer bead's refits) gives
+    the same numbers and no stream depends on what ran before it.
+
+    Examples
+    --------
+    >>> ctx = MethodContext(seed=1, epoch=3, method="ica")
+    >>> a = ctx.stream("bootstrap").normal()
+    >>> a == MethodContext(seed=1, epoch=3, method="ica").stream("bootstrap").normal()
+    True
+    """
+
+    seed: int = 0
+    epoch: int = 0
+    method: str = ""
+    resources: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The method's own stream, ``rng(seed, "reduce", epoch, method)``."""
+        return rng(self.seed, "reduce", self.epoch, self.method)
+
+    def stream(self, *key: object) -> np.random.Generator:
+        """An independent Generator for the purpose ``key`` (e.g. ``"bootstrap"``)."""
+        return rng(self.seed, "reduce", self.epoch, self.method, *key)
+
+    def stream_ints(self, *key: object, n: int = 1) -> list[int]:
+        """``n`` 32-bit integer seeds for libraries that take an int (scikit-learn)."""
+        return spawn_ints(self.seed, "reduce", self.epoch, self.method, *key, n=n)
+
+    def resource(self, name: str) -> Any:
+        """The loaded resource ``name``; InputError naming the method if absent."""
+        try:
+            return self.resources[name]
+        except KeyError:
+            raise InputError(f"method '{self.method}': needs the resource '{name}', "
+                             "which was not given") from None
+
+
 class Systematics(ABC):
     """Base class of a systematics model.
 
     Subclasses set ``name`` (the registry name), ``requires`` (the EpochData
-    attributes that must not be None) and implement :meth:`predict`. They do
-    all parameter-independent work in ``__init__``.
+    attributes that must not be None), ``Options`` (a :class:`MethodOptions`
+    subclass) and implement :meth:`predict`. They do all parameter-independent
+    work in ``__init__``, reading their settings from ``self.options`` and
+    their random streams and resources from ``self.context``.
 
     Parameters
     ----------
     data : EpochData
         The frames to model. Never modified.
-    **options
-        Method-specific, keyword-only options (documented per method).
+    options : Mapping or MethodOptions, optional
+        The method's options (``cls.Options``); unknown names are refused.
+    context : MethodContext, optional
+        Random streams and loaded resources (default: seed 0, epoch 0).
+    **kwargs
+        Options given as keywords, merged over ``options``.
     """
 
     name: ClassVar[str] = ""
     requires: ClassVar[tuple[str, ...]] = ()
+    #: The options dataclass; a method without options keeps the empty base.
+    Options: ClassVar[type[MethodOptions]] = MethodOptions
+    #: Names of the context resources the method needs (see ``load_resources``).
+    resources: ClassVar[tuple[str, ...]] = ()
+    #: Whether the method draws random numbers (its result then depends on the seed).
+    stochastic: ClassVar[bool] = False
     #: Names of the method's own nonlinear parameters, fitted with the astrophysical ones.
     param_names: ClassVar[tuple[str, ...]] = ()
-    #: Whether predict() returns the full flux model (True) or the method is a
-    #: pre-processing detrend whose output the fitter models directly.
     description: ClassVar[str] = ""
     #: The emcee move the fitter uses for this method's MCMC: "stretch" (the
     #: affine-invariant default) or "de" (differential evolution, the DE-MC of
@@ -124,13 +300,31 @@ class Systematics(ABC):
     #: and may set this to False (its errors then come from the Jacobian and MCMC).
     use_prayer_bead: ClassVar[bool] = True
 
-    def __init__(self, data: EpochData, **options: Any) -> None:
+    def __init__(self, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
+                 *, context: MethodContext | None = None, **kwargs: Any) -> None:
+        if kwargs:
+            base = parse_method_options(type(self), options).to_dict()
+            options = {**base, **kwargs}
+        self.options = parse_method_options(type(self), options)
         missing = [c for c in self.requires if getattr(data, c, None) is None]
         if missing:
             raise InputError(f"method '{self.name}' needs the column(s) {', '.join(missing)} "
                              "in the photometry table")
         self.data = data
-        self.options = dict(options)
+        self.context = context if context is not None else MethodContext(method=self.name)
+
+    @classmethod
+    def load_resources(cls, data: EpochData, sources: Mapping[str, Any]) -> dict[str, Any]:
+        """Turn the caller's resource arguments (paths or loaded objects) into arrays.
+
+        The caller runs this before building the method and puts the result in
+        :attr:`MethodContext.resources`. The default takes ``sources`` as they are.
+        """
+        return {k: v for k, v in sources.items() if k in cls.resources and v is not None}
+
+    def diagnostics(self) -> dict[str, Any]:
+        """What the build found, JSON-able (written under ``diagnostics`` in results)."""
+        return {}
 
     def initial_params(self) -> np.ndarray:
         """Starting values of the method's own parameters (default: none)."""
@@ -174,15 +368,20 @@ class Systematics(ABC):
         return self.data.flux / systematic
 
     def with_flux(self, flux: np.ndarray) -> Systematics:
-        """The same method (same options) rebuilt on ``data`` with ``flux`` replaced.
+        """The same method (same options and context) rebuilt on ``data`` with ``flux`` replaced.
 
         Used by the prayer bead, which refits the model plus shifted residuals.
         ``flux`` has the length of ``self.data``. Methods whose ``__init__``
         transforms the data (binning, say) override this so that the new
-        fluxes are not transformed twice.
+        fluxes are not transformed twice; the contract tests check that the
+        result equals a fresh build.
         """
-        from dataclasses import replace
-        return type(self)(replace(self.data, flux=np.asarray(flux, dtype=float)), **self.options)
+        flux = np.asarray(flux, dtype=float)
+        if flux.shape != self.data.flux.shape:
+            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, "
+                             f"got {flux.shape}")
+        return type(self)(dataclasses.replace(self.data, flux=flux), self.options,
+                          context=self.context)
 
     def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:
         """Re-set parameters that the method fixes by maximum likelihood for a given ``astro``.
@@ -208,29 +407,79 @@ class Systematics(ABC):
 
 
 _REGISTRY: dict[str, type[Systematics]] = {}
+_PLUGINS_LOADED = False
+#: The paper's seven first, in its order; then every other method by name.
+_PAPER_ORDER = ("bliss", "gp", "ica", "kr-data", "kr-pmap", "pld", "segpoly")
 
 
 def register(cls: type[Systematics]) -> type[Systematics]:
     """Class decorator: add a Systematics subclass to the registry under ``cls.name``."""
+    if not (isinstance(cls, type) and issubclass(cls, Systematics)):
+        raise TypeError(f"{cls!r} is not a subclass of eclipsebench.Systematics")
     if not cls.name:
         raise TypeError(f"{cls.__name__} has no registry name")
+    if not (isinstance(cls.Options, type) and issubclass(cls.Options, MethodOptions)
+            and dataclasses.is_dataclass(cls.Options)):
+        raise TypeError(f"{cls.__name__}.Options is not a MethodOptions dataclass")
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise TypeError(f"method name '{cls.name}' is registered twice")
     _REGISTRY[cls.name] = cls
     return cls
 
 
+def load_plugins(*, refresh: bool = False) -> None:
+    """Register the methods of the entry-point group ``eclipsebench.methods``.
+
+    Called the first time the registry is read. A plugin that fails to load,
+    is not a Systematics subclass, or whose class names itself differently
+    from its entry point is left out with a warning naming it, so that one
+    broken package does not take the built-in methods down with it.
+    """
+    global _PLUGINS_LOADED
+    if _PLUGINS_LOADED and not refresh:
+        return
+    _PLUGINS_LOADED = True
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name in _REGISTRY and not refresh:
+            continue
+        try:
+            cls = ep.load()
+            if not (isinstance(cls, type) and issubclass(cls, Systematics)):
+                raise TypeError(f"{ep.value} is not a subclass of eclipsebench.Systematics")
+            if cls.name and cls.name != ep.name:
+                raise TypeError(f"{ep.value} is named '{cls.name}', not '{ep.name}'")
+            if not cls.name:
+                cls.name = ep.name
+            if _REGISTRY.get(ep.name) not in (None, cls):
+                raise TypeError(f"method name '{ep.name}' is already registered")
+            register(cls)
+        except Exception as exc:  # any error of a third-party package: skip it, say why
+            warnings.warn(f"method plugin '{ep.name}' ({ep.value}) not loaded: {exc}",
+                          RuntimeWarning, stacklevel=2)
+
+
 def get_method(name: str) -> type[Systematics]:
-    """The registered class called ``name``; InputError listing the known names otherwise."""
+    """The registered class called ``name``; InputError listing the known names otherwise.
+
+    Examples
+    --------
+    >>> get_method("bliss").__name__
+    'Bliss'
+    """
+    load_plugins()
     try:
         return _REGISTRY[name]
     except KeyError:
         known = ", ".join(available_methods()) or "none"
-        raise InputError(f"--method {name!r}: unknown method (known: {known})") from None
+        raise InputError(f"method {name!r}: unknown method (known: {known})") from None
+
+
+#: The public name of :func:`get_method` (``eb.method_class``).
+method_class = get_method
 
 
 def available_methods() -> tuple[str, ...]:
-    """Registered method names in the paper's order where it has one."""
-    order = ["bliss", "gp", "ica", "kr-data", "kr-pmap", "pld", "segpoly"]
-    names = sorted(_REGISTRY, key=lambda n: (order.index(n) if n in order else len(order), n))
-    return tuple(names)
+    """Registered method names: the paper's seven in its order, then the others by name."""
+    load_plugins()
+    rank = {n: i for i, n in enumerate(_PAPER_ORDER)}
+    return tuple(sorted(_REGISTRY, key=lambda n: (rank.get(n, len(rank)), n)))

@@ -28,8 +28,9 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, Systematics, register
+from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["BlissGrid", "knot_spacing_from_data", "bliss_setup", "bliss_gain", "Bliss"]
 
@@ -194,12 +195,26 @@ def _with_flux(model: Systematics, flux: np.ndarray) -> Systematics:
     return new
 
 
+@dataclass(frozen=True)
+class BlissOptions(MethodOptions):
+    """Options of ``bliss`` (:class:`Bliss`)."""
+
+    knot_spacing_px: float | tuple[float, ...] | None = None
+    min_points_per_knot: int = 4
+
+    def validate(self) -> None:
+        sp = self.knot_spacing_px
+        check(sp is None or (np.size(sp) in (1, 2) and np.all(np.asarray(sp) > 0)),
+              "knot_spacing_px", "one or two positive spacings in pixels")
+        check(self.min_points_per_knot >= 1, "min_points_per_knot", "an integer >= 1")
+
+
 @register
 class Bliss(Systematics):
     """BLISS mapping (Stevenson et al. 2012; paper Appendix B.1).
 
-    Options
-    -------
+    Options (:class:`BlissOptions`)
+    -------------------------------
     knot_spacing_px : float or (float, float), optional
         Knot spacing in x and y (pixels). Default: the rms frame-to-frame
         centroid motion along each axis, as Stevenson et al. choose it.
@@ -210,21 +225,19 @@ class Bliss(Systematics):
 
     name: ClassVar[str] = "bliss"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    Options: ClassVar[type[MethodOptions]] = BlissOptions
     description: ClassVar[str] = "bilinearly interpolated knot means of flux/astro over (x, y)"
     #: The BLISS team sampled with DE-MC (ter Braak 2006); the fitter uses emcee's DE move.
     preferred_move: ClassVar[str] = "de"
 
-    def __init__(self, data: EpochData, **options: Any) -> None:
-        super().__init__(data, **options)
-        unknown = set(self.options) - {"knot_spacing_px", "min_points_per_knot"}
-        if unknown:
-            raise InputError(f"method 'bliss': unknown option(s) {', '.join(sorted(unknown))} "
-                             "(known: knot_spacing_px, min_points_per_knot)")
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
         x = np.asarray(data.x, float)
         y = np.asarray(data.y, float)
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             raise InputError("method 'bliss': centroids x, y must be finite")
-        spacing = self.options.get("knot_spacing_px")
+        spacing = self.options.knot_spacing_px
         if spacing is None:
             dx, dy = knot_spacing_from_data(x, y)
             if not (dx > 0 and dy > 0):
@@ -232,15 +245,16 @@ class Bliss(Systematics):
                                  "spacing can be derived; give knot_spacing_px")
         else:
             sp = np.atleast_1d(np.asarray(spacing, dtype=float))
-            if sp.size not in (1, 2):
-                raise InputError("option knot_spacing_px: expected one or two numbers")
             dx, dy = float(sp[0]), float(sp[-1])
-        min_points = self.options.get("min_points_per_knot", 4)
-        if int(min_points) != min_points or min_points < 1:
-            raise InputError(f"option min_points_per_knot: expected an integer >= 1, got {min_points}")
+        min_points = self.options.min_points_per_knot
         self.knot_spacing_px = (dx, dy)
         self.grid = bliss_setup(x, y, dx_px=dx, dy_px=dy, min_points=int(min_points))
         self._flux = np.asarray(data.flux, float)
+
+    def diagnostics(self) -> dict[str, Any]:
+        """Knot spacing, knots in the grid and live ones."""
+        return {"knot_spacing_px": list(self.knot_spacing_px), "n_knots": int(self.grid.n_knots),
+                "n_live_knots": self.grid.n_live}
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``astro * BLISS(flux / astro)`` (electrons)."""

@@ -51,15 +51,18 @@ sampler) while least squares, which cannot set them, keeps the ML kernel.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+import copy
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve, solve_triangular
 from scipy.linalg.lapack import dpotri
 from scipy.optimize import minimize
 
+from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, Systematics, register
+from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["GaussianProcess", "bin_epoch", "bin_index", "kernel_matrix", "KERNELS", "HYPER_NAMES",
            "OFFSET_NAMES"]
@@ -178,18 +181,36 @@ def kernel_matrix(inputs: np.ndarray, lengths: np.ndarray, kind: str,
     raise InputError(f"gp option 'kernel': expected one of {', '.join(KERNELS)}, got {kind!r}")
 
 
+@dataclass(frozen=True)
+class GpOptions(MethodOptions):
+    """Options of ``gp`` (:class:`GaussianProcess`)."""
+
+    kernel: Literal["squared-exponential", "matern32"] = "squared-exponential"
+    bin_seconds: float | None = 30.0
+    max_points: int = 3000
+    sample_kernel: bool = False
+    hyperparameters: tuple[float, ...] | None = None
+    optimise: bool = False
+
+    def validate(self) -> None:
+        check(self.bin_seconds is None or self.bin_seconds >= 0, "bin_seconds",
+              "a bin width >= 0 s (0: unbinned)")
+        check(self.max_points >= 10, "max_points", "at least 10 points")
+        h = self.hyperparameters or ()
+        check(len(h) in (0, 5) and all(np.isfinite(v) for v in h), "hyperparameters",
+              f"5 finite numbers ({', '.join(HYPER_NAMES)}) or none")
+
+
 @register
 class GaussianProcess(Systematics):
     """GP systematics over (x, y, t) on binned data (Evans et al. 2015).
 
-    Parameters
-    ----------
-    data : EpochData
-        Frames of one epoch (unbinned; binned here).
+    Options (:class:`GpOptions`)
+    ----------------------------
     kernel : {"squared-exponential", "matern32"}
         Covariance function (default squared exponential, as Evans et al.).
     bin_seconds : float
-        Time-bin width in seconds (30); 0 or None fits the frames unbinned.
+        Time-bin width in seconds (30); 0 fits the frames unbinned.
     max_points : int
         Largest number of (binned) points accepted (3000); more raises
         InputError asking to bin.
@@ -207,6 +228,7 @@ class GaussianProcess(Systematics):
 
     name: ClassVar[str] = "gp"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    Options: ClassVar[type[MethodOptions]] = GpOptions
     # Cyclic shifts of the residuals carry the correlated part the kernel already
     # models, so the prayer bead double-counts it (199 vs 80 ppm on a simulated
     # epoch) and costs one kernel optimisation per shift; Evans et al. (2015)
@@ -215,16 +237,13 @@ class GaussianProcess(Systematics):
     description: ClassVar[str] = ("Gaussian process over (x, y, t) with white noise on ~30 s "
                                   "bins; kernel by maximum likelihood (Evans et al. 2015)")
 
-    def __init__(self, data: EpochData, *, kernel: str = "squared-exponential",
-                 bin_seconds: float | None = 30.0, max_points: int = 3000,
-                 sample_kernel: bool = False, hyperparameters=None, optimise: bool = False,
-                 **options: Any) -> None:
-        super().__init__(data, kernel=kernel, bin_seconds=bin_seconds, max_points=max_points,
-                         sample_kernel=sample_kernel, hyperparameters=hyperparameters,
-                         optimise=optimise, **options)
-        if kernel not in KERNELS:
-            raise InputError(f"gp option 'kernel': expected one of {', '.join(KERNELS)}, "
-                             f"got {kernel!r}")
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
+        opts = self.options
+        kernel, bin_seconds, max_points = opts.kernel, opts.bin_seconds, opts.max_points
+        hyperparameters = opts.hyperparameters or None
+        sample_kernel, optimise = opts.sample_kernel, opts.optimise
         self.kernel = kernel
         self.unbinned_data = data
         binned = bin_epoch(data, bin_seconds) if bin_seconds else data
@@ -250,9 +269,6 @@ class GaussianProcess(Systematics):
         self._lo, self._hi = self._hyper_bounds()
         if hyperparameters is not None:
             h = np.asarray(hyperparameters, dtype=float)
-            if h.shape != (5,) or not np.all(np.isfinite(h)):
-                raise InputError("gp option 'hyperparameters': expected 5 finite numbers "
-                                 f"({', '.join(HYPER_NAMES)})")
         else:
             h = self._hyper_start()
         self.sample_kernel = bool(sample_kernel)
@@ -367,6 +383,13 @@ class GaussianProcess(Systematics):
                         "n_evaluations": int(res.nfev)}
         return self.ml_info
 
+    def diagnostics(self) -> dict[str, Any]:
+        """The kernel in use, the binning, and the last likelihood maximisation."""
+        return {"n_points": len(self.data), "n_frames": len(self.unbinned_data),
+                "hyperparameters": dict(zip(HYPER_NAMES, np.asarray(self.hyper).tolist(),
+                                            strict=True)),
+                "ml": dict(self.ml_info)}
+
     # ------------------------------------------------------------- interface
     def initial_params(self) -> np.ndarray:
         """Zero offsets from the maximum-likelihood hyperparameters (when they are sampled)."""
@@ -426,8 +449,6 @@ class GaussianProcess(Systematics):
         For the prayer bead; ``flux`` has one value per bin. The covariance
         does not depend on the flux, so nothing is refactorised.
         """
-        import copy
-        from dataclasses import replace
         flux = np.asarray(flux, dtype=float)
         if len(flux) != len(self.data):
             raise InputError(f"gp: with_flux needs {len(self.data)} binned fluxes, got {len(flux)}")

@@ -52,17 +52,19 @@ variance of the depths, to be added in quadrature to the depth uncertainty.
 
 from __future__ import annotations
 
+import copy
 import warnings
-from typing import Any, ClassVar
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 import pywt
 from sklearn.decomposition import FastICA
 from sklearn.exceptions import ConvergenceWarning
 
+from ..config.base import check
 from ..errors import InputError
-from ..seeding import rng, spawn_ints
-from .base import EpochData, Systematics, register
+from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["IndependentComponents", "wavelet_coefficients", "separate"]
 
@@ -128,112 +130,128 @@ def _abs_corr(columns: np.ndarray, ref: np.ndarray) -> np.ndarray:
     return np.abs(r @ c) / np.where(den > 0, den, 1.0)
 
 
+@dataclass(frozen=True)
+class IcaOptions(MethodOptions):
+    """Options of ``ica`` (:class:`IndependentComponents`)."""
+
+    n_components: int = 0
+    wavelet: str = "db4"
+    level: int = 0
+    combine: Literal["additive", "multiplicative"] = "additive"
+    n_restarts: int = 10
+    max_iter: int = 2000
+    tol: float = 1e-5
+    flux_free: bool = True
+
+    def validate(self) -> None:
+        check(self.n_components == 0 or self.n_components >= 2, "n_components",
+              "0 (one per pixel, at most 9) or at least 2")
+        check(self.wavelet in pywt.wavelist(kind="discrete"), "wavelet",
+              "a PyWavelets discrete wavelet (e.g. 'db4', 'sym8', 'haar')")
+        check(self.level >= 0, "level", "0 (the largest allowed, at most 8) or a level >= 1")
+        check(0 <= self.n_restarts <= 1000, "n_restarts", "0-1000 bootstrap restarts")
+        check(self.max_iter >= 1, "max_iter", "at least 1 iteration")
+        check(self.tol > 0, "tol", "a positive tolerance")
+
+
 @register
 class IndependentComponents(Systematics):
     """Wavelet pixel-ICA systematics (Morello et al. 2016).
 
-    Parameters
-    ----------
-    data : EpochData
-        Frames with pixel stamps (``pixels``, shape (n, 9) or (n, 25)).
-    n_components : int or None
-        Independent components to extract (default: one per pixel, at most 9;
+    Options (:class:`IcaOptions`)
+    -----------------------------
+    n_components : int
+        Independent components to extract (0: one per pixel, at most 9;
         FastICA's whitening keeps the strongest principal directions).
     wavelet : str
         PyWavelets discrete wavelet ("db4").
-    level : int or None
-        DWT level (default: the largest PyWavelets allows, at most 8).
+    level : int
+        DWT level (0: the largest PyWavelets allows, at most 8).
     combine : {"additive", "multiplicative"}
         ``F0 astro + sum s_k IC_k`` (Morello et al.) or ``astro (F0 + sum s_k IC_k)``.
-    eclipse_template : ndarray or None
-        An expected astrophysical curve at the data times; if given, it picks
-        the astrophysical component (otherwise the mixing-uniformity rule).
     n_restarts : int
         Bootstrap FastICA restarts for the component-separation error (10);
         0 disables it.
-    seed, epoch : int
-        Run seed and epoch number, for the random streams.
     max_iter, tol : int, float
         FastICA iteration limit and tolerance.
     flux_free : bool
         Make the non-astrophysical components blind to a uniform flux change
         (default True, our addition; False is pixel-ICA as published).
+
+    The random streams (FastICA's seeds, the bootstrap rows) come from the
+    context: ``context.stream_ints("fastica", r)`` and
+    ``context.stream("bootstrap")``.
     """
 
     name: ClassVar[str] = "ica"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
+    Options: ClassVar[type[MethodOptions]] = IcaOptions
+    stochastic: ClassVar[bool] = True
     description: ClassVar[str] = ("wavelet pixel-ICA: FastICA on DWT coefficients of the pixel "
                                   "light curves, eclipse + scaled components (Morello et al. 2016)")
 
-    def __init__(self, data: EpochData, *, n_components: int | None = None,
-                 wavelet: str = "db4", level: int | None = None, combine: str = "additive",
-                 eclipse_template=None, n_restarts: int = 10, seed: int = 0, epoch: int = 0,
-                 max_iter: int = 2000, tol: float = 1e-5, flux_free: bool = True,
-                 **options: Any) -> None:
-        super().__init__(data, n_components=n_components, wavelet=wavelet, level=level,
-                         combine=combine, n_restarts=n_restarts, seed=seed, epoch=epoch,
-                         max_iter=max_iter, tol=tol, flux_free=flux_free, **options)
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
+        opts = self.options
+        n_components = opts.n_components or None
+        wavelet, combine = opts.wavelet, opts.combine
+        level = opts.level or None
+        max_iter, tol, n_restarts = opts.max_iter, opts.tol, opts.n_restarts
         pix = np.asarray(data.pixels, dtype=float).reshape(len(data), -1)
         n, p = pix.shape
         if p < 3:
             raise InputError(f"ica: the pixel stamps have {p} pixels; expected a 3x3 or 5x5 stamp")
-        if combine not in ("additive", "multiplicative"):
-            raise InputError(f"ica option 'combine': expected 'additive' or 'multiplicative', "
-                             f"got {combine!r}")
-        if wavelet not in pywt.wavelist(kind="discrete"):
-            raise InputError(f"ica option 'wavelet': {wavelet!r} is not a PyWavelets discrete "
-                             "wavelet (e.g. 'db4', 'sym8', 'haar')")
         n_comp = min(p, 9) if n_components is None else int(n_components)
         if not 2 <= n_comp <= p:
-            raise InputError(f"ica option 'n_components': expected 2-{p}, got {n_components!r}")
+            raise InputError(f"method 'ica' option 'n_components': expected 2-{p}, got {n_components!r}")
         scale = np.median(pix.sum(axis=1))
         if not scale > 0:
             raise InputError("ica: the summed pixel stamps need a positive median flux")
         max_level = pywt.dwt_max_level(n, pywt.Wavelet(wavelet).dec_len)
         lev = min(8, max_level) if level is None else int(level)
         if not 1 <= lev <= max(max_level, 1):
-            raise InputError(f"ica option 'level': expected 1-{max_level} for {n} frames, "
+            raise InputError(f"method 'ica' option 'level': expected 1-{max_level} for {n} frames, "
                              f"got {level!r}")
         self.combine = combine
         norm = pix / scale
         centred = norm - norm.mean(axis=0)
         coeffs = wavelet_coefficients(centred, wavelet, lev)
-        s0 = spawn_ints(seed, "reduce", epoch, "ica", "fastica", 0)[0]
+        s0 = self.context.stream_ints("fastica", 0)[0]
         unmix, mixing, conv = separate(coeffs, n_comp, s0, max_iter=max_iter, tol=tol)
         self._mean_dir = norm.mean(axis=0) / np.linalg.norm(norm.mean(axis=0))
-        self.flux_free = bool(flux_free)
+        self.flux_free = opts.flux_free
         comps = centred @ unmix.T
-        template = None if eclipse_template is None else np.asarray(eclipse_template, float)
-        if template is not None:
-            if template.shape != (n,):
-                raise InputError(f"ica option 'eclipse_template': expected {n} values")
-            score = _abs_corr(comps, template)
-        else:
-            score = _alignment(mixing, norm.mean(axis=0))
+        score = _alignment(mixing, norm.mean(axis=0))
         k_astro = int(np.argmax(score))
         self.astro_component = comps[:, k_astro]
         self._comps_raw, self._centred, self._unmix = comps, centred, unmix
         self.components = self._regressors(self._free(centred, unmix), k_astro)
-        self.diagnostics = {"wavelet": wavelet, "level": lev, "n_components": n_comp,
+        self._diagnostics = {"wavelet": wavelet, "level": lev, "n_components": n_comp,
                             "astro_index": k_astro, "astro_score": float(score[k_astro]),
                             "next_score": float(np.sort(score)[-2]), "converged": conv}
 
         # Bootstrap restarts for the component-separation error.
         self.restart_components: list[np.ndarray] = []
-        g = rng(seed, "reduce", epoch, "ica", "bootstrap")
+        g = self.context.stream("bootstrap")
         n_conv = 0
         for r in range(1, int(n_restarts) + 1):
             rows = g.integers(0, len(coeffs), len(coeffs))
-            sr = spawn_ints(seed, "reduce", epoch, "ica", "fastica", r)[0]
+            sr = self.context.stream_ints("fastica", r)[0]
             u_r, _, c_r = separate(coeffs[rows], n_comp, sr, max_iter=max_iter, tol=tol)
             n_conv += c_r
             comps_r = centred @ u_r.T
             k_r = int(np.argmax(_abs_corr(comps_r, self.astro_component)))
             self.restart_components.append(self._regressors(self._free(centred, u_r), k_r))
-        self.diagnostics["restarts_converged"] = n_conv
+        self._diagnostics["restarts_converged"] = n_conv
 
         self._sw = 1.0 / np.asarray(data.flux_err, dtype=float)
         self._prepare_projection()
+
+    def diagnostics(self) -> dict[str, Any]:
+        """The decomposition (wavelet, level, components), the astrophysical component's
+        score against the runner-up, and FastICA's convergence."""
+        return dict(self._diagnostics)
 
     def _prepare_projection(self) -> None:
         """Weighted projection onto the span of the components, done once."""
@@ -279,7 +297,7 @@ class IndependentComponents(Systematics):
         k = int(np.argmax(_abs_corr(self._comps_raw, a)))
         self.astro_component = self._comps_raw[:, k]
         self.components = self._regressors(self._free(self._centred, self._unmix), k)
-        self.diagnostics["astro_index"] = k
+        self._diagnostics["astro_index"] = k
         self._prepare_projection()
         return k
 
@@ -300,8 +318,6 @@ class IndependentComponents(Systematics):
         The components come from the pixel stamps, which the prayer bead does
         not shift, so FastICA is not rerun; only the linear projection is.
         """
-        import copy
-        from dataclasses import replace
         new = copy.copy(self)
         new.data = replace(self.data, flux=np.asarray(flux, dtype=float))
         new._prepare_projection()

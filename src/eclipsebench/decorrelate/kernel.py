@@ -26,14 +26,18 @@ IRSA correction code does.
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
+from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, Systematics, register
+from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 from .bliss import _with_flux
 from .pmap import CalibrationSet, GriddedPmap, find_pmap_path, interpolate_grid, load_pmap
 
@@ -123,26 +127,23 @@ def _check_finite(name: str, method: str, *arrays) -> None:
             raise InputError(f"method '{method}': column(s) {name} must be finite")
 
 
-def _int_option(options: dict, key: str, default: int, method: str, minimum: int = 1) -> int:
-    v = options.get(key, default)
-    if isinstance(v, bool) or int(v) != v or v < minimum:
-        raise InputError(f"method '{method}': option {key} expected an integer >= {minimum}, got {v!r}")
-    return int(v)
+@dataclass(frozen=True)
+class KrDataOptions(MethodOptions):
+    """Options of ``kr-data`` (:class:`KernelRegressionData`)."""
 
+    k: int = 50
+    use_noise_pixels: bool = False
 
-def _bool_option(options: dict, key: str, default: bool, method: str) -> bool:
-    v = options.get(key, default)
-    if not isinstance(v, (bool, np.bool_)):
-        raise InputError(f"method '{method}': option {key} expected true or false, got {v!r}")
-    return bool(v)
+    def validate(self) -> None:
+        check(self.k >= 1, "k", "an integer >= 1")
 
 
 @register
 class KernelRegressionData(Systematics):
     """KR/Data: leave-one-out Gaussian kernel regression on the science frames.
 
-    Options
-    -------
+    Options (:class:`KrDataOptions`)
+    --------------------------------
     k : int, default 50
         Nearest neighbours (Wong et al. 2014).
     use_noise_pixels : bool, default False
@@ -152,16 +153,14 @@ class KernelRegressionData(Systematics):
 
     name: ClassVar[str] = "kr-data"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    Options: ClassVar[type[MethodOptions]] = KrDataOptions
     description: ClassVar[str] = "k-nearest-neighbour Gaussian kernel regression of flux/astro"
 
-    def __init__(self, data: EpochData, **options: Any) -> None:
-        super().__init__(data, **options)
-        unknown = set(self.options) - {"k", "use_noise_pixels"}
-        if unknown:
-            raise InputError(f"method 'kr-data': unknown option(s) {', '.join(sorted(unknown))} "
-                             "(known: k, use_noise_pixels)")
-        k = _int_option(self.options, "k", 50, self.name)
-        use_np = _bool_option(self.options, "use_noise_pixels", False, self.name)
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
+        k = self.options.k
+        use_np = self.options.use_noise_pixels
         if use_np and data.noise_pixels is None:
             raise InputError("method 'kr-data' with use_noise_pixels: needs the column "
                              "noise_pixels in the photometry table")
@@ -182,7 +181,15 @@ class KernelRegressionData(Systematics):
         self.smoother = sp.csr_matrix((w.ravel(), idx.ravel(), np.arange(0, n * k + 1, k)),
                                       shape=(n, n))
         self._dof = smoother_trace(pts, pts, idx)
+        self._weight_ratio_median = float(np.median(w.max(axis=1) / w.min(axis=1)))
         self._flux = np.asarray(data.flux, float)
+
+    def diagnostics(self) -> dict[str, Any]:
+        """Kernel scale lengths, effective degrees of freedom, and how much the kernel
+        weighs: the median over frames of the largest/smallest weight among its neighbours
+        (1 is a plain nearest-neighbour mean)."""
+        return {"scales": self.scales.tolist(), "dof": float(self._dof),
+                "weight_ratio_median": self._weight_ratio_median}
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``astro * KR(flux / astro)`` (electrons)."""
@@ -253,17 +260,38 @@ def noise_pixels_offset(pmap: CalibrationSet, x: np.ndarray, y: np.ndarray,
     return float(np.median(np.asarray(noise_pixels, float) - pmap.noise_pixels[idx].mean(axis=1)))
 
 
+@dataclass(frozen=True)
+class KrPmapOptions(MethodOptions):
+    """Options of ``kr-pmap`` (:class:`KernelRegressionPmap`)."""
+
+    k: int = 50
+    use_noise_pixels: bool = True
+    match_noise_pixels: bool = True
+    max_distance_px: float = 0.1
+    max_uncovered_fraction: float = 0.05
+    min_occupancy: float = 0.0
+
+    def validate(self) -> None:
+        check(self.k >= 1, "k", "an integer >= 1")
+        check(self.max_distance_px > 0, "max_distance_px", "a positive distance in pixels")
+        check(0 <= self.max_uncovered_fraction <= 1, "max_uncovered_fraction",
+              "a fraction 0-1")
+        check(self.min_occupancy >= 0, "min_occupancy", "an occupancy >= 0")
+
+
 @register
 class KernelRegressionPmap(Systematics):
     """KR/Pmap: kernel regression trained on a calibration star (Krick et al. 2016).
 
-    Options
-    -------
-    pmap : path, optional
-        A calibration-star table (FITS, columns x, y, noise_pixels, flux,
-        flux_err) or the gridded SSC pmap (its folder or ``pmap_*.fits``).
-        Default: ``SIMDIR/calibration/pmap_calibration.fits`` when the table
-        comes from a simulation.
+    The calibration set is the context resource ``pmap``: a calibration-star
+    table (:class:`~eclipsebench.decorrelate.pmap.CalibrationSet`) or the
+    gridded SSC pixel map (:class:`~eclipsebench.decorrelate.pmap.GriddedPmap`),
+    loaded by :meth:`load_resources` from a path (default:
+    ``SIMDIR/calibration/pmap_calibration.fits`` when the table comes from a
+    simulation).
+
+    Options (:class:`KrPmapOptions`)
+    --------------------------------
     k : int, default 50
         Calibration neighbours per science frame.
     use_noise_pixels : bool, default True
@@ -295,29 +323,31 @@ class KernelRegressionPmap(Systematics):
 
     name: ClassVar[str] = "kr-pmap"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    Options: ClassVar[type[MethodOptions]] = KrPmapOptions
+    resources: ClassVar[tuple[str, ...]] = ("pmap",)
     description: ClassVar[str] = "fixed gain from kernel regression on a calibration star"
 
-    def __init__(self, data: EpochData, **options: Any) -> None:
-        super().__init__(data, **options)
-        known = {"pmap", "k", "use_noise_pixels", "match_noise_pixels", "max_distance_px",
-                 "max_uncovered_fraction", "min_occupancy"}
-        unknown = set(self.options) - known
-        if unknown:
-            raise InputError(f"method 'kr-pmap': unknown option(s) {', '.join(sorted(unknown))} "
-                             f"(known: {', '.join(sorted(known))})")
-        k = _int_option(self.options, "k", 50, self.name)
-        use_np = _bool_option(self.options, "use_noise_pixels", True, self.name)
-        match_np = _bool_option(self.options, "match_noise_pixels", True, self.name)
-        max_d = float(self.options.get("max_distance_px", 0.1))
-        if not max_d > 0:
-            raise InputError(f"method 'kr-pmap': option max_distance_px expected > 0, got {max_d}")
-        max_frac = float(self.options.get("max_uncovered_fraction", 0.05))
-        if not 0 <= max_frac <= 1:
-            raise InputError("method 'kr-pmap': option max_uncovered_fraction expected 0..1, "
-                             f"got {max_frac}")
-        path = find_pmap_path(self.options.get("pmap"), data.meta)
-        self.pmap = load_pmap(path)
-        self.pmap_path = str(path)
+    @classmethod
+    def load_resources(cls, data: EpochData, sources: Mapping[str, Any]) -> dict[str, Any]:
+        """``{"pmap": CalibrationSet or GriddedPmap}`` from a path, a loaded map, or the
+        simulation folder named in the table's metadata."""
+        given = sources.get("pmap")
+        if isinstance(given, (CalibrationSet, GriddedPmap)):
+            return {"pmap": given}
+        return {"pmap": load_pmap(find_pmap_path(given, data.meta))}
+
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
+        o = self.options
+        k, use_np, match_np = o.k, o.use_noise_pixels, o.match_noise_pixels
+        max_d, max_frac = o.max_distance_px, o.max_uncovered_fraction
+        if "pmap" not in self.context.resources:
+            self.context = dataclasses.replace(
+                self.context, resources={**self.context.resources,
+                                         **self.load_resources(data, {})})
+        self.pmap = self.context.resource("pmap")
+        path = self.pmap.source or "the calibration set"
         x = np.asarray(data.x, float)
         y = np.asarray(data.y, float)
         _check_finite("x, y", self.name, x, y)
@@ -331,13 +361,13 @@ class KernelRegressionPmap(Systematics):
             self.noise_pixels_offset = 0.0
             occ = interpolate_grid(g.occupancy, g.x_grid, g.y_grid, x, y)
             self.n_low_occupancy = int(np.sum(occ < 20.0))
-            min_occ = float(self.options.get("min_occupancy", 0.0))
+            min_occ = o.min_occupancy
             if np.sum(occ < min_occ):
-                raise InputError(f"--pmap {path}: {int(np.sum(occ < min_occ))} of {len(x)} frames "
+                raise InputError(f"pmap {path}: {int(np.sum(occ < min_occ))} of {len(x)} frames "
                                  f"fall where the map's occupancy is below min_occupancy={min_occ}")
         else:
             if len(self.pmap) < k:
-                raise InputError(f"--pmap {path}: {len(self.pmap)} calibration rows, fewer than k = {k}")
+                raise InputError(f"pmap {path}: {len(self.pmap)} calibration rows, fewer than k = {k}")
             beta = data.noise_pixels if use_np else None
             if use_np and beta is None:
                 raise InputError("method 'kr-pmap' with use_noise_pixels: needs the column "
@@ -350,7 +380,7 @@ class KernelRegressionPmap(Systematics):
                                                                tree=tree_xy)
                 beta = np.asarray(beta, float) - self.noise_pixels_offset
                 if np.any(beta <= 0):
-                    raise InputError(f"--pmap {path}: the science noise pixels minus their offset "
+                    raise InputError(f"pmap {path}: the science noise pixels minus their offset "
                                      f"from the calibration set ({self.noise_pixels_offset:.3g}) "
                                      "are not all positive; use match_noise_pixels=false")
             self.scales = scale_lengths(x, y, beta)
@@ -362,7 +392,7 @@ class KernelRegressionPmap(Systematics):
             self.n_low_occupancy = 0
         self.n_uncovered = int(far.sum())
         if self.n_uncovered > max_frac * len(x):
-            raise InputError(f"--pmap {path}: {self.n_uncovered} of {len(x)} frames lie more than "
+            raise InputError(f"pmap {path}: {self.n_uncovered} of {len(x)} frames lie more than "
                              f"{max_d} px from the calibration data (max_distance_px), more than "
                              f"max_uncovered_fraction={max_frac}")
         self.k = k
@@ -382,6 +412,12 @@ class KernelRegressionPmap(Systematics):
         # einsum rather than np.dot: no BLAS threads in the fitter's inner loop.
         wm = self._ivar * m
         return (np.einsum("i,i->", wm, self._flux) / np.einsum("i,i->", wm, m)) * m
+
+    def diagnostics(self) -> dict[str, Any]:
+        """The calibration set used and how well it covers the science frames."""
+        return {"pmap": str(self.pmap.source), "pmap_kind": type(self.pmap).__name__,
+                "n_uncovered": self.n_uncovered, "n_low_occupancy": self.n_low_occupancy,
+                "noise_pixels_offset": float(self.noise_pixels_offset)}
 
     def with_flux(self, flux: np.ndarray) -> KernelRegressionPmap:
         """The same fixed gain on new fluxes."""

@@ -27,12 +27,14 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
+from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, Systematics, register
+from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["normalised_pixels", "central_stamp", "time_basis", "PldDesign", "pld_solve",
            "PixelLevelDecorrelation"]
@@ -165,12 +167,25 @@ def pld_solve(design: PldDesign, astro: np.ndarray) -> np.ndarray:
         return np.linalg.lstsq(a, b, rcond=None)[0]
 
 
+@dataclass(frozen=True)
+class PldOptions(MethodOptions):
+    """Options of ``pld`` (:class:`PixelLevelDecorrelation`)."""
+
+    stamp: Literal[3, 5] = 3
+    time_poly_degree: int = 0
+    bin_frames: int = 1
+
+    def validate(self) -> None:
+        check(0 <= self.time_poly_degree <= 5, "time_poly_degree", "an integer 0-5")
+        check(self.bin_frames >= 1, "bin_frames", "an integer >= 1")
+
+
 @register
 class PixelLevelDecorrelation(Systematics):
     """PLD (Deming et al. 2015; paper Appendix B.5).
 
-    Options
-    -------
+    Options (:class:`PldOptions`)
+    -----------------------------
     stamp : int, 3 or 5, default 3
         Side of the pixel stamp; a larger stamp in the table is cut to its
         central part.
@@ -184,25 +199,16 @@ class PixelLevelDecorrelation(Systematics):
 
     name: ClassVar[str] = "pld"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
+    Options: ClassVar[type[MethodOptions]] = PldOptions
     description: ClassVar[str] = "linear regression on normalised pixel values"
 
-    def __init__(self, data: EpochData, **options: Any) -> None:
-        super().__init__(data, **options)
-        known = {"stamp", "time_poly_degree", "bin_frames"}
-        unknown = set(self.options) - known
-        if unknown:
-            raise InputError(f"method 'pld': unknown option(s) {', '.join(sorted(unknown))} "
-                             f"(known: {', '.join(sorted(known))})")
-        stamp = self.options.get("stamp", 3)
-        if stamp not in (3, 5):
-            raise InputError(f"method 'pld': option stamp expected 3 or 5, got {stamp!r}")
-        degree = self.options.get("time_poly_degree", 0)
-        if isinstance(degree, bool) or int(degree) != degree or not 0 <= degree <= 5:
-            raise InputError(f"method 'pld': option time_poly_degree expected 0..5, got {degree!r}")
-        bin_frames = self.options.get("bin_frames", 1)
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
+        stamp = self.options.stamp
+        degree = self.options.time_poly_degree
+        bin_frames = self.options.bin_frames
         n = len(data)
-        if isinstance(bin_frames, bool) or int(bin_frames) != bin_frames or bin_frames < 1:
-            raise InputError(f"method 'pld': option bin_frames expected an integer >= 1, got {bin_frames!r}")
         p_hat = normalised_pixels(central_stamp(data.pixels, int(stamp)))
         regressors = np.column_stack([p_hat, time_basis(data.time_bmjd, int(degree))])
         n_bins = -(-n // int(bin_frames))

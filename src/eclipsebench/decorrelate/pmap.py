@@ -226,7 +226,7 @@ def load_pmap(path: str | os.PathLike) -> CalibrationSet | GriddedPmap:
     """
     p = Path(path)
     if not p.exists():
-        raise InputError(f"--pmap {p}: no such file or folder")
+        raise InputError(f"pmap {p}: no such file or folder")
     if p.is_dir():
         return load_gridded_pmap(p)
     hdus = _read_fits_quietly(p)
@@ -244,7 +244,7 @@ def find_pmap_path(option: str | os.PathLike | None, meta: Mapping[str, Any]) ->
     Parameters
     ----------
     option : path or None
-        The user's ``pmap`` option (``--pmap PATH``).
+        The caller's ``pmap`` argument (``--pmap PATH`` on the command line).
     meta : mapping
         The photometry table's provenance; ``meta["SIMDIR"]`` is the simulation
         folder when the data are simulated.
@@ -257,16 +257,16 @@ def find_pmap_path(option: str | os.PathLike | None, meta: Mapping[str, Any]) ->
     if option is not None and str(option) != "":
         p = Path(option)
         if not p.exists():
-            raise InputError(f"--pmap {p}: no such file or folder")
+            raise InputError(f"pmap {p}: no such file or folder")
         return p
     simdir = meta.get("SIMDIR") or meta.get("simdir")
     if simdir:
         p = Path(str(simdir)) / CALIBRATION_RELPATH
         if p.is_file():
             return p
-        raise InputError(f"method 'kr-pmap': no --pmap given and {p} (from the table's SIMDIR) "
+        raise InputError(f"method 'kr-pmap': no pmap given and {p} (from the table's SIMDIR) "
                          "does not exist")
-    raise InputError("method 'kr-pmap': needs --pmap PATH (a calibration-star table or the "
+    raise InputError("method 'kr-pmap': needs a pmap (a calibration-star table or the "
                      "gridded pmap folder); the table names no simulation folder (SIMDIR)")
 
 

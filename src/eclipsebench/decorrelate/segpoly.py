@@ -45,12 +45,15 @@ eclipse: :attr:`SegmentedPolynomial.default_eclipse_shape` is ``"box"``.
 
 from __future__ import annotations
 
+import copy
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 import numpy as np
 
+from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, Systematics, register
+from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["SegmentedPolynomial", "hf_scatter", "poly_design", "iterative_poly_detrend",
            "segment_fractions_default"]
@@ -185,14 +188,42 @@ def _segments(time: np.ndarray, length: float, min_points: int) -> list[np.ndarr
     return merged
 
 
+@dataclass(frozen=True)
+class SegpolyOptions(MethodOptions):
+    """Options of ``segpoly`` (:class:`SegmentedPolynomial`)."""
+
+    order: int = 3
+    segment_order: int = 3
+    segment_fractions: tuple[float, ...] = segment_fractions_default
+    tolerance: float = 0.01
+    max_iterations: int = 20
+    clip_sigma: float = 4.0
+    mask_bmjd: tuple[float, ...] = ()
+    mask_eclipse: bool = True
+    mask_pad: float = 0.2
+    initial_mask_fraction: float = 0.4
+    divide_astro: bool = True
+
+    def validate(self) -> None:
+        check(0 <= self.order <= 6, "order", "an integer 0-6")
+        check(0 <= self.segment_order <= 6, "segment_order", "an integer 0-6")
+        check(len(self.segment_fractions) > 0
+              and all(0 < f <= 1 for f in self.segment_fractions), "segment_fractions",
+              "fractions in (0, 1]")
+        check(0 < self.tolerance < 1, "tolerance", "a number in (0, 1)")
+        check(self.max_iterations >= 1, "max_iterations", "at least 1 pass")
+        check(self.clip_sigma > 0, "clip_sigma", "a positive number of standard deviations")
+        check(len(self.mask_bmjd) in (0, 2), "mask_bmjd", "[start, end] BMJD or none")
+        check(0 <= self.mask_pad <= 2, "mask_pad", "a number 0-2")
+        check(0 <= self.initial_mask_fraction < 0.9, "initial_mask_fraction", "a number 0-0.9")
+
+
 @register
 class SegmentedPolynomial(Systematics):
     """SP(K2): stage-1 global and stage-2 segmented polynomial detrending (Buzasi et al. 2015).
 
-    Parameters
-    ----------
-    data : EpochData
-        Frames of one epoch (time, flux, centroids).
+    Options (:class:`SegpolyOptions`)
+    ---------------------------------
     order : int
         Order of the stage-1 polynomial in (x, y); 3 as in the paper.
     segment_order : int
@@ -206,7 +237,7 @@ class SegmentedPolynomial(Systematics):
         Cap on the passes of each iterative fit (20).
     clip_sigma : float
         Outlier clipping of each pass, robust standard deviations (4).
-    mask_bmjd : (float, float) or None
+    mask_bmjd : (float, float) or empty
         A fixed time window left out of every polynomial fit.
     mask_eclipse : bool
         Without ``mask_bmjd``: detrend first with the central
@@ -228,37 +259,22 @@ class SegmentedPolynomial(Systematics):
 
     name: ClassVar[str] = "segpoly"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    Options: ClassVar[type[MethodOptions]] = SegpolyOptions
     description: ClassVar[str] = ("SP(K2): iterated cubic (x, y) polynomial, then ten segmented "
                                   "detrendings combined by the median (Buzasi et al. 2015)")
     #: The SP(K2) team fitted a box eclipse (paper B.6); the fitter may use the shared model instead.
     default_eclipse_shape: ClassVar[str] = "box"
 
-    def __init__(self, data: EpochData, *, order: int = 3, segment_order: int = 3,
-                 segment_fractions=segment_fractions_default, tolerance: float = 0.01,
-                 max_iterations: int = 20, clip_sigma: float = 4.0,
-                 mask_bmjd: tuple[float, float] | None = None, mask_eclipse: bool = True,
-                 mask_pad: float = 0.2, initial_mask_fraction: float = 0.4,
-                 divide_astro: bool = True, **options: Any) -> None:
-        super().__init__(data, order=order, segment_order=segment_order,
-                         segment_fractions=tuple(segment_fractions), tolerance=tolerance,
-                         max_iterations=max_iterations, clip_sigma=clip_sigma,
-                         mask_bmjd=mask_bmjd, mask_eclipse=mask_eclipse, mask_pad=mask_pad,
-                         initial_mask_fraction=initial_mask_fraction,
-                         divide_astro=divide_astro, **options)
-        for key, val in (("order", order), ("segment_order", segment_order)):
-            if not (isinstance(val, (int, np.integer)) and 0 <= val <= 6):
-                raise InputError(f"segpoly option '{key}': expected an integer 0-6, got {val!r}")
-        fracs = np.asarray(segment_fractions, dtype=float)
-        if fracs.ndim != 1 or len(fracs) == 0 or np.any(fracs <= 0) or np.any(fracs > 1):
-            raise InputError("segpoly option 'segment_fractions': expected fractions in (0, 1]")
-        if not 0 <= initial_mask_fraction < 0.9:
-            raise InputError("segpoly option 'initial_mask_fraction': expected 0 to 0.9, got "
-                             f"{initial_mask_fraction!r}")
-        if not 0 <= mask_pad <= 2:
-            raise InputError(f"segpoly option 'mask_pad': expected 0-2, got {mask_pad!r}")
-        if not 0 < tolerance < 1:
-            raise InputError(f"segpoly option 'tolerance': expected a number in (0, 1), "
-                             f"got {tolerance!r}")
+    def __init__(self, data: EpochData, options: Any = None, *,
+                 context: MethodContext | None = None, **kwargs: Any) -> None:
+        super().__init__(data, options, context=context, **kwargs)
+        o = self.options
+        order, segment_order = o.order, o.segment_order
+        fracs = np.asarray(o.segment_fractions, dtype=float)
+        tolerance, max_iterations, clip_sigma = o.tolerance, o.max_iterations, o.clip_sigma
+        mask_bmjd = o.mask_bmjd or None
+        mask_eclipse, divide_astro = o.mask_eclipse, o.divide_astro
+        initial_mask_fraction = o.initial_mask_fraction
         time = np.asarray(data.time_bmjd, dtype=float)
         if np.any(np.diff(time) < 0):
             raise InputError("segpoly: frames must be in time order")
@@ -321,12 +337,20 @@ class SegmentedPolynomial(Systematics):
         trend = flux / final
         self.trend = trend / np.mean(trend)
         self.detrended = np.asarray(data.flux, dtype=float) / self.trend
-        self.diagnostics = {"stage1_iterations": n1,
+        self._diagnostics = {"stage1_iterations": n1,
                             "hf_scatter_raw": hf_scatter(flux),
                             "hf_scatter_stage1": hf_scatter(stage1),
                             "hf_scatter_final": hf_scatter(final),
                             "mask_window_bmjd": self.mask_window_bmjd,
                             "n_masked": int((~fit_mask).sum())}
+
+    def diagnostics(self) -> dict[str, Any]:
+        """The detrend: stage-1 passes, high-frequency scatter before and after each
+        stage, and the masked window."""
+        d = dict(self._diagnostics)
+        d["mask_window_bmjd"] = None if d["mask_window_bmjd"] is None else list(
+            d["mask_window_bmjd"])
+        return d
 
     def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:
         """Detrend again with the fitted eclipse masked and ``astro`` divided out.
@@ -353,13 +377,13 @@ class SegmentedPolynomial(Systematics):
         if not self.mask_eclipse or self.fixed_mask:
             if redo:
                 self._detrend()
-                return dict(self.diagnostics)
+                return self.diagnostics()
             return None
         time = np.asarray(self.data.time_bmjd, dtype=float)
         inside = np.flatnonzero(a < a.min() + 0.5 * np.ptp(a))
         if np.ptp(a) > 0 and len(inside) >= 2:
             t_in, t_out = time[inside[0]], time[inside[-1]]
-            pad = self.options.get("mask_pad", 0.2) * (t_out - t_in)
+            pad = self.options.mask_pad * (t_out - t_in)
             window = (float(t_in - pad), float(t_out + pad))
             left = np.count_nonzero((time < window[0]) | (time > window[1]))
             if left < max(self._settings["min_fit"], len(time) // 3):
@@ -373,7 +397,7 @@ class SegmentedPolynomial(Systematics):
         if not redo:
             return None
         self._detrend()
-        return dict(self.diagnostics)
+        return self.diagnostics()
 
     def with_flux(self, flux: np.ndarray) -> SegmentedPolynomial:
         """The same trend with ``flux`` replaced (for the prayer bead).
@@ -382,8 +406,6 @@ class SegmentedPolynomial(Systematics):
         team reported formal fit errors), so the shifted series are fitted
         with the trend of the original data instead of being detrended again.
         """
-        import copy
-        from dataclasses import replace
         new = copy.copy(self)
         new.data = replace(self.data, flux=np.asarray(flux, dtype=float))
         return new

@@ -15,16 +15,22 @@ as Wong et al. (2014) did: the least-squares (Jacobian) error multiplied by
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from astropy.table import Table
+from scipy.optimize import least_squares
 
+from ..astro.catalogue import get_system
+from ..astro.orbit import eclipse_time_bmjd
 from ..config.reduce import ReduceSection
 from ..config.system import SystemSection
 from ..decorrelate import get_method
-from ..decorrelate.base import Systematics
+from ..decorrelate.base import MethodContext, MethodOptions, Systematics, parse_method_options
 from ..errors import InputError
+from ..photometry.table import read_photometry
 from ..seeding import rng
 from .astro_model import PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table
@@ -41,7 +47,7 @@ from .mcmc import McmcResult, run_mcmc
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
-           "resolve_system", "predicted_eclipse_bmjd"]
+           "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
 _DEFAULT_OPTIONS = ReduceSection()
@@ -54,26 +60,16 @@ def _as_table(table):
         path = os.fspath(table)
         if not os.path.exists(path):
             raise InputError(f"{path}: no such photometry table")
-        try:
-            from ..photometry.table import read_photometry
-        except ImportError:  # the photometry stage is not installed yet
-            from astropy.table import Table
-            try:
-                t = Table.read(path)
-            except Exception as exc:  # astropy raises many types for unreadable files
-                raise InputError(f"{path}: not a readable table ({exc})") from None
-        else:
-            t = read_photometry(path)
+        t = read_photometry(path)
         t.meta.setdefault("FILENAME", path)
         return t
-    if not hasattr(table, "colnames"):
+    if not isinstance(table, Table):
         raise InputError("table: expected an astropy Table or the path of a photometry table")
     return table
 
 
 def resolve_system(system: Any):
     """A PlanetSystem from None (the configured default, XO-3b), a name, or a PlanetSystem."""
-    from ..astro.catalogue import get_system
     if system is None:
         return get_system(SystemSection().name)
     if isinstance(system, str):
@@ -83,14 +79,13 @@ def resolve_system(system: Any):
 
 def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data") -> float:
     """The catalogue ephemeris's eclipse nearest the data; InputError if it is outside them."""
-    from ..astro.orbit import eclipse_time_bmjd
     t0, t1 = float(np.min(time_bmjd)), float(np.max(time_bmjd))
     t_ecl = float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
     if not t0 <= t_ecl <= t1:
         name = getattr(system, "name", "the system")
         raise InputError(f"{source}: the {name} eclipse nearest the data is at "
                          f"{t_ecl:.5f} BMJD, outside the time span {t0:.5f}-{t1:.5f} "
-                         "(wrong --system, or no eclipse in these frames)")
+                         "(wrong system, or no eclipse in these frames)")
     return t_ecl
 
 
@@ -125,21 +120,56 @@ class PreparedEpoch:
                           phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape)
 
 
+def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
+                           method_options: Mapping[str, Any] | MethodOptions | None = None,
+                           ) -> MethodOptions:
+    """The effective options of ``method``: ``[reduce.options.<method>]`` overlaid by
+    ``method_options``, checked against the method's options dataclass.
+
+    Raises
+    ------
+    InputError
+        An unknown method; an unknown or ill-typed option, naming the
+        configuration key (``reduce.options.<method>.<key>``) or the option.
+
+    Examples
+    --------
+    >>> resolve_method_options("kr-data", method_options={"k": 20}).k
+    20
+    """
+    cls = get_method(method)
+    configured = options.options.get(method, {})
+    base = parse_method_options(cls, configured, prefix=f"reduce.options.{method}")
+    if method_options is None:
+        return base
+    if isinstance(method_options, MethodOptions):
+        return parse_method_options(cls, method_options)
+    return parse_method_options(cls, {**base.to_dict(), **dict(method_options)})
+
+
 def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
-                  epoch=None, pmap=None, method_options=None) -> PreparedEpoch:
-    """Read the table, keep the good frames, build the method and predict the eclipse time."""
+                  epoch=None, seed: int = 0, method_options=None,
+                  resources: Mapping[str, Any] | None = None) -> PreparedEpoch:
+    """Read the table, keep the good frames, build the method and predict the eclipse time.
+
+    The method gets its options (:func:`resolve_method_options`) and a
+    :class:`~eclipsebench.decorrelate.base.MethodContext` with the run seed,
+    the epoch and the resources it declares, loaded by its ``load_resources``
+    from ``resources`` (paths or loaded objects).
+    """
     table = _as_table(table)
     source = str((table.meta or {}).get("FILENAME", "the photometry table"))
     cls = get_method(method)
+    method_opts = resolve_method_options(method, options, method_options)
     data = epoch_data_from_table(table, radius_px=options.radius_px or None, stamp=options.stamp)
     system = resolve_system(system)
     t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source)
-    sys_options = dict(method_options or {})
-    if pmap is not None:
-        sys_options["pmap"] = os.fspath(pmap)
-    systematics = cls(data, **sys_options)
+    epoch_number = _epoch_number(table, epoch)
+    context = MethodContext(seed=int(seed), epoch=epoch_number or 0, method=method,
+                            resources=cls.load_resources(data, dict(resources or {})))
+    systematics = cls(data, method_opts, context=context)
     return PreparedEpoch(table=table, systematics=systematics, system=system,
-                         epoch=_epoch_number(table, epoch), t_ecl_predicted_bmjd=t_pred,
+                         epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
                          source=source, n_frames=len(data))
 
 
@@ -184,6 +214,8 @@ class EpochResult:
     mcmc: dict[str, Any] | None
     system: str
     seed: int
+    options: dict[str, Any]
+    diagnostics: dict[str, Any]
     lightcurve: dict[str, np.ndarray] = field(repr=False, compare=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -213,6 +245,8 @@ class EpochResult:
                 out[f"{name}_err"] = self.param_errors[name]
         if self.mcmc is not None:
             out.update({f"mcmc_{k}": v for k, v in self.mcmc.items()})
+        out["options"] = dict(self.options)
+        out["diagnostics"] = dict(self.diagnostics)
         return out
 
     def lightcurve_table(self):
@@ -258,8 +292,8 @@ def _extra_depth_variance(systematics: Systematics, astro_model: AstroModel,
 
 
 def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
-                 seed: int = 0, epoch: int | None = None, pmap=None,
-                 method_options: dict[str, Any] | None = None) -> EpochResult:
+                 seed: int = 0, epoch: int | None = None, method_options=None,
+                 resources: Mapping[str, Any] | None = None, pmap=None) -> EpochResult:
     """Fit one epoch with one method and estimate the depth and its uncertainty.
 
     Parameters
@@ -273,13 +307,18 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     system : str, PlanetSystem or None
         The planet (default: the configured system, XO-3b).
     seed : int
-        Run seed; the MCMC stream is ``rng(seed, "reduce", epoch, method, "mcmc")``.
+        Run seed; every stream of the fit and of the method is
+        ``rng(seed, "reduce", epoch, method, ...)`` (the MCMC's ends in ``"mcmc"``).
     epoch : int or None
         Epoch number (default: the table's ``EPOCH`` metadata).
-    pmap : path or None
-        Calibration set for ``kr-pmap`` (passed to the method as ``pmap``).
-    method_options : dict or None
-        Method-specific keyword options.
+    method_options : Mapping or MethodOptions, optional
+        The method's options, over those of ``options.options[method]``
+        (``[reduce.options.<method>]``).
+    resources : Mapping, optional
+        Inputs a method declares in its ``resources`` (``{"pmap": path or
+        loaded map}`` for ``kr-pmap``), loaded by the method's ``load_resources``.
+    pmap : path, CalibrationSet or GriddedPmap, optional
+        Shorthand for ``resources={"pmap": pmap}``.
 
     Returns
     -------
@@ -291,9 +330,16 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         Missing columns, all frames flagged, an eclipse outside the time span,
         an unknown method or option.
     """
-    prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, pmap=pmap,
-                         method_options=method_options)
+    prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
+                         method_options=method_options, resources=_resources(resources, pmap))
     return fit_prepared(prep, method, options=options, seed=seed)
+
+
+def _resources(resources: Mapping[str, Any] | None, pmap) -> dict[str, Any]:
+    out = dict(resources or {})
+    if pmap is not None:
+        out["pmap"] = pmap
+    return out
 
 
 def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
@@ -366,7 +412,20 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
         sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
         mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
+        options=systematics.options.to_dict(), diagnostics=_jsonable(systematics.diagnostics()),
         lightcurve=lightcurve)
+
+
+def _jsonable(obj: Any) -> Any:
+    """Diagnostics as plain JSON types (numpy scalars and arrays become numbers and lists)."""
+    if isinstance(obj, Mapping):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, np.ndarray)):
+        return [_jsonable(v) for v in np.asarray(obj, dtype=object).tolist()] \
+            if isinstance(obj, np.ndarray) else [_jsonable(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
 
 
 # --------------------------------------------------------------------------- phase models
@@ -395,8 +454,8 @@ class PhaseSelection:
 
 
 def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS,
-                       system=None, seed: int = 0, epoch: int | None = None, pmap=None,
-                       method_options: dict[str, Any] | None = None,
+                       system=None, seed: int = 0, epoch: int | None = None, method_options=None,
+                       resources: Mapping[str, Any] | None = None, pmap=None,
                        phases: tuple[str, ...] = PHASE_MODELS) -> PhaseSelection:
     """Fit each phase model by least squares and report BIC and AIC for each.
 
@@ -404,8 +463,8 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
     Jacobian error times ``max(1, beta_red)`` (no prayer bead or MCMC, to keep
     the comparison fast).
     """
-    prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, pmap=pmap,
-                         method_options=method_options)
+    prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
+                         method_options=method_options, resources=_resources(resources, pmap))
     rows = []
     for phase in phases:
         res = fit_prepared(prep, method, options=options, seed=seed, phase=phase, errors=False)
@@ -496,8 +555,8 @@ class _JointProblem:
 
 
 def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
-                 seed: int = 0, epochs=None, pmap=None,
-                 method_options: dict[str, Any] | None = None) -> JointResult:
+                 seed: int = 0, epochs=None, method_options=None,
+                 resources: Mapping[str, Any] | None = None, pmap=None) -> JointResult:
     """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
 
     Each epoch is first fitted alone (its solution starts the joint fit), then
@@ -505,8 +564,6 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     error times ``max(1, beta_red)``, with ``beta_red`` the mean of the
     epochs' red-noise factors.
     """
-    from scipy.optimize import least_squares
-
     tables = list(tables)
     if not tables:
         raise InputError("reduce_joint: no photometry tables given")
@@ -515,8 +572,9 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         raise InputError("reduce_joint: give one epoch number per table")
     problems, fits, preps = [], [], []
     for table, ep in zip(tables, epochs, strict=True):
-        prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, pmap=pmap,
-                             method_options=method_options)
+        prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, seed=seed,
+                             method_options=method_options,
+                             resources=_resources(resources, pmap))
         astro_model = prep.astro_model(options)
         theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
         fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,
