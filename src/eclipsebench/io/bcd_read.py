@@ -148,8 +148,7 @@ def find_bcd_files(input_dir: str | os.PathLike, channel: int | None = None) -> 
     elif not root.is_dir():
         raise InputError(f"{root}: no such folder (expected a folder of IRAC *_bcd.fits files)")
     else:
-        files = sorted((p for p in root.rglob("SPITZER_I*_bcd.fits") if BCD_NAME.match(p.name)),
-                       key=lambda p: p.name)
+        files = sorted(_walk_bcd(root), key=lambda p: p.name)
     if channel is not None:
         files = [p for p in files if int(BCD_NAME.match(p.name)["ch"]) == int(channel)]
     if not files:
@@ -162,16 +161,73 @@ def find_bcd_files(input_dir: str | os.PathLike, channel: int | None = None) -> 
     return files
 
 
-def _card(header: fits.Header, key: str, path: Path, kind=float):
-    if key not in header:
-        raise DataError(path, f"header lacks {key}")
-    value = header[key]
+def _walk_bcd(root: Path) -> list[Path]:
+    """Every archive-named BCD file under ``root``; an unreadable folder is an error."""
+    def refuse(exc: OSError) -> None:
+        where = exc.filename or root
+        if isinstance(exc, PermissionError):
+            raise InputError(f"{where}: permission denied (cannot list this folder of IRAC "
+                             "BCD files)") from None
+        raise InputError(f"{where}: cannot list this folder ({exc.strerror or exc})") from None
+
+    if not os.access(root, os.R_OK | os.X_OK):
+        refuse(PermissionError(13, "Permission denied", str(root)))
+    found = []
+    for folder, dirs, names in os.walk(root, onerror=refuse, followlinks=True):
+        dirs.sort()
+        found.extend(Path(folder) / n for n in names if BCD_NAME.match(n))
+    return found
+
+
+_MISSING = object()
+_EXPECTED = {float: "a finite number", int: "an integer"}
+
+
+def _card_text(header: fits.Header, key: str) -> str:
+    """The value as written in the card, for messages about values astropy cannot parse."""
     try:
-        out = kind(value)
-    except (TypeError, ValueError):
-        raise DataError(path, f"header {key} = {value!r} is not a number") from None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            image = header.cards[key]._image or header.cards[key].image
+    except Exception:
+        return "?"
+    text = image[10:] if image[8:10] == "= " else image[8:]
+    return text.split("/", 1)[0].strip() or "?"
+
+
+def _card(header: fits.Header, key: str, path: Path, kind=float, default=_MISSING):
+    """Header value ``key`` as ``kind`` (float or int), or ``default`` when absent.
+
+    Raises
+    ------
+    DataError
+        Naming the file and the key when the card is missing (and no default),
+        unparsable (``BMJD_OBS = NaN``), not a number or not finite.
+    """
+    expected = _EXPECTED.get(kind, kind.__name__)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # astropy "fixes" some bad cards with a warning
+            present = key in header
+            value = header[key] if present else None
+    except Exception:  # astropy's VerifyError or VerifyWarning for an unparsable card
+        raise DataError(path, f"header {key} = {_card_text(header, key)}: unparsable card; "
+                              f"expected {expected}") from None
+    if not present:
+        if default is _MISSING:
+            raise DataError(path, f"header lacks {key}")
+        return default
+    try:
+        if isinstance(value, bool) or isinstance(value, str) and kind is int:
+            raise ValueError
+        number = float(value)
+        out = kind(number)
+        if kind is int and out != number:
+            raise ValueError
+    except (TypeError, ValueError, OverflowError):
+        raise DataError(path, f"header {key} = {value!r}: expected {expected}") from None
     if kind is float and not math.isfinite(out):
-        raise DataError(path, f"header {key} = {value!r} is not finite")
+        raise DataError(path, f"header {key} = {value!r}: expected {expected}")
     return out
 
 
@@ -245,19 +301,26 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
         readmode = str(header.get("READMODE", "SUB" if subarray else "FULL")).strip().upper()
         if subarray != (readmode == "SUB"):
             raise DataError(path, f"READMODE = {readmode!r} does not match the data shape {shape}")
-        chnl = int(header.get("CHNLNUM", m["ch"]))
+        chnl = _card(header, "CHNLNUM", path, int, int(m["ch"]))
         if chnl != int(m["ch"]):
             raise DataError(path, f"CHNLNUM = {chnl} but the name says channel {m['ch']}")
-        aorkey = int(header.get("AORKEY", m["aorkey"]))
+        aorkey = _card(header, "AORKEY", path, int, int(m["aorkey"]))
         if aorkey != int(m["aorkey"]):
             raise DataError(path, f"AORKEY = {aorkey} but the name says {m['aorkey']}")
-        sample_s = float(header.get("SAMPTIME", 0.01 if subarray else 0.2))
-        fowler = header.get("AFOWLNUM")
-        wait = header.get("AWAITPER")
+        sample_s = _card(header, "SAMPTIME", path, float, 0.01 if subarray else 0.2)
+        if sample_s <= 0:
+            raise DataError(path, f"header SAMPTIME = {sample_s}: expected a positive number")
+        fowler = _card(header, "AFOWLNUM", path, int, None)
+        wait = _card(header, "AWAITPER", path, int, None)
         if fowler is None or wait is None:  # EXPTIME = (FN + WT) dt, FRAMTIME = (2 FN + WT) dt
             fowler = round((values["FRAMTIME"] - values["EXPTIME"]) / sample_s)
             wait = round(values["EXPTIME"] / sample_s) - fowler
-        epoch = header.get("EPOCH")
+        epoch = _card(header, "EPOCH", path, int, None)
+        expid = _card(header, "EXPID", path, int, int(m["expid"]))
+        if expid != int(m["expid"]):
+            raise DataError(path, f"EXPID = {expid} but the name says {m['expid']} (a copied "
+                                  "or renamed cube?)")
+        dce = _card(header, "DCENUM", path, int, int(m["dce"]))
         simulate = bool(header.get("SIMULATE", False))
         timesys = str(header.get("TIMESYS", "TDB" if simulate else "UTC")).strip().upper()
         if timesys not in ("UTC", "TDB"):
@@ -265,18 +328,19 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
         tdb = timesys == "TDB"
         interval = values["FRAMTIME"]
         if n_frames > 1 and "AINTBEG" in header and "ATIMEEND" in header:
-            spread = (float(header["ATIMEEND"]) - float(header["AINTBEG"]) - values["FRAMTIME"])
+            spread = (_card(header, "ATIMEEND", path) - _card(header, "AINTBEG", path)
+                      - values["FRAMTIME"])
             candidate = spread / (n_frames - 1)
             if values["FRAMTIME"] <= candidate < 1.1 * values["FRAMTIME"]:
                 interval = candidate
         return BcdInfo(
-            path=path, channel=chnl, aorkey=aorkey, expid=int(header.get("EXPID", m["expid"])),
-            dce=int(header.get("DCENUM", m["dce"])), n_frames=n_frames, ny=ny, nx=nx,
+            path=path, channel=chnl, aorkey=aorkey, expid=expid,
+            dce=dce, n_frames=n_frames, ny=ny, nx=nx,
             subarray=subarray, bmjd_obs=values["BMJD_OBS"], tdb=tdb,
             framtime_s=values["FRAMTIME"], exptime_s=values["EXPTIME"], gain=values["GAIN"],
             fluxconv=values["FLUXCONV"], fowler=max(int(fowler), 1), wait=max(int(wait), 0),
-            read_noise_e=float(header.get("RONOISE", 9.4)), frame_interval_s=interval,
-            sample_time_s=sample_s, epoch=int(epoch) if epoch is not None else None, simulate=simulate,
+            read_noise_e=_card(header, "RONOISE", path, float, 9.4), frame_interval_s=interval,
+            sample_time_s=sample_s, epoch=epoch, simulate=simulate,
             extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD")})
 
 
@@ -344,6 +408,32 @@ def read_bcd(path: str | os.PathLike | BcdInfo, *, unc: bool = False,
     return cube
 
 
+def _refuse_duplicates(infos: list[BcdInfo], by_aor: dict[int, list[BcdInfo]]) -> None:
+    """Refuse a cube present twice: same AORKEY/EXPID/DCE, or overlapping frame times.
+
+    Within an AOR (files in time order) a cube must start after the previous
+    cube's last frame has started; a copied cube (same BMJD_OBS) would
+    otherwise put duplicated, or backwards, times into the table.
+    """
+    seen: dict[tuple[int, int, int, int], Path] = {}
+    for info in infos:
+        key = (info.channel, info.aorkey, info.expid, info.dce)
+        if key in seen:
+            raise DataError(info.path, f"duplicate: the same cube (AORKEY {info.aorkey}, EXPID "
+                                       f"{info.expid}, DCE {info.dce}) as {seen[key].name}; "
+                                       "remove one of them")
+        seen[key] = info.path
+    for files in by_aor.values():
+        for prev, cur in zip(files, files[1:], strict=False):
+            interval = prev.frame_interval_s if prev.frame_interval_s > 0 else prev.framtime_s
+            last_start = prev.bmjd_obs + (prev.n_frames - 1) * interval / SECONDS_PER_DAY
+            if cur.bmjd_obs < last_start or cur.bmjd_obs == prev.bmjd_obs:
+                raise DataError(cur.path, f"duplicate: BMJD_OBS = {cur.bmjd_obs!r} falls inside "
+                                          f"the frames of {prev.path.name} (BMJD_OBS = "
+                                          f"{prev.bmjd_obs!r}); expected cubes that follow "
+                                          "each other in time (a copied cube?)")
+
+
 def group_epochs(infos: list[BcdInfo], gap_days: float = 1.0) -> list[Epoch]:
     """Group files into AORs and AORs into epochs, each in time order.
 
@@ -364,6 +454,7 @@ def group_epochs(infos: list[BcdInfo], gap_days: float = 1.0) -> list[Epoch]:
         by_aor.setdefault(info.aorkey, []).append(info)
     for files in by_aor.values():
         files.sort(key=lambda i: (i.bmjd_obs, i.expid, i.dce))
+    _refuse_duplicates(infos, by_aor)
     aors = sorted(by_aor, key=lambda a: by_aor[a][0].bmjd_obs)
     has_epoch = [i.epoch is not None for i in infos]
     if any(has_epoch) and not all(has_epoch):

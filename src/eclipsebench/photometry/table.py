@@ -4,6 +4,12 @@ Columns and metadata are the contract of ``docs/contracts.md``. JSON-valued
 metadata (``INPUTS``, ``OPTIONS``, ``AORKEYS``, ``FLAGBITS``, ``FLAGCNT``) are
 stored as JSON strings in the FITS header and decoded by
 :func:`read_photometry`.
+
+FITS header values must be printable ASCII, but provenance paths (``INROOT``,
+``SIMDIR``) may hold spaces and any letters. A string value that is not
+printable ASCII is stored JSON-escaped (``"/data/\u00fc"``, quotes included)
+and its key listed in the JSON list ``ESCAPED``; :func:`read_photometry`
+decodes it back.
 """
 
 from __future__ import annotations
@@ -29,6 +35,8 @@ REQUIRED_COLUMNS = ("time_bmjd", "aorkey", "expid", "frame", "x", "y", "x_gauss"
                     "noise_pixels", "width_x", "width_y", "background", "flux", "flux_err",
                     "stamp3", "stamp5", "flag")
 JSON_KEYS = ("INPUTS", "OPTIONS", "AORKEYS", "FLAGBITS", "FLAGCNT")
+ESCAPED_KEY = "ESCAPED"
+_PRINTABLE_ASCII = re.compile(r"^[\x20-\x7e]*$")
 
 _STRUCTURAL = re.compile(r"^(XTENSION|BITPIX|NAXIS\d*|PCOUNT|GCOUNT|TFIELDS|EXTNAME|CHECKSUM|"
                          r"DATASUM|COMMENT|HISTORY|T(TYPE|FORM|UNIT|DIM|NULL|SCAL|ZERO|DISP)\d+)$")
@@ -87,15 +95,23 @@ def make_table(columns: dict[str, np.ndarray], meta: dict) -> Table:
 
 def _header_cards(meta: dict) -> list[tuple[str, object]]:
     cards = []
+    escaped = []
     for key, value in meta.items():
         key = str(key).upper()
+        if key == ESCAPED_KEY:
+            continue
         if key in JSON_KEYS or isinstance(value, (list, tuple, dict)):
-            value = json.dumps(value, sort_keys=True, default=str)
+            value = json.dumps(value, sort_keys=True, default=str)  # ASCII: non-ASCII escaped
         elif isinstance(value, np.generic):
             value = value.item()
         elif value is None:
             continue
+        elif isinstance(value, str) and not _PRINTABLE_ASCII.match(value):
+            value = json.dumps(value)
+            escaped.append(key)
         cards.append((key if len(key) <= 8 else f"HIERARCH {key}", value))
+    if escaped:
+        cards.append((f"HIERARCH {ESCAPED_KEY}", json.dumps(escaped)))
     return cards
 
 
@@ -158,9 +174,14 @@ def read_photometry(path: str | os.PathLike) -> Table:
     missing = [c for c in REQUIRED_COLUMNS if c not in table.colnames]
     if missing:
         raise DataError(path, f"photometry table lacks columns {missing}")
+    escaped = table.meta.pop(ESCAPED_KEY, None)
+    try:
+        escaped = set(json.loads(escaped)) if isinstance(escaped, str) else set()
+    except (json.JSONDecodeError, TypeError):
+        escaped = set()
     meta = {}
     for key, value in table.meta.items():
-        if key in JSON_KEYS and isinstance(value, str):
+        if (key in JSON_KEYS or key in escaped) and isinstance(value, str):
             try:
                 value = json.loads(value)
             except json.JSONDecodeError:
