@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import median_filter
 
-__all__ = ["FLAG_BITS", "FLAG_DESCRIPTIONS", "flag_counts", "running_median", "nanmedian0",
-           "robust_sigma",
-           "outliers", "reject_cosmic_rays"]
+__all__ = ["FLAG_BITS", "FLAG_DESCRIPTIONS", "FAULT_BITS", "flag_counts", "frame_faults",
+           "keep_fault_reasons", "running_median", "nanmedian0", "robust_sigma", "outliers",
+           "reject_cosmic_rays"]
 
 #: bit value of each reason a frame is not good
 FLAG_BITS = {
@@ -24,6 +24,8 @@ FLAG_BITS = {
     "flux_outlier": 32,
     "fit_failed": 64,
     "no_star": 128,
+    "constant": 256,
+    "negative": 512,
 }
 FLAG_DESCRIPTIONS = {
     "first_frame": "first frame of a subarray cube (first-frame effect), dropped by default",
@@ -35,8 +37,13 @@ FLAG_DESCRIPTIONS = {
                         "deviates from its running median by more than outlier_sigma",
     "flux_outlier": "flux deviates from its running median by more than outlier_sigma",
     "fit_failed": "the Gaussian centroid fit did not converge",
-    "no_star": "no finite brightest pixel, non-positive net flux, or non-finite measurements",
+    "no_star": "no finite brightest pixel, non-positive net flux, or non-finite measurements "
+               "(an all-zero frame too)",
+    "constant": "every finite pixel has the same non-zero value (a frame that holds no image)",
+    "negative": "the frame's strongest feature points down: a negated (sign-flipped) image",
 }
+#: the reasons :func:`frame_faults` gives; such frames stay out of every running statistic
+FAULT_BITS = FLAG_BITS["no_star"] | FLAG_BITS["constant"] | FLAG_BITS["negative"]
 
 
 def flag_counts(flag: np.ndarray) -> dict[str, int]:
@@ -46,6 +53,59 @@ def flag_counts(flag: np.ndarray) -> dict[str, int]:
     out["good"] = int(np.count_nonzero(flag == 0))
     out["total"] = int(flag.size)
     return out
+
+
+def frame_faults(frames: np.ndarray) -> np.ndarray:
+    """Flag bits of frames that cannot hold a star image, judged before any cleaning.
+
+    ``no_star`` for an all-zero frame, ``constant`` for a frame whose finite
+    pixels all have one non-zero value, ``negative`` for a negated image (its
+    finite pixels reach farther below their median than twice as far above
+    it). Frames without a finite pixel get 0 here (the ``nonfinite`` flag
+    covers them). Such frames must stay out of the running statistics that
+    judge their neighbours (cosmic rays, outliers).
+
+    Examples
+    --------
+    >>> star = np.zeros((3, 5, 5)); star[:, 2, 2] = 100.0; star += 1.0
+    >>> star[1] = 0.0; star[2] = -star[2]
+    >>> frame_faults(star).tolist()
+    [0, 128, 512]
+    """
+    frames = np.asarray(frames)
+    n = frames.shape[0]
+    flat = frames.reshape(n, -1).astype(np.float64, copy=False)
+    finite = np.isfinite(flat)
+    out = np.zeros(n, dtype=np.int64)
+    any_finite = finite.any(axis=1)
+    if not any_finite.any():
+        return out
+    hi = np.where(finite, flat, -np.inf).max(axis=1)
+    lo = np.where(finite, flat, np.inf).min(axis=1)
+    all_finite = finite.all(axis=1)
+    med = np.full(n, np.nan)
+    med[all_finite] = np.median(flat[all_finite], axis=1)
+    partial = any_finite & ~all_finite
+    if partial.any():
+        med[partial] = np.nanmedian(np.where(finite[partial], flat[partial], np.nan), axis=1)
+    flat_frame = any_finite & (hi == lo)
+    out[flat_frame & (hi == 0)] = FLAG_BITS["no_star"]
+    out[flat_frame & (hi != 0)] = FLAG_BITS["constant"]
+    with np.errstate(invalid="ignore"):
+        negated = any_finite & ~flat_frame & ((med - lo) > 2.0 * (hi - med))
+    out[negated] = FLAG_BITS["negative"]
+    return out
+
+
+def keep_fault_reasons(flag: np.ndarray, faults: np.ndarray) -> np.ndarray:
+    """``flag`` with each faulty frame's reason being its fault alone (plus ``first_frame``).
+
+    Measuring a frame without an image sets other bits too (``no_star``,
+    ``nonfinite``); the fault from :func:`frame_faults` is the reason.
+    """
+    flag = np.asarray(flag)
+    faults = np.asarray(faults)
+    return np.where(faults != 0, (flag & FLAG_BITS["first_frame"]) | faults, flag)
 
 
 def running_median(values: np.ndarray, window: int, valid: np.ndarray | None = None) -> np.ndarray:

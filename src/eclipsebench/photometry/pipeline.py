@@ -31,7 +31,15 @@ from ..io.bcd_read import (
     read_bcd_header,
 )
 from ..progress import get_logger
-from .clean import FLAG_BITS, flag_counts, nanmedian0, outliers, reject_cosmic_rays
+from .clean import (
+    FLAG_BITS,
+    flag_counts,
+    frame_faults,
+    keep_fault_reasons,
+    nanmedian0,
+    outliers,
+    reject_cosmic_rays,
+)
 from .measure import measure_stack
 from .table import make_table
 
@@ -136,6 +144,7 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
     opt = options
     n, ny, nx = stack.frames_e.shape
     flag = np.zeros(n, dtype=np.int64)
+    faults = frame_faults(stack.frames_e)  # no image: kept out of the neighbours' statistics
     if opt.drop_first_frame:
         flag[stack.first] |= FLAG_BITS["first_frame"]
     rmax = max(max(opt.radii_px), opt.radius_px)
@@ -149,7 +158,7 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
         y0, y1 = max(stack.star_y - reach, 0), min(stack.star_y + reach + 1, ny)
         x0, x1 = max(stack.star_x - reach, 0), min(stack.star_x + reach + 1, nx)
         cleaned, hits = reject_cosmic_rays(frames[:, y0:y1, x0:x1], opt.cosmic_ray_window,
-                                           opt.cosmic_ray_sigma, valid=~stack.first,
+                                           opt.cosmic_ray_sigma, valid=~stack.first & (faults == 0),
                                            read_var_e2=2.0 * stack.read_noise_e**2 / stack.fowler)
         if hits.any():
             frames[:, y0:y1, x0:x1] = cleaned  # the stack is ours: repair in place
@@ -176,6 +185,7 @@ def measure_aor(stack: AorStack, options: PhotometrySection, *, stamp_x: int,
     elif opt.centroid == "lsq-asym":
         failed |= ~m["lsq_ok"]
     flag[failed & ~bad] |= FLAG_BITS["fit_failed"]
+    flag = keep_fault_reasons(flag, faults)
     if opt.outlier_window > 0:
         ok = flag == 0
         # true pointing motion (drifts, excursions) moves both centroids alike; a bad
