@@ -10,7 +10,7 @@ import cloudpickle
 import numpy as np
 import pytest
 
-from eclipsebench.challenge.engine import Task, TaskFailed, run_tasks
+from eclipsebench.challenge.engine import Task, TaskFailed, run_tasks, stamp_path
 from eclipsebench.errors import InputError
 from eclipsebench.io.atomic import write_json
 from eclipsebench.seeding import rng
@@ -141,3 +141,37 @@ def test_dask_workers_keep_glibc_malloc_dynamic(tmp_path):
     run_tasks([Task("env", "env", record_environment, (str(out),), (out,))], workers=2)
     env = json.loads(out.read_text())
     assert env == {"MALLOC_TRIM_THRESHOLD_": None, "OPENBLAS_NUM_THREADS": "1", "profile": False}
+
+
+def test_truncated_or_edited_outputs_are_redone(tmp_path):
+    tasks = graph(tmp_path)
+    run_tasks(tasks, workers=1)
+    first = (tmp_path / "total.json").read_bytes()
+    text = (tmp_path / "n1.json").read_text()
+    (tmp_path / "n1.json").write_text(text[:5])                  # truncated
+    (tmp_path / "n3.json").write_text(text)                      # valid, but not what n/3 wrote
+    rep = run_tasks(tasks, workers=1)
+    assert sorted(rep.ran) == ["n/1", "n/3", "total"]
+    assert (tmp_path / "total.json").read_bytes() == first
+    assert stamp_path(tasks[-1]).is_file()
+
+
+def test_a_result_made_from_other_inputs_is_redone(tmp_path):
+    tasks = graph(tmp_path)
+    run_tasks(tasks, workers=1)
+    # n/1 redone elsewhere with another seed: whole and stamped, but total was made from
+    # the old n1.json, so total (only) is redone
+    other = graph(tmp_path, seed=8)[1]
+    (tmp_path / "n1.json").unlink()
+    run_tasks([other], workers=1)
+    rep = run_tasks(tasks, workers=1)
+    assert rep.ran == ["total"]
+
+
+def test_a_check_refusing_the_outputs_redoes_the_task(tmp_path):
+    out = tmp_path / "a.json"
+    task = Task("a", "x", make_numbers, (str(out), 1, 1), (out,))
+    run_tasks([task], workers=1)
+    refusing = Task("a", "x", make_numbers, (str(out), 1, 1), (out,), check=lambda p: False)
+    assert run_tasks([refusing], workers=1).ran == ["a"]
+    assert run_tasks([task], workers=1).ran == []

@@ -1,11 +1,26 @@
 """Run a graph of file-producing tasks on Dask, resuming from what is on disk.
 
 A :class:`Task` is a module-level function, its arguments, the files it
-writes (atomically) and the tasks it needs. A task whose output files all
-exist is done and is never run again, so rerunning the same graph after an
-interruption (Ctrl-C, a killed worker, a killed process) redoes only what is
-missing. Results pass between tasks through those files, never through
-memory, so the outcome cannot depend on where or in which order tasks ran.
+writes (atomically) and the tasks it needs. Results pass between tasks
+through those files, never through memory, so the outcome cannot depend on
+where or in which order tasks ran.
+
+Resuming. When a task finishes, the engine writes its *stamp* beside its
+last output (``.<name>.task.json``): the SHA-256 of each output's bytes and
+of the inputs it was made from (the bytes of its dependencies' outputs). A
+task is done, and is not run again, only when
+
+* every output exists and its bytes match the stamp (a truncated or edited
+  file is redone),
+* the inputs recorded in the stamp are the current ones (a result made from
+  a photometry table that has since been redone is redone),
+* the task's own ``check`` accepts the outputs (e.g. the JSON parses and has
+  the fields of its schema; the cubes an AOR's marker stands for exist),
+* and every task it depends on is done.
+
+So rerunning the same graph after an interruption (Ctrl-C, a killed worker,
+a killed process, a truncated file) redoes exactly what is missing or not
+trustworthy, and its dependants.
 
 Executors:
 
@@ -20,6 +35,9 @@ Executors:
 
 from __future__ import annotations
 
+import hashlib
+import json
+import logging
 import os
 import socket
 import time
@@ -27,10 +45,18 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numba
+from threadpoolctl import threadpool_limits
+
 from ..errors import InputError
+from ..io.atomic import write_json
 from ..progress import get_logger, progress
 
-__all__ = ["Task", "TaskTiming", "RunReport", "TaskFailed", "run_tasks"]
+__all__ = ["Task", "TaskTiming", "RunReport", "TaskFailed", "run_tasks", "stamp_path",
+           "is_done"]
+
+#: Suffix of a task's stamp, written beside its last output as ``.<name>.task.json``.
+STAMP_SUFFIX = ".task.json"
 
 log = get_logger("challenge")
 
@@ -51,9 +77,13 @@ class Task:
     args : tuple
         Picklable arguments.
     outputs : tuple of Path
-        The task is done when all of them exist.
+        The files it writes (see the module docstring for when it is done).
     deps : tuple of str
         Keys of the tasks that must be done first.
+    check : callable, optional
+        ``check(*outputs) -> bool``, run in the calling process on resume:
+        whether the outputs are whole and of the expected schema (beyond the
+        stamp's byte hashes). ``None``: the stamp alone decides.
     """
 
     key: str
@@ -62,10 +92,74 @@ class Task:
     args: tuple = ()
     outputs: tuple[Path, ...] = ()
     deps: tuple[str, ...] = ()
+    check: Callable[..., bool] | None = None
 
-    def done(self) -> bool:
-        """Whether every output file exists."""
-        return bool(self.outputs) and all(Path(p).exists() for p in self.outputs)
+
+def stamp_path(task: Task) -> Path:
+    """Where ``task``'s stamp lives: ``.<name>.task.json`` beside its last output."""
+    last = Path(task.outputs[-1])
+    return last.with_name(f".{last.name}{STAMP_SUFFIX}")
+
+
+class _Hashes:
+    """SHA-256 of files, computed once per run (forgotten when a task rewrites them)."""
+
+    def __init__(self) -> None:
+        self._memo: dict[Path, str] = {}
+
+    def of(self, path: Path) -> str:
+        path = Path(path)
+        digest = self._memo.get(path)
+        if digest is None:
+            h = hashlib.sha256()
+            with open(path, "rb") as fh:
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    h.update(block)
+            digest = self._memo[path] = h.hexdigest()
+        return digest
+
+    def forget(self, paths: Iterable[Path]) -> None:
+        for p in paths:
+            self._memo.pop(Path(p), None)
+
+
+def _inputs_digest(task: Task, by_key: dict[str, Task], hashes: _Hashes) -> str:
+    """SHA-256 over the bytes of every output of every dependency, in order."""
+    h = hashlib.sha256()
+    for d in task.deps:
+        for p in by_key[d].outputs:
+            h.update(hashes.of(p).encode())
+    return h.hexdigest()
+
+
+def _write_stamp(task: Task, by_key: dict[str, Task], hashes: _Hashes) -> None:
+    hashes.forget(task.outputs)
+    write_json(stamp_path(task), {
+        "task": task.key,
+        "inputs_sha256": _inputs_digest(task, by_key, hashes),
+        "outputs_sha256": {Path(p).name: hashes.of(p) for p in task.outputs}})
+
+
+def is_done(task: Task, by_key: dict[str, Task], hashes: _Hashes | None = None) -> bool:
+    """Whether ``task``'s outputs can be trusted as they are (its dependencies aside)."""
+    hashes = hashes or _Hashes()
+    if not task.outputs or not all(Path(p).is_file() for p in task.outputs):
+        return False
+    try:
+        stamp = json.loads(stamp_path(task).read_text())
+        recorded = stamp["outputs_sha256"]
+        if stamp["task"] != task.key or list(recorded) != [Path(p).name for p in task.outputs]:
+            return False
+        if any(recorded[Path(p).name] != hashes.of(p) for p in task.outputs):
+            return False
+        if stamp["inputs_sha256"] != _inputs_digest(task, by_key, hashes):
+            return False
+    except (OSError, ValueError, KeyError, TypeError):
+        return False  # no stamp, an unreadable one or a dependency output missing
+    try:
+        return task.check is None or bool(task.check(*task.outputs))
+    except Exception:  # a check that cannot read the file: not trusted, redone
+        return False
 
 
 @dataclass(frozen=True)
@@ -165,9 +259,6 @@ def _call(func: Callable[..., object], args: tuple) -> tuple[float, float, str]:
     # Every task runs single-threaded wherever it runs (in this process, a local
     # worker or a remote scheduler's): multi-threaded BLAS splits sums differently,
     # and the same seed must give the same bytes with any number of workers.
-    import numba
-    from threadpoolctl import threadpool_limits
-
     previous = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
@@ -231,7 +322,11 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
     by_key = _check_graph(tasks)
     order = _order(by_key)
     report = RunReport(started_unix=time.time())
-    done = {k for k in order if by_key[k].done()}
+    hashes = _Hashes()
+    done: set[str] = set()
+    for k in order:  # dependencies first: a task is done only if all it needs is
+        if all(d in done for d in by_key[k].deps) and is_done(by_key[k], by_key, hashes):
+            done.add(k)
     report.skipped = [k for k in order if k in done]
     todo = [k for k in order if k not in done]
     t0 = time.perf_counter()
@@ -242,9 +337,9 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
     try:
         if scheduler is None and workers <= 1:
             report.executor = "in-process (synchronous)"
-            failures = _run_sync(by_key, todo, done, bars, report, keep_going)
+            failures = _run_sync(by_key, todo, done, bars, report, keep_going, hashes)
         else:
-            failures = _run_dask(by_key, todo, done, bars, report, keep_going,
+            failures = _run_dask(by_key, todo, done, bars, report, keep_going, hashes,
                                  workers=workers, scheduler=scheduler)
     finally:
         bars.close()
@@ -261,13 +356,15 @@ def _blocked(task: Task, failed: set[str]) -> bool:
     return any(d in failed for d in task.deps)
 
 
-def _finish(task: Task) -> None:
+def _finish(task: Task, by_key: dict[str, Task], hashes: _Hashes) -> None:
     missing = [str(p) for p in task.outputs if not Path(p).exists()]
     if missing:
         raise RuntimeError(f"task {task.key} finished without writing {', '.join(missing)}")
+    _write_stamp(task, by_key, hashes)
 
 
-def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseException]:
+def _run_sync(by_key, todo, done, bars, report, keep_going,
+              hashes) -> dict[str, BaseException]:
     failures: dict[str, BaseException] = {}
     for key in todo:
         task = by_key[key]
@@ -275,7 +372,7 @@ def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseExc
             continue  # a dependency failed: not run
         try:
             report.record(key, _call(task.func, task.args))
-            _finish(task)
+            _finish(task, by_key, hashes)
         except Exception as exc:  # collected and re-raised after the others ran
             failures[key] = exc
             log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
@@ -289,8 +386,8 @@ def _run_sync(by_key, todo, done, bars, report, keep_going) -> dict[str, BaseExc
 
 
 def _open_client(workers: int, scheduler: str | None):
-    import logging
-
+    # dask/distributed: imported only when a cluster is used (seconds to import)
+    from dask import config as dask_config
     from distributed import Client, LocalCluster
 
     # Dask's own INFO lines (nannies, plugins) would drown the progress bars.
@@ -312,18 +409,16 @@ def _open_client(workers: int, scheduler: str | None):
     # array above 128 KiB becomes a fresh mmap whose pages fault in zeroed: our tasks,
     # which allocate large temporary arrays, then ran 1.8x slower (BENCHMARKS.md).
     # The statistical profiler takes the GIL from the task every 10 ms; nobody reads it.
-    import dask
-
-    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    with dask_config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
                           "distributed.worker.profile.enabled": False}):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=":0", silence_logs=40, env=_worker_env())
     return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"
 
 
-def _run_dask(by_key, todo, done, bars, report, keep_going, *, workers,
+def _run_dask(by_key, todo, done, bars, report, keep_going, hashes, *, workers,
               scheduler) -> dict[str, BaseException]:
-    from distributed import as_completed
+    from distributed import as_completed  # heavy, optional: only with a cluster
 
     client, cluster, report.executor = _open_client(workers, scheduler)
     failures: dict[str, BaseException] = {}
@@ -353,7 +448,7 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, *, workers,
             task = by_key[key]
             try:
                 report.record(key, fut.result())
-                _finish(task)
+                _finish(task, by_key, hashes)
             except Exception as exc:  # collected and re-raised after the others ran
                 failures[key] = exc
                 log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
