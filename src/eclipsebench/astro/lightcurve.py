@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -38,7 +39,7 @@ from .eclipse import EclipseShape, TransitShape
 from .orbit import eclipse_time_bmjd, geometric_to_observed, transit_time_bmjd
 from .thermal import ThermalModel, band_for
 
-__all__ = ["LightCurve", "light_curve_function", "light_curve_from_config",
+__all__ = ["LightCurve", "light_curve_function", "light_curve_from_config", "cached_light_curve",
            "FLUX_RATIO_MODELS"]
 
 FLUX_RATIO_MODELS = ("monochromatic", "tophat")
@@ -227,3 +228,15 @@ def light_curve_from_config(section, **overrides) -> LightCurve:
                   quadrature=getattr(section, "quadrature", "gauss"))
     kwargs.update(overrides)
     return light_curve_function(system, **kwargs)
+
+
+@lru_cache(maxsize=4)
+def cached_light_curve(section) -> LightCurve:
+    """:func:`light_curve_from_config` of a ``[system]`` section, built once per process.
+
+    The one cache of L(t) (building it takes seconds): the simulation's AOR
+    tasks, its truth tables and anything else that needs the light curve of
+    a configuration call this. ``section`` is the frozen (hashable)
+    ``SystemSection``; the returned object is shared, do not modify it.
+    """
+    return light_curve_from_config(section)

@@ -6,30 +6,42 @@
     DIR/config.toml, DIR/truth.ecsv, DIR/r<AORKEY>/ch2/bcd/*_bcd.fits (+ _bunc),
     DIR/lightcurves/epoch_NN.ecsv, DIR/calibration/pmap_calibration.fits
 
-Work is split in AOR tasks (run in worker processes when ``run.workers`` > 1).
+This module is the simulate *stage*: pure functions (:func:`simulate_aor`,
+:func:`epoch_truth_row`, ...), the module-level task functions and the
+planner :func:`plan_simulate_tasks`, which turns a configuration and a
+challenge folder into engine tasks (:mod:`eclipsebench.challenge.engine`):
+one per AOR, the calibration set, one per epoch (its light-curve table and
+truth row) and ``truth.ecsv`` last. ``simulate_challenge`` runs them on the
+engine, as ``eclipsebench run`` does among its other stages.
+
 Every random stream is keyed by what it is for (``("simulate", epoch,
 "pointing")``, ``("simulate", epoch, aorkey, expid, "photon")``, ...), so the
 bytes depend on the seed only, never on the number of workers or the order.
 
 Resuming: an AOR task writes its cubes, then ``DIR/.simstate/r<AORKEY>.npz``
-(its per-frame truth) last; an epoch is complete when its
-``DIR/.simstate/epoch_NN.json`` exists, written after its light-curve table.
-A rerun skips complete AORs and epochs.
+(its per-frame truth) last; an epoch task writes its light-curve table, then
+``DIR/.simstate/epoch_NN.json``. The engine's stamps (``.<name>.task.json``)
+record the hashes of those files and of what they were made from; a rerun
+redoes only what is missing or not whole.
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, fields
+from functools import partial
 from pathlib import Path
 
 import numpy as np
+from astropy.table import Table
 
+from ..astro.catalogue import get_system
+from ..astro.lightcurve import LightCurve, cached_light_curve
+from ..challenge.engine import Task, run_tasks
 from ..config import Config, dump_toml, to_mapping
-from ..errors import ConfigError
-from ..instrument.constants import ReadoutMode
+from ..errors import ConfigError, InputError
+from ..instrument.constants import ReadoutMode, read_noise_of
 from ..instrument.fowler import bunc_mjysr, electrons_to_mjysr
 from ..instrument.pointing import (
     ParamRange,
@@ -43,33 +55,25 @@ from ..io.bcd_write import AorWriter, bcd_path, bmjd_to_utc, bunc_path
 from ..io.header_template import XO3_DEC_DEG, XO3_RA_DEG, BcdHeaderInfo
 from ..progress import get_logger, progress
 from ..seeding import rng
+from .calibration import write_calibration_set
 from .plan import SECONDS_PER_DAY, AORPlan, EpochPlan, plan_challenge
 from .render import FrameModel, render_frames, stamp_origin, tick_moments
 from .star import StarImager, make_star_imager, prf_label
 
 __all__ = ["simulate_challenge", "ChallengeResult", "pointing_ranges_from_config",
-           "readout_from_config", "frame_model_from_config", "STATE_DIR"]
+           "readout_from_config", "frame_model_from_config", "STATE_DIR", "light_curve_of",
+           "challenge_plans", "plan_simulate_tasks", "simulate_aor", "aor_state_path",
+           "epoch_marker_path"]
 
 STATE_DIR = ".simstate"
-CAL_CHUNKS_PER_TASK = 3
 TRUTH_COLUMNS = ("epoch", "aorkey_pre", "aorkey_main", "start_bmjd", "t_ecl_bmjd", "depth_ppm",
                  "x_mean", "x_sd", "y_mean", "y_sd", "xy_cov", "n_frames")
 log = get_logger("simulate")
 
 
-_LC_CACHE: dict = {}
-
-
-def light_curve_of(cfg: Config):
-    """L(t) of ``cfg.system`` (cached per process: building it takes seconds)."""
-    from ..astro.lightcurve import light_curve_from_config
-
-    lc = _LC_CACHE.get(cfg.system)
-    if lc is None:
-        lc = light_curve_from_config(cfg.system)
-        _LC_CACHE.clear()
-        _LC_CACHE[cfg.system] = lc
-    return lc
+def light_curve_of(cfg: Config) -> LightCurve:
+    """L(t) of ``cfg.system`` (the one per-process cache, :func:`cached_light_curve`)."""
+    return cached_light_curve(cfg.system)
 
 
 def readout_from_config(cfg: Config) -> ReadoutMode:
@@ -78,16 +82,6 @@ def readout_from_config(cfg: Config) -> ReadoutMode:
     t_int = (2 * obs.fowler + obs.wait) * obs.sample_time_s
     return ReadoutMode("configured", obs.fowler, obs.wait, obs.sample_time_s,
                        round(t_int, 6), True)
-
-
-def read_noise_of(cfg: Config) -> float:
-    """Read noise per read: ``simulation.read_noise_e``, or the model's own when unset."""
-    from ..instrument.constants import READ_NOISE_E, READ_NOISE_IRACSIM2015_E
-
-    sim = cfg.simulation
-    if sim.read_noise_e is not None:
-        return float(sim.read_noise_e)
-    return READ_NOISE_IRACSIM2015_E if sim.noise_model == "iracsim2015" else READ_NOISE_E
 
 
 def frame_model_from_config(cfg: Config) -> FrameModel:
@@ -133,8 +127,6 @@ def pointing_ranges_from_config(cfg: Config) -> PointingRanges:
 
 def draw_epoch_pointing(cfg: Config, epoch: int, seed: int) -> PointingParams:
     """The pointing parameters of ``epoch`` (stream ``("simulate", epoch, "pointing")``)."""
-    from ..errors import InputError
-
     try:
         return draw_pointing_params(rng(seed, "simulate", epoch, "pointing"),
                                     pointing_ranges_from_config(cfg))
@@ -147,15 +139,6 @@ def draw_epoch_pointing(cfg: Config, epoch: int, seed: int) -> PointingParams:
 def _grid_index(t_s: np.ndarray, dt_s: float) -> np.ndarray:
     idx = np.rint(np.asarray(t_s) / dt_s).astype(np.int64)
     return idx
-
-
-@dataclass
-class _AorTask:
-    cfg: Config
-    plan: EpochPlan
-    aor_index: int
-    out_dir: str
-    seed: int
 
 
 def _header_info(cfg: Config, aor: AORPlan, seed: int, mode: ReadoutMode, ra: float,
@@ -176,8 +159,6 @@ def _header_info(cfg: Config, aor: AORPlan, seed: int, mode: ReadoutMode, ra: fl
 
 def _target(cfg: Config) -> tuple[float, float, str]:
     """RA, Dec (deg) and OBJECT of the target: XO-3's unless the catalogue knows better."""
-    from ..astro.catalogue import get_system
-
     system = get_system(cfg.system.name, cfg.system.catalogue or None)
     ra = getattr(system, "ra_deg", None)
     dec = getattr(system, "dec_deg", None)
@@ -277,50 +258,35 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
         truth["sky_e_per_px"].append(bg * model.ticks_per_exposure)
     out = {k: np.concatenate(v) for k, v in truth.items()}
     out["aorkey"] = np.full(out["time_bmjd"].size, aor.aorkey)
-    state = out_dir / STATE_DIR / f"r{aor.aorkey}.npz"
-    with atomic_path(state) as tmp:
+    with atomic_path(aor_state_path(out_dir, aor.aorkey)) as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, **out)
     return out
 
 
-def _aor_done(out_dir: Path, aor: AORPlan) -> bool:
-    state = out_dir / STATE_DIR / f"r{aor.aorkey}.npz"
-    if not state.is_file():
-        return False
-    return all(bcd_path(out_dir, aor.aorkey, c).is_file() and bunc_path(out_dir, aor.aorkey,
-                                                                          c).is_file()
-               for c in range(aor.n_cubes))
+def aor_state_path(out_dir: str | Path, aorkey: int) -> Path:
+    """``DIR/.simstate/r<AORKEY>.npz``: an AOR's per-frame truth, written after its cubes."""
+    return Path(out_dir) / STATE_DIR / f"r{aorkey}.npz"
+
+
+def epoch_marker_path(out_dir: str | Path, epoch: int) -> Path:
+    """``DIR/.simstate/epoch_NN.json``: an epoch's truth row, written after its light curve."""
+    return Path(out_dir) / STATE_DIR / f"epoch_{epoch:02d}.json"
+
+
+def epoch_lightcurve_path(out_dir: str | Path, epoch: int) -> Path:
+    """``DIR/lightcurves/epoch_NN.ecsv``: the true L(t) and position per frame."""
+    return Path(out_dir) / "lightcurves" / f"epoch_{epoch:02d}.ecsv"
+
+
+def calibration_path(out_dir: str | Path) -> Path:
+    """``DIR/calibration/pmap_calibration.fits``: the KR/Pmap calibration-star set."""
+    return Path(out_dir) / "calibration" / "pmap_calibration.fits"
 
 
 def _load_aor_truth(out_dir: Path, aor: AORPlan) -> dict[str, np.ndarray]:
-    with np.load(out_dir / STATE_DIR / f"r{aor.aorkey}.npz") as data:
+    with np.load(aor_state_path(out_dir, aor.aorkey)) as data:
         return {k: data[k] for k in data.files}
-
-
-def _run_aor_task(task: _AorTask) -> tuple[int, int]:
-    from ..errors import InputError
-
-    try:
-        simulate_aor(task.cfg, task.plan, task.aor_index, task.out_dir, task.seed,
-                     show_progress=False)
-    except InputError as exc:  # ConfigError/DataError do not survive pickling
-        raise InputError(str(exc)) from None
-    return task.plan.epoch, task.aor_index
-
-
-def _run_calibration_task(cfg: Config, chunks: list[int]) -> tuple[list[int], list[dict]]:
-    from ..errors import InputError
-    from .calibration import calibration_chunk
-
-    try:
-        return chunks, [calibration_chunk(cfg, c) for c in chunks]
-    except InputError as exc:  # ConfigError/DataError do not survive pickling
-        raise InputError(str(exc)) from None
-
-
-def _epoch_marker(out_dir: Path, epoch: int) -> Path:
-    return out_dir / STATE_DIR / f"epoch_{epoch:02d}.json"
 
 
 def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray], lc,
@@ -349,8 +315,6 @@ def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray],
 
 
 def _write_epoch(cfg: Config, plan: EpochPlan, out_dir: Path, lc, seed: int) -> dict:
-    from astropy.table import Table
-
     parts = [_load_aor_truth(out_dir, a) for a in plan.aors]
     frames = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     table = Table({"time_bmjd": frames["time_bmjd"], "aorkey": frames["aorkey"],
@@ -360,17 +324,14 @@ def _write_epoch(cfg: Config, plan: EpochPlan, out_dir: Path, lc, seed: int) -> 
     table.meta = {"epoch": plan.epoch, "seed": seed,
                   "description": "true L(t) (1 = star alone) and true mean position (0-based px) "
                                  "per frame; time_bmjd at the centre of the Fowler weights"}
-    path = out_dir / "lightcurves" / f"epoch_{plan.epoch:02d}.ecsv"
-    with atomic_path(path) as tmp:
+    with atomic_path(epoch_lightcurve_path(out_dir, plan.epoch)) as tmp:
         table.write(tmp, format="ascii.ecsv")
     row = epoch_truth_row(cfg, plan, frames, lc, seed)
-    write_json(_epoch_marker(out_dir, plan.epoch), row)
+    write_json(epoch_marker_path(out_dir, plan.epoch), row)
     return row
 
 
 def _write_truth(rows: list[dict], out_dir: Path) -> Path:
-    from astropy.table import Table
-
     rows = sorted(rows, key=lambda r: r["epoch"])
     seen = {k for r in rows for k in r}
     names = [k for k in TRUTH_COLUMNS if k in seen]
@@ -384,6 +345,114 @@ def _write_truth(rows: list[dict], out_dir: Path) -> Path:
     with atomic_path(path) as tmp:
         table.write(tmp, format="ascii.ecsv")
     return path
+
+
+# --------------------------------------------------------------------------- tasks
+# Module-level so that Dask can ship them to worker processes.
+
+def simulate_aor_task(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str,
+                      seed: int) -> None:
+    """Render and write one AOR (:func:`simulate_aor`) with the process's cached L(t)."""
+    try:
+        simulate_aor(cfg, plan, aor_index, out_dir, seed, light_curve=light_curve_of(cfg))
+    except InputError as exc:  # ConfigError/DataError do not survive pickling
+        raise InputError(str(exc)) from None
+
+
+def calibration_task(cfg: Config, out_dir: str) -> None:
+    """The KR/Pmap calibration-star set (``DIR/calibration/pmap_calibration.fits``)."""
+    try:
+        write_calibration_set(cfg, out_dir)
+    except InputError as exc:  # ConfigError/DataError do not survive pickling
+        raise InputError(str(exc)) from None
+
+
+def epoch_task(cfg: Config, plan: EpochPlan, out_dir: str, seed: int) -> None:
+    """One epoch's light-curve table and truth row, once its AORs are on disk."""
+    _write_epoch(cfg, plan, Path(out_dir), light_curve_of(cfg), seed)
+
+
+def truth_task(cfg: Config, out_dir: str, epochs: list[int]) -> None:
+    """``config.toml`` and ``truth.ecsv`` (last) from the epochs' truth rows."""
+    out = Path(out_dir)
+    write_text(out / "config.toml", dump_toml(to_mapping(cfg)))
+    _write_truth([json.loads(epoch_marker_path(out, e).read_text()) for e in epochs], out)
+
+
+def _cubes_exist(out_dir: str, aorkey: int, n_cubes: int, *outputs: Path) -> bool:
+    """Check of an AOR task: every cube its truth marker stands for is on disk."""
+    return all(bcd_path(Path(out_dir), aorkey, c).is_file()
+               and bunc_path(Path(out_dir), aorkey, c).is_file() for c in range(n_cubes))
+
+
+def _epoch_row_ok(epoch: int, lightcurve: Path, marker: Path) -> bool:
+    """Check of an epoch task: the truth row parses and is this epoch's."""
+    row = json.loads(Path(marker).read_text())
+    return isinstance(row, dict) and row.get("epoch") == epoch and "t_ecl_bmjd" in row
+
+
+def _truth_ok(config: Path, truth: Path) -> bool:
+    """Check of the truth task: ``truth.ecsv`` reads and has its columns."""
+    table = Table.read(truth, format="ascii.ecsv")
+    return all(c in table.colnames for c in TRUTH_COLUMNS)
+
+
+def challenge_plans(cfg: Config) -> list[EpochPlan]:
+    """The observing plans of every epoch (:func:`.plan.plan_challenge`)."""
+    period = get_system(cfg.system.name, cfg.system.catalogue or None).period_days
+    return plan_challenge(cfg.observation, cfg.challenge.epochs, period, cfg.challenge.seed)
+
+
+def plan_simulate_tasks(cfg: Config, out_dir: str | Path, *, calibration: bool | None = None,
+                        prefix: str = "simulate") -> list[Task]:
+    """The simulate stage's tasks for the challenge folder ``out_dir``.
+
+    Keys: ``<prefix>/r<AORKEY>`` (the longest AORs first: keeps every worker
+    busy), ``<prefix>/calibration``, ``<prefix>/epoch_NN`` and
+    ``<prefix>/truth`` (``truth.ecsv``; the task later stages depend on).
+
+    Parameters
+    ----------
+    cfg : Config
+    out_dir : path
+        The challenge folder (``docs/contracts.md``).
+    calibration : bool, optional
+        Write the calibration-star set (default ``simulation.write_calibration``;
+        never when ``simulation.calibration_frames`` is 0).
+    prefix : str
+        Key prefix (the run's systematics-free twin uses ``simulate_flat``).
+    """
+    out = Path(out_dir)
+    seed = cfg.challenge.seed
+    calibration = cfg.simulation.write_calibration if calibration is None else calibration
+    calibration = bool(calibration) and cfg.simulation.calibration_frames > 0
+    plans = challenge_plans(cfg)
+    tasks: list[Task] = []
+    aors = sorted(((plan, i) for plan in plans for i in range(len(plan.aors))),
+                  key=lambda pi: -pi[0].aors[pi[1]].n_cubes)
+    for plan, i in aors:
+        aor = plan.aors[i]
+        tasks.append(Task(f"{prefix}/r{aor.aorkey}", "simulate", simulate_aor_task,
+                          (cfg, plan, i, str(out), seed), (aor_state_path(out, aor.aorkey),),
+                          check=partial(_cubes_exist, str(out), aor.aorkey, aor.n_cubes)))
+    truth_deps = []
+    if calibration:
+        tasks.append(Task(f"{prefix}/calibration", "simulate", calibration_task, (cfg, str(out)),
+                          (calibration_path(out),)))
+        truth_deps.append(f"{prefix}/calibration")
+    for plan in plans:
+        key = f"{prefix}/epoch_{plan.epoch:02d}"
+        tasks.append(Task(key, "simulate", epoch_task, (cfg, plan, str(out), seed),
+                          (epoch_lightcurve_path(out, plan.epoch),
+                           epoch_marker_path(out, plan.epoch)),
+                          tuple(f"{prefix}/r{a.aorkey}" for a in plan.aors),
+                          check=partial(_epoch_row_ok, plan.epoch)))
+        truth_deps.append(key)
+    tasks.append(Task(f"{prefix}/truth", "simulate", truth_task,
+                      (cfg, str(out), [p.epoch for p in plans]),
+                      (out / "config.toml", out / "truth.ecsv"), tuple(truth_deps),
+                      check=_truth_ok))
+    return tasks
 
 
 @dataclass
@@ -409,6 +478,9 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
                        calibration: bool | None = None) -> ChallengeResult:
     """Simulate ``cfg.challenge.epochs`` epochs (and the calibration set) into ``out_dir``.
 
+    Plans the simulate stage (:func:`plan_simulate_tasks`) and runs it on the
+    task engine (:func:`eclipsebench.challenge.engine.run_tasks`).
+
     Parameters
     ----------
     cfg : Config
@@ -421,80 +493,27 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
         Write the calibration-star set (default ``simulation.write_calibration``).
     """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     seed = cfg.challenge.seed
     workers = cfg.run.workers if workers is None else int(workers)
     calibration = cfg.simulation.write_calibration if calibration is None else calibration
-    cal_file = out / "calibration" / "pmap_calibration.fits"
     calibration = bool(calibration) and cfg.simulation.calibration_frames > 0
-    cal_needed = calibration and not cal_file.is_file()
-    lc = light_curve_of(cfg)
-    make_star_imager(cfg)  # fail early on a bad PRF choice
+    light_curve_of(cfg)  # fail early on a bad [system] (and build L(t) once here)
+    make_star_imager(cfg)  # ... on a bad PRF choice
     for epoch in range(1, cfg.challenge.epochs + 1):
         draw_epoch_pointing(cfg, epoch, seed)  # ... and on bad pointing ranges
+    out.mkdir(parents=True, exist_ok=True)
     config_text = dump_toml(to_mapping(cfg))
     existing = out / "config.toml"
     if existing.is_file() and existing.read_text() != config_text:
-        from ..errors import InputError
-
         raise InputError(f"--out {out}: holds a challenge simulated with a different "
                          "configuration (see its config.toml); choose another folder")
     write_text(existing, config_text)
-    plans = plan_challenge(cfg.observation, cfg.challenge.epochs, lc.system.period_days, seed)
-
-    rows: dict[int, dict] = {}
-    todo: list[_AorTask] = []
-    skipped = 0
-    for plan in plans:
-        marker = _epoch_marker(out, plan.epoch)
-        if marker.is_file():
-            rows[plan.epoch] = json.loads(marker.read_text())
-            skipped += len(plan.aors)
-            continue
-        for i, aor in enumerate(plan.aors):
-            if _aor_done(out, aor):
-                skipped += 1
-            else:
-                todo.append(_AorTask(cfg, plan, i, str(out), seed))
-    # the longest tasks first keeps both workers busy
-    todo.sort(key=lambda t: -t.plan.aors[t.aor_index].n_cubes)
-
-    cal_path = None
-    from .calibration import concat_chunks, n_chunks, write_calibration_table
-
-    cal_tasks = ([list(range(c, min(c + CAL_CHUNKS_PER_TASK, n_chunks(cfg))))
-                  for c in range(0, n_chunks(cfg), CAL_CHUNKS_PER_TASK)] if cal_needed else [])
-    cal_parts: dict[int, dict] = {}
-    bar = progress(total=len(todo) + len(cal_tasks), desc="simulate (AORs, calibration)",
-                   unit="task")
-    if workers > 1 and len(todo) + len(cal_tasks) > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = [pool.submit(_run_aor_task, t) for t in todo]
-            futures += [pool.submit(_run_calibration_task, cfg, ch) for ch in cal_tasks]
-            for fut in as_completed(futures):
-                res = fut.result()
-                if isinstance(res[1], list):
-                    cal_parts.update(zip(res[0], res[1], strict=True))
-                bar.update(1)
-    else:
-        for t in todo:
-            simulate_aor(t.cfg, t.plan, t.aor_index, t.out_dir, t.seed, light_curve=lc)
-            bar.update(1)
-        for ch in cal_tasks:
-            cal_parts.update(zip(*_run_calibration_task(cfg, ch), strict=True))
-            bar.update(1)
-    bar.close()
-    if cal_needed:
-        data = concat_chunks([cal_parts[c] for c in sorted(cal_parts)])
-        cal_path = Path(write_calibration_table(cfg, data, out))
-
-    for plan in plans:
-        if plan.epoch not in rows:
-            rows[plan.epoch] = _write_epoch(cfg, plan, out, lc, seed)
-    truth_rows = [rows[p.epoch] for p in plans]
-    _write_truth(truth_rows, out)
-    if calibration and cal_path is None:
-        cal_path = cal_file
+    tasks = plan_simulate_tasks(cfg, out, calibration=calibration)
+    report = run_tasks(tasks, workers=workers)
+    plans = challenge_plans(cfg)
+    aor_keys = {f"simulate/r{a.aorkey}" for p in plans for a in p.aors}
+    truth_rows = [json.loads(epoch_marker_path(out, p.epoch).read_text()) for p in plans]
     n_files = sum(2 * a.n_cubes for p in plans for a in p.aors)
     return ChallengeResult(out_dir=out, epochs=len(plans), truth_rows=truth_rows, files=n_files,
-                           skipped_aors=skipped, calibration=cal_path)
+                           skipped_aors=sum(k in aor_keys for k in report.skipped),
+                           calibration=calibration_path(out) if calibration else None)
