@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import json
 import shutil
+import socket
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -140,3 +143,81 @@ def test_a_method_refusing_an_epoch_is_recorded_not_fatal(tiny_run, tmp_path, mo
                                     "--pmap cal.fits: 7 frames lie outside the calibration data"}]
     assert summary["methods_excluded"] == ["bliss"] and list(summary["methods"]) == ["pld"]
     assert len(Table.read(lay.depths, format="ascii.ecsv")) == 3
+
+
+def _copy_run(root, dest):
+    shutil.copytree(root, dest, dirs_exist_ok=True)
+    (dest / "run.lock").unlink(missing_ok=True)
+    return Layout(dest)
+
+
+def _cli(root, *extra):
+    args = ["run", "--out", str(root), "--workers", "1", "--quiet", *extra]
+    for item in TINY:
+        args += ["--set", item]
+    return args
+
+
+def test_a_truncated_result_is_redone_and_the_summary_is_the_same(tiny_run, tmp_path):
+    """Issue 18: resume trusted a truncated result (then failed on it with exit 1)."""
+    cfg, root, _, _ = tiny_run
+    lay = _copy_run(root, tmp_path / "run")
+    text = lay.result("pld", 1).read_text()
+    lay.result("pld", 1).write_text(text[: len(text) // 2])
+    lay.summary.unlink()
+    lay.depths.unlink()
+    _, report = run_challenge(cfg, lay.root, workers=1)
+    assert sorted(report.ran) == ["reduce/pld/epoch_01", "stats"]
+    assert lay.result("pld", 1).read_text() == text
+    assert lay.summary.read_bytes() == (root / "summary.json").read_bytes()
+
+
+def test_a_result_edited_or_made_from_other_inputs_is_redone(tiny_run, tmp_path):
+    cfg, root, _, _ = tiny_run
+    lay = _copy_run(root, tmp_path / "run")
+    # valid JSON of the right schema, but not the bytes the task wrote: not trusted
+    res = json.loads(lay.result("bliss", 2).read_text())
+    lay.result("bliss", 2).write_text(json.dumps({**res, "depth_ppm": 1.0}))
+    # a photometry table lost: redone, and every result made from it with it
+    lay.photometry(1).unlink()
+    _, report = run_challenge(cfg, lay.root, workers=1)
+    assert sorted(report.ran) == ["photometry/epoch_01", "reduce/bliss/epoch_01",
+                                  "reduce/bliss/epoch_02", "reduce/pld/epoch_01", "stats"]
+    assert lay.summary.read_bytes() == (root / "summary.json").read_bytes()
+
+
+def test_a_second_run_in_the_same_folder_exits_2_naming_the_lock(tiny_run, tmp_path, capsys):
+    _, root, _, _ = tiny_run
+    lay = _copy_run(root, tmp_path / "run")
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        lay.lock.write_text(f"{holder.pid} {socket.gethostname()}\n")
+        assert main(_cli(lay.root)) == 2
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+        assert str(lay.lock) in err and str(holder.pid) in err
+        assert lay.lock.read_text().split()[0] == str(holder.pid)  # not taken from its owner
+    finally:
+        holder.kill()
+        holder.wait()
+    # the holder is gone: its lock is stale and taken over; released at the end
+    assert main(_cli(lay.root)) == 0
+    assert not lay.lock.exists()
+
+
+def test_without_a_report_none_is_announced(tiny_run, capsys):
+    _, root, _, _ = tiny_run
+    assert main(_cli(root)) == 0
+    out = capsys.readouterr().out
+    assert f"summary in {root / 'summary.json'}" in out
+    assert "report in" not in out and "index.html" not in out
+
+
+@pytest.mark.parametrize("option", [["--set", "challenge.epochs=1"], ["--epochs", "1"]])
+def test_one_epoch_is_refused_before_any_work(tmp_path, capsys, option):
+    out = tmp_path / "one"
+    assert main(["run", "--out", str(out), "--quiet", *option]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert "challenge.epochs" in err and "at least 2 epochs" in err
+    assert not out.exists()

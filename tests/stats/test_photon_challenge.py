@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from eclipsebench.challenge.photon import (
+from eclipsebench.stats.photon_limit import (
     analytic_photon_limit,
     empirical_photon_limit,
     in_eclipse_fraction,

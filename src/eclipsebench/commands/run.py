@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..config import load_config
+from ..report.tables import format_text_table
 from .options import add_config_options, method_list, positive_int
 
 NAME = "run"
@@ -47,7 +48,8 @@ def _overrides(args: argparse.Namespace) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..challenge.runner import run_challenge
+    # every stage's modules (~1.5 s to import): loaded by this command only, not at CLI start
+    from ..challenge.runner import Layout, run_challenge
 
     cfg = load_config(args.config, _overrides(args))
     out = Path(args.out) if args.out else Path(
@@ -55,14 +57,14 @@ def run(args: argparse.Namespace) -> dict:
     summary, report = run_challenge(cfg, out)
     if args.json:
         return summary
+    layout = Layout(out)
     return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
                                 "skipped": len(report.skipped), "wall_s": report.wall_s,
-                                "executor": report.executor}}
+                                "executor": report.executor, "summary": str(layout.summary),
+                                "report": str(layout.report) if cfg.run.report else None}}
 
 
 def format_text(result: dict) -> str:
-    from ..report.tables import format_text_table
-
     lines = [format_text_table(result)]
     pl = result.get("photon_limit", {})
     a, e = pl.get("analytic"), pl.get("empirical")
@@ -85,7 +87,9 @@ def format_text(result: dict) -> str:
                      + ", ".join(result["methods_excluded"]))
     run = result.get("_run")
     if run:
+        where = f"summary in {run['summary']}"
+        if run.get("report"):
+            where += f", report in {run['report']}"
         lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "
-                     f"{run['wall_s']:.1f} s ({run['executor']}); summary in "
-                     f"{run['out']}/summary.json, report in {run['out']}/report/index.html")
+                     f"{run['wall_s']:.1f} s ({run['executor']}); {where}")
     return "\n".join(lines)

@@ -1,0 +1,80 @@
+"""The run folder of ``eclipsebench run``: the one place that says where each file goes.
+
+::
+
+    DIR/run_config.toml                    the configuration of the run (guards resume)
+    DIR/run.lock                           held (pid) while a run works in DIR
+    DIR/simulation/                        the simulated challenge (docs/contracts.md)
+    DIR/simulation_flat/                   its systematics-free twin (empirical photon limit)
+    DIR/photometry[_flat]/epoch_NN.fits    one photometry table per epoch
+    DIR/results[_flat]/<method>/epoch_NN.json (+ .lc.ecsv)   one reduction per epoch x method
+    DIR/depths.ecsv                        method, epoch, depth_ppm, error_ppm
+    DIR/summary.json                       statistics + photon limits + truth + seed + config
+    DIR/report/index.html                  figures and tables
+    DIR/timings.ecsv                       when, where and how long each task of the
+                                           last invocation ran (not part of the results)
+
+Beside each task's last output the engine keeps the task's stamp,
+``.<name>.task.json`` (:mod:`.engine`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["Layout"]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where each task of a run writes (see the module docstring)."""
+
+    root: Path
+
+    def sim(self, flat: bool = False) -> Path:
+        return self.root / ("simulation_flat" if flat else "simulation")
+
+    def photometry(self, epoch: int, flat: bool = False) -> Path:
+        return self.root / ("photometry_flat" if flat else "photometry") / f"epoch_{epoch:02d}.fits"
+
+    def result(self, method: str, epoch: int, flat: bool = False) -> Path:
+        return (self.root / ("results_flat" if flat else "results") / method
+                / f"epoch_{epoch:02d}.json")
+
+    def result_lightcurve(self, method: str, epoch: int, flat: bool = False) -> Path:
+        """The decorrelated light curve written beside a result."""
+        return self.result(method, epoch, flat).with_suffix(".lc.ecsv")
+
+    def truth(self, flat: bool = False) -> Path:
+        return self.sim(flat) / "truth.ecsv"
+
+    def truth_lightcurve(self, epoch: int, flat: bool = False) -> Path:
+        return self.sim(flat) / "lightcurves" / f"epoch_{epoch:02d}.ecsv"
+
+    def calibration(self) -> Path:
+        return self.sim() / "calibration" / "pmap_calibration.fits"
+
+    @property
+    def depths(self) -> Path:
+        return self.root / "depths.ecsv"
+
+    @property
+    def summary(self) -> Path:
+        return self.root / "summary.json"
+
+    @property
+    def timings(self) -> Path:
+        return self.root / "timings.ecsv"
+
+    @property
+    def report(self) -> Path:
+        return self.root / "report" / "index.html"
+
+    @property
+    def run_config(self) -> Path:
+        return self.root / "run_config.toml"
+
+    @property
+    def lock(self) -> Path:
+        return self.root / "run.lock"

@@ -1,0 +1,95 @@
+"""The reduce stage of a run: every method on every epoch's photometry table.
+
+:func:`plan_reduce_tasks` turns the configuration, the run folder
+(:class:`.layout.Layout`), the epochs and the methods into engine tasks
+``reduce[_flat]/<method>/epoch_NN``; :func:`reduce_task` is the one place
+that calls the fitting package (:func:`eclipsebench.fit.reduce.reduce_epoch`)
+for a run. Keep it small: the method seam's context (seeded generator,
+loaded calibration set) is threaded here.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import partial
+from pathlib import Path
+
+from ..astro.catalogue import get_system
+from ..config import Config
+from ..errors import InputError
+from ..fit import reduce as fit_reduce
+from ..io.atomic import atomic_path, write_json
+from ..progress import get_logger
+from .engine import Task
+from .layout import Layout
+from .photometry_stage import photometry_key
+
+__all__ = ["reduce_key", "reduce_task", "plan_reduce_tasks", "result_ok"]
+
+log = get_logger("challenge")
+
+
+def reduce_key(method: str, epoch: int, flat: bool = False) -> str:
+    """The task key of one method on one epoch."""
+    return f"reduce{'_flat' if flat else ''}/{method}/epoch_{epoch:02d}"
+
+
+def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int,
+                out_path: str) -> None:
+    """Reduce one epoch with one method; write the light curve, then the result JSON.
+
+    A method that refuses the epoch's data (an :class:`InputError`, e.g.
+    frames outside KR/Pmap's calibration coverage) is an outcome of the
+    benchmark, not a crash: the JSON records ``failed`` and the message, the
+    statistics leave that epoch out and list it, and a rerun does not retry it
+    (it would fail the same way).
+    """
+    out = Path(out_path)
+    system = get_system(cfg.system.name, cfg.system.catalogue or None)
+    try:
+        result = fit_reduce.reduce_epoch(table_path, method, options=cfg.reduce, system=system,
+                                         seed=seed, epoch=epoch)
+    except InputError as exc:
+        log.warning("%s epoch %d: %s", method, epoch, exc)
+        write_json(out, {"method": method, "epoch": epoch, "failed": True, "error": str(exc),
+                         "depth_ppm": None, "depth_err_ppm": None})
+        return
+    with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
+        result.lightcurve_table().write(tmp, format="ascii.ecsv")
+    write_json(out, result.to_dict())
+
+
+def _number_or_none(v) -> bool:
+    return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
+
+def result_ok(method: str, epoch: int, path: Path) -> bool:
+    """Resume check: the result JSON parses and matches its schema for (method, epoch).
+
+    A result has ``method``, ``epoch``, ``depth_ppm`` and ``depth_err_ppm``
+    (numbers, or null with ``failed`` and an ``error`` message); a finished
+    one also has its decorrelated light curve beside it.
+    """
+    res = json.loads(Path(path).read_text())
+    if not (isinstance(res, dict) and res.get("method") == method and res.get("epoch") == epoch
+            and _number_or_none(res.get("depth_ppm"))
+            and _number_or_none(res.get("depth_err_ppm"))):
+        return False
+    if res.get("failed"):
+        return isinstance(res.get("error"), str)
+    return Path(path).with_suffix(".lc.ecsv").is_file()
+
+
+def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: list[str], *,
+                      flat: bool = False) -> list[Task]:
+    """One task per (method, epoch), each after its epoch's photometry task."""
+    seed = cfg.challenge.seed
+    tasks = []
+    for e in epochs:
+        table = layout.photometry(e, flat)
+        for m in methods:
+            out = layout.result(m, e, flat)
+            tasks.append(Task(reduce_key(m, e, flat), "reduce", reduce_task,
+                              (cfg, str(table), m, e, seed, str(out)), (out,),
+                              (photometry_key(e, flat),), check=partial(result_ok, m, e)))
+    return tasks
