@@ -1,10 +1,10 @@
 """Per-frame measurement kernels, compiled with numba and run over all frames.
 
-Each ``_frame_*`` function measures one frame; :func:`measure_frames` runs the
-whole measurement set over a stack of frames in parallel (``numba.prange``).
-The public, documented entry points are in :mod:`.centroids`,
-:mod:`.background`, :mod:`.apertures` and :mod:`.measure`; this module holds
-the compiled pieces they share.
+Each ``_frame_*`` function is the one definition of an estimator on one
+frame; :func:`measure_frames` runs the whole measurement set over a stack of
+frames in parallel (``numba.prange``). The public, documented entry points are
+:func:`.measure.measure_stack` (the whole set) and the single estimators of
+:mod:`.estimators`; this module holds the compiled pieces they share.
 
 Conventions: ``frames[k, j, i]`` is frame ``k``, row ``y = j``, column
 ``x = i``; a pixel's centre is at integer coordinates (0-based) and it covers
@@ -32,6 +32,11 @@ IDX = {name: k for k, name in enumerate(COLUMNS)}
 N_COLUMNS = len(COLUMNS)
 
 CENTROID_CODES = {"col": 0, "gauss": 1, "gauss-fixed": 2, "lsq-asym": 3}
+#: Starting width (px) of the free-width Gaussian fit.
+GAUSS_START_WIDTH_PX = 0.7
+#: Least-asymmetry search grid half-width and window radius (px).
+LSQ_GRID_HALF_PX = 2
+LSQ_WINDOW_PX = 3
 _SQRT2 = math.sqrt(2.0)
 _INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
 
@@ -221,6 +226,14 @@ def _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
     return chi2
 
 
+# per-axis vectors (0 value, 1 d/dcentre, 2 d/dwidth, 3 ones) of each Jacobian column,
+# parameters (A, x0, y0, C) with a fixed width, (A, x0, y0, sx, sy, C) with free widths
+_GAUSS_FIXED_X = np.array([0, 1, 0, 3], dtype=np.int64)
+_GAUSS_FIXED_Y = np.array([0, 0, 1, 3], dtype=np.int64)
+_GAUSS_FREE_X = np.array([0, 1, 0, 2, 0, 3], dtype=np.int64)
+_GAUSS_FREE_Y = np.array([0, 0, 1, 0, 2, 3], dtype=np.int64)
+
+
 @njit(cache=True)
 def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
     """Least-squares fit of a pixel-integrated 2-D Gaussian plus a constant.
@@ -279,26 +292,11 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
     syy = np.empty((4, 4))
     ry = np.empty((4, n))
     res = np.empty((n, n))
-    cx_idx = np.empty(npar, dtype=np.int64)
-    cy_idx = np.empty(npar, dtype=np.int64)
     coef = np.empty(npar)
-    # column q: (x vector, y vector); A multiplies all but the amplitude and constant
-    cx_idx[0] = 0
-    cy_idx[0] = 0
-    cx_idx[1] = 1
-    cy_idx[1] = 0
-    cx_idx[2] = 0
-    cy_idx[2] = 1
-    if fixed:
-        cx_idx[3] = 3
-        cy_idx[3] = 3
-    else:
-        cx_idx[3] = 2
-        cy_idx[3] = 0
-        cx_idx[4] = 0
-        cy_idx[4] = 2
-        cx_idx[5] = 3
-        cy_idx[5] = 3
+    # Jacobian column q is built from x vector cx_idx[q] and y vector cy_idx[q];
+    # A multiplies all but the amplitude and constant
+    cx_idx = _GAUSS_FIXED_X if fixed else _GAUSS_FREE_X
+    cy_idx = _GAUSS_FIXED_Y if fixed else _GAUSS_FREE_Y
     chi2 = _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
     lam = 1e-3
     converged = False
@@ -581,8 +579,8 @@ def measure_frames(frames, guess_x, guess_y, stamp_x, stamp_y, search_half, box_
         out[f, 3] = xcol
         out[f, 4] = ycol
         out[f, 5] = beta
-        xg, yg, sxg, syg, ag, cg, okg = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol, 0.7,
-                                                     False, max_iter)
+        xg, yg, sxg, syg, ag, cg, okg = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol,
+                                                     GAUSS_START_WIDTH_PX, False, max_iter)
         out[f, 6] = xg
         out[f, 7] = yg
         out[f, 8] = sxg
@@ -597,7 +595,7 @@ def measure_frames(frames, guess_x, guess_y, stamp_x, stamp_y, search_half, box_
             out[f, 14] = yf
             out[f, 15] = okf
         if want_lsq:
-            xl, yl, okl = _frame_lsq_asym(img, px, py, bg0, 2, 3)
+            xl, yl, okl = _frame_lsq_asym(img, px, py, bg0, LSQ_GRID_HALF_PX, LSQ_WINDOW_PX)
             out[f, 16] = xl
             out[f, 17] = yl
             out[f, 18] = okl

@@ -28,8 +28,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..config.photometry import PhotometrySection
+from ..instrument.constants import READ_NOISE_E, SUB_2S
 from ..stats.photon_limit import fowler_variance
 from . import kernels
+from .estimators import per_frame
 
 __all__ = ["radius_name", "variable_name", "measure_stack", "flux_uncertainty"]
 
@@ -46,8 +48,9 @@ def variable_name(a: float, b: float) -> str:
     return f"va{a:.2f}b{b:.2f}".replace(".", "p").replace("-", "m")
 
 
-def flux_uncertainty(aperture_sum_e, background_e, area_px, n_annulus, *, fowler: int = 8,
-                     wait: int = 184, read_noise_e: float = 9.4, read: str = "pixels"):
+def flux_uncertainty(aperture_sum_e, background_e, area_px, n_annulus, *,
+                     fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait,
+                     read_noise_e: float = READ_NOISE_E, read: str = "pixels"):
     """Per-frame uncertainty (electrons) of a background-subtracted aperture flux.
 
     Uses the paper's Eq. ``gar_for_var`` (:func:`fowler_variance`) for the
@@ -75,18 +78,10 @@ def flux_uncertainty(aperture_sum_e, background_e, area_px, n_annulus, *, fowler
     return np.sqrt(var)
 
 
-def _as_index(value, n: int, name: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=np.int64)
-    if arr.ndim == 0:
-        arr = np.full(n, int(arr), dtype=np.int64)
-    if arr.shape != (n,):
-        raise ValueError(f"{name}: expected one value or {n}, got shape {arr.shape}")
-    return np.ascontiguousarray(arr)
-
-
 def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp_y=None,
                   options: PhotometrySection | None = None, gauss_width_px: float | None = None,
-                  fowler: int = 8, wait: int = 184, read_noise_e: float = 9.4) -> dict:
+                  fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait,
+                  read_noise_e: float = READ_NOISE_E) -> dict:
     """Measure every frame of ``frames_e`` (n, ny, nx), electrons per pixel.
 
     Parameters
@@ -106,7 +101,9 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
         ``options.gauss_width_px``, or when that is unset and the centroid is
         ``gauss-fixed``, the median free-fit width over the frames.
     fowler, wait, read_noise_e : int, int, float
-        Readout of the frames (FN, WT, read noise) for the noise model.
+        Readout of the frames (FN, WT, read noise per read in electrons) for
+        the noise model; default the 2 s subarray mode of the XO-3 data
+        (:data:`~eclipsebench.instrument.constants.SUB_2S`, ``READ_NOISE_E``).
 
     Returns
     -------
@@ -121,10 +118,10 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
     if frames.ndim != 3:
         raise ValueError(f"frames_e: expected (n, ny, nx), got shape {frames.shape}")
     n = frames.shape[0]
-    gx = _as_index(guess_x, n, "guess_x")
-    gy = _as_index(guess_y, n, "guess_y")
-    sx = _as_index(gx if stamp_x is None else stamp_x, n, "stamp_x")
-    sy = _as_index(gy if stamp_y is None else stamp_y, n, "stamp_y")
+    gx = per_frame(guess_x, n, "guess_x", np.int64)
+    gy = per_frame(guess_y, n, "guess_y", np.int64)
+    sx = per_frame(gx if stamp_x is None else stamp_x, n, "stamp_x", np.int64)
+    sy = per_frame(gy if stamp_y is None else stamp_y, n, "stamp_y", np.int64)
     radii = sorted(set(float(r) for r in opt.radii_px) | {float(opt.radius_px)})
     radii_arr = np.asarray(radii, dtype=np.float64)
     var_a = np.asarray([ab[0] for ab in opt.variable_apertures], dtype=np.float64)

@@ -18,7 +18,7 @@ import numpy as np
 from astropy.table import Table
 
 from .. import __version__
-from ..config.base import to_mapping
+from ..config.base import from_mapping, to_mapping
 from ..config.photometry import PhotometrySection
 from ..errors import InputError
 from ..io.bcd_read import (
@@ -294,6 +294,5 @@ def photometry_tables(input_dir: str | os.PathLike, options: PhotometrySection, 
 
 def replace_options(options: PhotometrySection, **changes) -> PhotometrySection:
     """A copy of ``options`` with ``changes`` applied and validated."""
-    from ..config.base import from_mapping
     mapping = to_mapping(dataclasses.replace(options, **changes))
     return from_mapping(PhotometrySection, mapping, prefix="photometry")
