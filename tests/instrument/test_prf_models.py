@@ -95,16 +95,3 @@ def test_flux_scale_in_electrons_and_jansky(builtin):
         P.electrons_per_second_scale(builtin, -1.0, t_exp_s=1.92)
     with pytest.raises(InputError, match="finite"):
         builtin.render([np.nan], [15.0])
-
-
-def test_centroid_and_noise_pixel_helpers_on_hand_made_images():
-    im = np.zeros((2, 32, 32))
-    im[0, 15, 15] = 3.0
-    im[0, 15, 16] = 1.0  # x = 15.25, y = 15
-    im[1, 10:17, 20:27] = 2.0  # uniform 7x7 box centred on (23, 13): 49 noise pixels
-    im[1, 13, 23] = 2.0 + 1e-9
-    xs, ys = P.centroid_col(im)
-    np.testing.assert_allclose(xs, [15.25, 23.0], atol=1e-8)
-    np.testing.assert_allclose(ys, [15.0, 13.0], atol=1e-8)
-    assert P.noise_pixels(im)[1] == pytest.approx(49.0)
-    assert P.noise_pixels(im)[0] == pytest.approx(16.0 / 10.0)

@@ -13,8 +13,12 @@ the exposure time (pedestal i to signal i) is ``t_exp = (FN + WT) dt``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from eclipsebench.errors import InputError
+
+if TYPE_CHECKING:  # annotations only: the configuration package imports this module
+    from eclipsebench.config import Config
 
 __all__ = [
     "PIXEL_SCALE_ARCSEC", "PIXEL_SCALE_X_ARCSEC", "PIXEL_SCALE_Y_ARCSEC", "PIXEL_SOLID_ANGLE_SR",
@@ -22,7 +26,8 @@ __all__ = [
     "READ_NOISE_IRACSIM2015_E", "WAVELENGTH_UM", "BAND_UM", "TELESCOPE_DIAMETER_M",
     "SUBARRAY_SHAPE", "SUBARRAY_ORIGIN_FULL", "SWEET_SPOT_PX", "ReadoutMode",
     "SUB_2S", "SUB_0P4S", "SUB_0P1S", "SUB_0P02S", "FULL_2S", "FULL_6S", "FULL_12S",
-    "FULL_30S", "FULL_100S", "READOUT_MODES", "readout_mode",
+    "FULL_30S", "FULL_100S", "READOUT_MODES", "readout_mode", "read_noise_per_read_e",
+    "read_noise_of",
 ]
 
 #: Nominal IRAC pixel scale (arcsec per pixel); the brief's 1.2".
@@ -144,3 +149,28 @@ def readout_mode(name: str) -> ReadoutMode:
     except KeyError:
         raise InputError(f"readout mode: expected one of {sorted(READOUT_MODES)}, "
                          f"got {name!r}") from None
+
+
+def read_noise_per_read_e(noise_model: str, read_noise_e: float | None = None) -> float:
+    """Read noise per read (electrons) of a simulation noise model.
+
+    Parameters
+    ----------
+    noise_model : {"physical", "iracsim2015"}
+        ``"iracsim2015"`` uses IRACSIM's :data:`READ_NOISE_IRACSIM2015_E`
+        (16.8 e); any other model the header value :data:`READ_NOISE_E` (9.4 e).
+    read_noise_e : float, optional
+        An explicit value, returned as is.
+    """
+    if read_noise_e is not None:
+        return float(read_noise_e)
+    return READ_NOISE_IRACSIM2015_E if noise_model == "iracsim2015" else READ_NOISE_E
+
+
+def read_noise_of(cfg: Config) -> float:
+    """Read noise per read of a configuration: ``simulation.read_noise_e``, or the model's own.
+
+    See :func:`read_noise_per_read_e`; only ``cfg.simulation.noise_model`` and
+    ``cfg.simulation.read_noise_e`` are read.
+    """
+    return read_noise_per_read_e(cfg.simulation.noise_model, cfg.simulation.read_noise_e)

@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from eclipsebench.errors import InputError
+from eclipsebench.stats.photon_limit import fowler_variance
 
 from .constants import ReadoutMode
 
@@ -286,8 +287,6 @@ def bunc_mjysr(e, mode: ReadoutMode, *, read_noise_e: float, fluxconv: float,
     :func:`eclipsebench.stats.photon_limit.fowler_variance`) on the
     non-negative part of ``e`` (electrons per exposure time), one pixel each.
     """
-    from eclipsebench.stats.photon_limit import fowler_variance
-
     var = fowler_variance(np.clip(np.asarray(e, float), 0.0, None), fowler=mode.fowler,
                           wait=mode.wait, read_noise_e=read_noise_e)
     return electrons_to_mjysr(np.sqrt(var), fluxconv=fluxconv, gain=gain, t_exp_s=mode.t_exp_s)

@@ -58,27 +58,22 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+from astropy.io import fits
+from astropy.utils.exceptions import AstropyUserWarning
 from scipy import signal, special
 
 from eclipsebench.errors import DataError, InputError
 
-from . import _spline
-from .constants import (
-    BAND_UM,
-    FLUXCONV_WARM_CH2,
-    GAIN_E_PER_DN,
-    PIXEL_SCALE_ARCSEC,
-    PIXEL_SOLID_ANGLE_SR,
-    SUBARRAY_ORIGIN_FULL,
-    TELESCOPE_DIAMETER_M,
-)
+# The estimators are defined once, in the photometry package; aperture_flux,
+# centroid_col and noise_pixels stay importable from here for simulate/star.py
+# and tools/fit_gainmap.py.
+from ..photometry.estimators import aperture_flux, centroid_col, noise_pixels
+from . import _spline, constants
 
 __all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial",
-           "load_gainmap_coefficients", "aperture_weights", "aperture_flux", "centroid_col",
-           "noise_pixels", "electrons_per_second_scale", "jy_to_electrons_per_second",
-           "psf_fine", "pixel_integrated_table", "warm_rescaling"]
-
-CENTROID_HALF = 3
+           "load_gainmap_coefficients", "aperture_flux", "centroid_col", "noise_pixels",
+           "electrons_per_second_scale", "jy_to_electrons_per_second", "psf_fine",
+           "pixel_integrated_table", "warm_rescaling"]
 
 
 class TaylorStamps(NamedTuple):
@@ -147,63 +142,6 @@ def load_gainmap_coefficients() -> dict:
     """The committed gain-map fit (``eclipsebench/data/gainmap_ch2.json``)."""
     text = resources.files("eclipsebench.data").joinpath("gainmap_ch2.json").read_text()
     return json.loads(text)
-
-
-def aperture_weights(xc: float, yc: float, radius_px: float, shape: tuple[int, int]) -> np.ndarray:
-    """Exact fraction of each pixel inside a circle (0-based pixel centres)."""
-    from photutils.geometry import circular_overlap_grid
-
-    ny, nx = shape
-    return circular_overlap_grid(-0.5 - xc, nx - 0.5 - xc, -0.5 - yc, ny - 0.5 - yc, nx, ny,
-                                 radius_px, 1, 1)
-
-
-def aperture_flux(images, xc, yc, radius_px: float) -> np.ndarray:
-    """Aperture sums of ``images`` (n, ny, nx) in circles at ``(xc, yc)`` (exact overlaps)."""
-    images = np.asarray(images, float)
-    xc = np.broadcast_to(np.asarray(xc, float), images.shape[:1])
-    yc = np.broadcast_to(np.asarray(yc, float), images.shape[:1])
-    return np.array([(aperture_weights(x, y, radius_px, im.shape) * im).sum()
-                     for im, x, y in zip(images, xc, yc, strict=True)])
-
-
-def _boxes(images, half: int, around):
-    """The (2 half + 1)^2 boxes (n, m, m) and their corner pixel (i0, j0) per image."""
-    images = np.asarray(images, float)
-    n, ny, nx = images.shape
-    if around is None:
-        flat = np.nanargmax(images.reshape(n, -1), axis=1)
-        j, i = np.divmod(flat, nx)
-    else:
-        i = np.full(n, int(around[0]))
-        j = np.full(n, int(around[1]))
-    i = np.clip(i, half, nx - 1 - half)
-    j = np.clip(j, half, ny - 1 - half)
-    k = np.arange(-half, half + 1)
-    rows = (j[:, None] + k[None, :])[:, :, None]
-    cols = (i[:, None] + k[None, :])[:, None, :]
-    return images[np.arange(n)[:, None, None], rows, cols], i - half, j - half
-
-
-def centroid_col(images, half: int = CENTROID_HALF, around=None):
-    """Centre-of-light centroids (paper Eqs. ``x_centroid``, ``y_centroid``).
-
-    Over the ``(2 half + 1)^2`` box centred on the brightest pixel (or on the
-    integer pixel ``around = (x, y)``) of background-free images (n, ny, nx).
-    """
-    box, i0, j0 = _boxes(images, half, around)
-    k = np.arange(2 * half + 1)
-    tot = box.sum(axis=(1, 2))
-    xs = i0 + (box.sum(axis=1) * k).sum(axis=1) / tot
-    ys = j0 + (box.sum(axis=2) * k).sum(axis=1) / tot
-    return xs, ys
-
-
-def noise_pixels(images, half: int = CENTROID_HALF) -> np.ndarray:
-    """Noise pixels ``(sum f)^2 / sum f^2`` over the 7x7 box on the brightest pixel
-    (paper Eq. ``noise_pixels``) of background-free images (n, ny, nx)."""
-    box = _boxes(images, half, None)[0]
-    return box.sum(axis=(1, 2)) ** 2 / (box**2).sum(axis=(1, 2))
 
 
 class PRF:
@@ -337,14 +275,14 @@ def psf_fine(oversample: int, half_px: float, *, obscuration: float, blur_px: fl
     n = int(round(2 * half_px * oversample))
     u = (np.arange(n) + 0.5) / oversample - half_px
     r_px = np.hypot(u[None, :], u[:, None])
-    r_rad = r_px * PIXEL_SCALE_ARCSEC / 206264.80624709636
+    r_rad = r_px * constants.PIXEL_SCALE_ARCSEC / 206264.80624709636
     psf = np.zeros_like(r_px)
     eps = obscuration
-    for lam_um in np.linspace(BAND_UM[0], BAND_UM[1], n_wavelengths):
-        v = np.pi * TELESCOPE_DIAMETER_M * r_rad / (lam_um * 1e-6)
+    for lam_um in np.linspace(constants.BAND_UM[0], constants.BAND_UM[1], n_wavelengths):
+        v = np.pi * constants.TELESCOPE_DIAMETER_M * r_rad / (lam_um * 1e-6)
         v = np.where(v == 0, 1e-12, v)
         amp = 2 * special.j1(v) / v - eps**2 * 2 * special.j1(eps * v) / (eps * v)
-        psf += (amp / (1 - eps**2)) ** 2 * (lam_um / BAND_UM[0]) ** -2
+        psf += (amp / (1 - eps**2)) ** 2 * (lam_um / constants.BAND_UM[0]) ** -2
     if blur_px > 0:
         k = np.arange(-int(np.ceil(5 * blur_px * oversample)),
                       int(np.ceil(5 * blur_px * oversample)) + 1) / oversample
@@ -431,16 +369,13 @@ class IrsaPRF(PRF):
         entirely inside one file's region). Between the 5x5 sub-pixel
         realisations the table is interpolated with cubic B-splines.
         """
-        from astropy.io import fits
-        from astropy.utils.exceptions import AstropyUserWarning
-
         folder = Path(folder)
         files = sorted(p for p in folder.glob("*.fits") if _IRSA_NAME.search(p.name))
         if not files:
             raise DataError(folder, "no IRSA PRF files named *col<NNN>_row<NNN>.fits")
         x, y = (15.0, 15.0) if array_position is None else map(float, array_position)
         if subarray:
-            x, y = x + SUBARRAY_ORIGIN_FULL[0], y + SUBARRAY_ORIGIN_FULL[1]
+            x, y = x + constants.SUBARRAY_ORIGIN_FULL[0], y + constants.SUBARRAY_ORIGIN_FULL[1]
         pos = np.array([[int(m.group(1)) - 1, int(m.group(2)) - 1]
                         for m in (_IRSA_NAME.search(p.name) for p in files)], float)
         best = files[int(np.argmin(np.hypot(pos[:, 0] - x, pos[:, 1] - y)))]
@@ -516,9 +451,9 @@ def electrons_per_second_scale(prf: PRF, flux_aperture_e: float, radius_px: floa
     return flux_aperture_e / (t_exp_s * a)
 
 
-def jy_to_electrons_per_second(flux_jy, *, gain: float = GAIN_E_PER_DN,
-                               fluxconv: float = FLUXCONV_WARM_CH2,
-                               pixel_solid_angle_sr: float = PIXEL_SOLID_ANGLE_SR):
+def jy_to_electrons_per_second(flux_jy, *, gain: float = constants.GAIN_E_PER_DN,
+                               fluxconv: float = constants.FLUXCONV_WARM_CH2,
+                               pixel_solid_angle_sr: float = constants.PIXEL_SOLID_ANGLE_SR):
     """Electron rate of a flux density: ``F_Jy GAIN / (1e6 Omega_pix FLUXCONV)`` e/s.
 
     (BCD = FLUXCONV e / (GAIN t) in MJy/sr; summing MJy/sr x Omega_pix x 1e6
