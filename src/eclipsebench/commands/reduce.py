@@ -102,6 +102,10 @@ def _clean(obj):
     return obj
 
 
+#: a depth error below this (1e-12 of the flux: rounding) is zero, never a result
+ZERO_ERROR_PPM = 1e-6
+
+
 def lightcurve_path(result_path: str | Path) -> Path:
     """``RESULT.json`` -> ``RESULT.lc.ecsv``."""
     p = Path(result_path)
@@ -130,9 +134,9 @@ def run(args: argparse.Namespace) -> dict:
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
                           method_options=method_options)
     error = result.depth_err_ppm
-    if error is None or not math.isfinite(error) or error <= 0:
+    if error is None or not math.isfinite(error) or error < ZERO_ERROR_PPM:
         raise InputError(f"{table_path}: the {args.method} fit gives depth "
-                         f"{result.depth_ppm:.1f} +- {error} ppm: a zero or non-finite error "
+                         f"{result.depth_ppm:.1f} +- {error:.3g} ppm: a zero or non-finite error "
                          "is not a result (constant flux or a degenerate fit); nothing written")
     summary = result.to_dict()
     if args.compare_phases:

@@ -1,0 +1,109 @@
+"""Helpers for the bad-input tests: run the CLI, check the one-line error, snapshot folders."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from astropy.io import fits
+from scipy.special import erf
+
+from eclipsebench.cli import main
+
+REAL = "real_xo3_peakup_46466816"
+GAIN, EXPTIME, FLUXCONV = 3.71, 1.92, 0.1447
+
+
+def run_cli(capsys, *argv) -> tuple[int, str, list[str]]:
+    """Exit code, stdout and the stderr lines of ``eclipsebench ARGV``."""
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err.splitlines()
+
+
+def assert_one_line(code: int, err: list[str], *names: str, exit_code: int = 2) -> None:
+    """Exit ``exit_code``, exactly one stderr line naming each of ``names``, no traceback."""
+    assert code == exit_code, err
+    assert len(err) == 1, err
+    assert "Traceback" not in err[0] and "internal error" not in err[0], err
+    for name in names:
+        assert str(name) in err[0], (name, err[0])
+
+
+def snapshot(root: Path) -> set[str]:
+    """Every path under ``root`` (files and folders), relative."""
+    return {p.relative_to(root).as_posix() for p in root.rglob("*")}
+
+
+def star_cube(n: int = 64, *, seed: int = 0, total: float = 7e4, bg: float = 5.0) -> np.ndarray:
+    """``n`` frames (electrons) of a jittering integrated Gaussian star with photon noise."""
+    rng = np.random.default_rng(seed)
+
+    def edges(c: float) -> np.ndarray:
+        e = (np.arange(33) - 0.5 - c) / (0.6 * np.sqrt(2.0))
+        return np.diff(0.5 * erf(e))
+
+    frames = [total * np.outer(edges(14.9 + 0.01 * rng.standard_normal()),
+                               edges(15.2 + 0.01 * rng.standard_normal())) for _ in range(n)]
+    return rng.poisson(np.stack(frames) + bg).astype(float)
+
+
+def write_cube(folder: Path, cube_e: np.ndarray, *, expid: int = 0, bmjd: float | None = None,
+               aorkey: int = 123456, **extra) -> Path:
+    """A subarray BCD file of ``cube_e`` (electrons); cube k starts 130 s after cube k-1."""
+    folder.mkdir(parents=True, exist_ok=True)
+    h = fits.Header()
+    values = dict(CHNLNUM=2, BMJD_OBS=57000.0 + expid * 130.0 / 86400 if bmjd is None else bmjd,
+                  FRAMTIME=2.0, EXPTIME=EXPTIME, SAMPTIME=0.01, AFOWLNUM=8, AWAITPER=184,
+                  GAIN=GAIN, FLUXCONV=FLUXCONV, RONOISE=9.4, BUNIT="MJy/sr", READMODE="SUB",
+                  AORKEY=aorkey, EXPID=expid, DCENUM=0, TIMESYS="TDB")
+    values.update(extra)
+    for key, value in values.items():
+        h[key] = value
+    path = folder / f"SPITZER_I2_{aorkey}_{expid:04d}_0000_1_bcd.fits"
+    fits.PrimaryHDU((cube_e * FLUXCONV / (GAIN * EXPTIME)).astype(np.float32),
+                    header=h).writeto(path)
+    return path
+
+
+@pytest.fixture
+def star_folder(tmp_path) -> Path:
+    """Three synthetic cubes of one AOR (192 frames)."""
+    folder = tmp_path / "bcd"
+    for k in range(3):
+        write_cube(folder, star_cube(64, seed=k), expid=k)
+    return folder
+
+
+@pytest.fixture
+def real_cubes(shared_irac, tmp_path):
+    """``copy(names)``: copy real XO-3 peak-up cubes (EXPIDs) into tmp_path/real; return paths."""
+    folder = tmp_path / "real"
+    folder.mkdir()
+
+    def copy(expids=(0, 1, 2)) -> list[Path]:
+        out = []
+        for k in expids:
+            name = f"SPITZER_I2_46466816_{k:04d}_0000_2_bcd.fits"
+            shutil.copy(shared_irac / REAL / name, folder / name)
+            out.append(folder / name)
+        return out
+
+    return copy
+
+
+@pytest.fixture
+def cli(capsys):
+    """``cli(*argv) -> (code, stdout, stderr lines)``."""
+    return lambda *argv: run_cli(capsys, *argv)
+
+
+@pytest.fixture
+def bad():
+    """The helpers of this folder (tests import nothing from conftest under importlib mode)."""
+    import types
+
+    return types.SimpleNamespace(assert_one_line=assert_one_line, snapshot=snapshot,
+                                 star_cube=star_cube, write_cube=write_cube)
