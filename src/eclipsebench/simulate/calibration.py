@@ -4,147 +4,109 @@ A non-variable star observed in many short pointings spread over the
 sweet-spot pixel with 0.1 s subarray frames (FN = 2, WT = 6, 0.01 s ticks),
 through the same PRF, intra-pixel gain and Fowler noise as the challenge
 (about 400,000 measurements by default, ``simulation.calibration_frames``).
-Each measurement is reduced as the paper's photometry does: background from
-the 3-7 px annulus, center-of-light centroid over 7x7 pixels (Eqs.
-``x_centroid``/``y_centroid``), noise pixels over the same box (Eq.
-``noise_pixels``), and a 2.25 px aperture. The result,
-``DIR/calibration/pmap_calibration.fits``, has columns ``x``, ``y``,
-``noise_pixels``, ``flux``, ``flux_err`` (electrons) plus the true position
-and the background.
 
-Speed: only an 11x11 stamp around the star is simulated (the annulus is the
-part of 3-7 px that lies inside it, radii 3 to ~5.4 px); the photometry here
-is a small vectorised numpy version of the photometry stage's (to be unified
-with :mod:`eclipsebench.photometry` later).
+Measured as the science frames are: every frame goes through the science
+photometry itself, :func:`eclipsebench.photometry.measure.measure_stack`, with
+the configuration's ``[photometry]`` section (brightest pixel, annulus,
+centroid, noise pixels, aperture radius, background estimator, noise model;
+by default the paper's 3-7 px annulus mean, 7x7 center of light, Eqs.
+``x_centroid``/``y_centroid``/``noise_pixels``, and a 2.25 px aperture) and
+the calibration frames' readout. KR/Pmap therefore trains on numbers made by
+the same code, with the same settings, as the numbers it corrects.
+
+Stamp size: only a square stamp about the star is simulated (400,000 full
+32x32 frames would cost 3.5 times the pixels for nothing). Its half-width,
+:func:`calibration_stamp_half_px`, is ``ceil(outer annulus radius) + 1`` px,
+or more where the centroid box, the largest aperture (pixel corners included)
+or the least-asymmetry window reach further: 8 px, a 17x17 stamp, for the
+default photometry. The star sits within 0.5 px of the stamp's central pixel,
+so its brightest pixel and its centroid lie within 1 px of it, and every pixel
+of the annulus about either lies inside the stamp: no estimator sees the stamp
+edge, as none sees the edge of a science frame (an 11x11 stamp, as before,
+clipped the 3-7 px annulus to 3-5.4 px). The price: the Fowler noise draws of
+2.4 times as many pixels (about 1.4 s instead of 0.5 s per 16,384-frame chunk
+on this machine). The whole stamp gets the star and the sky at a constant rate,
+as the pixels of a science frame outside its per-tick stamp do.
+
+The result, ``DIR/calibration/pmap_calibration.fits``, has columns ``x``,
+``y``, ``noise_pixels``, ``flux``, ``flux_err`` (electrons) plus the true
+position and the background.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
+from astropy.table import Table
 
 from ..config import Config
-from ..instrument.constants import SUB_0P1S, ReadoutMode
-from ..instrument.fowler import fowler_weights
+from ..config.photometry import PhotometrySection
+from ..instrument.constants import SUB_0P1S, ReadoutMode, read_noise_of
 from ..io.atomic import atomic_path
+from ..photometry.estimators import LSQ_GRID_HALF_PX, LSQ_WINDOW_PX
+from ..photometry.measure import measure_stack
 from ..seeding import rng
 from .render import fowler_uniform
 from .star import make_star_imager, prf_label
 
 __all__ = ["write_calibration_set", "write_calibration_table", "simulate_calibration",
-           "calibration_chunk", "concat_chunks", "n_chunks", "measure_stamps",
-           "aperture_weight_table", "CHUNK_FRAMES", "STAMP_HALF", "FRAMES_PER_POINTING"]
+           "calibration_chunk", "calibration_frames", "measure_calibration_frames",
+           "calibration_stamp_half_px", "CalibrationFrames", "concat_chunks", "n_chunks",
+           "CHUNK_FRAMES", "FRAMES_PER_POINTING", "CALIBRATION_COLUMNS"]
 
 CHUNK_FRAMES = 16384
 FRAMES_PER_POINTING = 64
-STAMP_HALF = 5
-BOX_HALF = 3
 JITTER_PX = 0.01
 CALIBRATION_FLUX_E = 40000.0
+CALIBRATION_COLUMNS = ("x", "y", "noise_pixels", "flux", "flux_err", "x_true", "y_true",
+                       "background")
 
 
-def aperture_weight_table(radius_px: float, half: int = BOX_HALF, step_px: float = 0.01
-                          ) -> tuple[np.ndarray, float]:
-    """Exact pixel overlaps of a circle on a grid of centre offsets, for interpolation.
+class CalibrationFrames(NamedTuple):
+    """Simulated calibration stamps before photometry.
 
-    Returns ``(table, step)`` with ``table[iy, ix]`` the (2 half + 1)^2 overlap
-    weights of a circle of ``radius_px`` centred at offset
-    ``(-0.5 + ix step, -0.5 + iy step)`` from the box's central pixel.
+    ``frames_e[n, a, b]`` is detector pixel ``(x0[n] + b, y0[n] + a)`` in
+    electrons; the star's true position is ``(x_true[n], y_true[n])``.
     """
-    from photutils.geometry import circular_overlap_grid
 
-    n_off = int(round(1.0 / step_px)) + 1
-    offs = -0.5 + step_px * np.arange(n_off)
-    size = 2 * half + 1
-    table = np.empty((n_off, n_off, size, size))
-    for iy, oy in enumerate(offs):
-        for ix, ox in enumerate(offs):
-            table[iy, ix] = circular_overlap_grid(-half - 0.5 - ox, half + 0.5 - ox,
-                                                  -half - 0.5 - oy, half + 0.5 - oy,
-                                                  size, size, radius_px, 1, 1)
-    return table, step_px
+    frames_e: np.ndarray
+    x0: np.ndarray
+    y0: np.ndarray
+    x_true: np.ndarray
+    y_true: np.ndarray
 
 
-def _interp_weights(table: np.ndarray, step: float, ox: np.ndarray, oy: np.ndarray
-                    ) -> np.ndarray:
-    """Bilinear interpolation of :func:`aperture_weight_table` at offsets (ox, oy)."""
-    n = table.shape[0]
-    u = np.clip((ox + 0.5) / step, 0, n - 1 - 1e-9)
-    v = np.clip((oy + 0.5) / step, 0, n - 1 - 1e-9)
-    i = u.astype(int)
-    j = v.astype(int)
-    fu = (u - i)[:, None, None]
-    fv = (v - j)[:, None, None]
-    return ((1 - fu) * (1 - fv) * table[j, i] + fu * (1 - fv) * table[j, i + 1]
-            + (1 - fu) * fv * table[j + 1, i] + fu * fv * table[j + 1, i + 1])
+def calibration_stamp_half_px(options: PhotometrySection) -> int:
+    """Half-width (px) of the simulated calibration stamps (see the module notes).
 
-
-def measure_stamps(stamps_e: np.ndarray, *, radius_px: float, annulus_px: tuple[float, float],
-                   var_per_e: float, read_var_e2: float, weight_table=None
-                   ) -> dict[str, np.ndarray]:
-    """Photometry of star stamps centred on the star's nearest pixel.
-
-    Parameters
-    ----------
-    stamps_e : ndarray, shape (n, 2h + 1, 2h + 1)
-        Images in electrons; the central pixel is the star's nearest pixel.
-    radius_px : float
-        Aperture radius.
-    annulus_px : (float, float)
-        Background annulus radii about the central pixel (clipped to the stamp).
-    var_per_e, read_var_e2 : float
-        Pixel variance model ``var = var_per_e max(e, 0) + read_var_e2``.
-    weight_table : tuple, optional
-        :func:`aperture_weight_table` for ``radius_px`` (computed if absent).
-
-    Returns
-    -------
-    dict of ndarray
-        ``x_off``, ``y_off`` (centroid relative to the central pixel),
-        ``noise_pixels``, ``flux``, ``flux_err``, ``background`` (e per px).
+    ``ceil(r_out) + 1`` for the annulus, raised where the centroid box, the
+    largest aperture (pixel corners included) or the least-asymmetry window
+    (plus 1 px) reach further; 8 for the default photometry.
     """
-    n, size, _ = stamps_e.shape
-    h = size // 2
-    yy, xx = np.mgrid[-h:h + 1, -h:h + 1]
-    r = np.hypot(xx, yy)
-    ann = (r >= annulus_px[0]) & (r <= annulus_px[1])
-    n_ann = int(ann.sum())
-    bg = stamps_e[:, ann].mean(axis=1)
-    sub = stamps_e - bg[:, None, None]
-    box = sub[:, h - BOX_HALF:h + BOX_HALF + 1, h - BOX_HALF:h + BOX_HALF + 1]
-    k = np.arange(-BOX_HALF, BOX_HALF + 1, dtype=float)
-    tot = box.sum(axis=(1, 2))
-    # Eqs. x_centroid, y_centroid over the 7x7 box
-    x_off = (box.sum(axis=1) * k).sum(axis=1) / tot
-    y_off = (box.sum(axis=2) * k).sum(axis=1) / tot
-    # Eq. noise_pixels over the same box
-    npix = tot**2 / (box**2).sum(axis=(1, 2))
-    table, step = weight_table if weight_table is not None else aperture_weight_table(radius_px)
-    w = _interp_weights(table, step, x_off, y_off)
-    raw = stamps_e[:, h - BOX_HALF:h + BOX_HALF + 1, h - BOX_HALF:h + BOX_HALF + 1]
-    area = w.sum(axis=(1, 2))
-    flux = (w * box).sum(axis=(1, 2))
-    var_pix = var_per_e * np.clip(raw, 0.0, None) + read_var_e2
-    var_bg = (var_per_e * np.clip(bg, 0.0, None) + read_var_e2) / n_ann
-    flux_err = np.sqrt((w**2 * var_pix).sum(axis=(1, 2)) + area**2 * var_bg)
-    return {"x_off": x_off, "y_off": y_off, "noise_pixels": npix, "flux": flux,
-            "flux_err": flux_err, "background": bg}
+    r_max = max(max(options.radii_px), options.radius_px)
+    reach_px = max(options.annulus_px[1], r_max + 0.5, options.box_px // 2,
+                   LSQ_GRID_HALF_PX + LSQ_WINDOW_PX)
+    return int(math.ceil(reach_px)) + 1
 
 
-def calibration_chunk(cfg: Config, chunk: int, n_total: int | None = None, *,
-                      mode: ReadoutMode = SUB_0P1S,
-                      flux_aperture_e: float = CALIBRATION_FLUX_E) -> dict[str, np.ndarray]:
-    """Simulate and measure frames ``chunk * 16384 ...`` of the calibration set.
+def calibration_frames(cfg: Config, chunk: int, n_total: int | None = None, *,
+                       mode: ReadoutMode = SUB_0P1S,
+                       flux_aperture_e: float = CALIBRATION_FLUX_E) -> CalibrationFrames:
+    """Simulate frames ``chunk * 16384 ...`` of the calibration set (no photometry).
 
     Pointings of 64 frames are centred uniformly at random within a square of
     side ``simulation.calibration_box_px`` around the sweet-spot pixel centre
-    (15, 15); frames scatter about their pointing by 0.01 px. Streams:
-    ``("simulate", "calibration", chunk, "positions"|"photon"|"read")``, so the
-    output depends on the seed only, not on how chunks are spread over workers.
+    (15, 15); frames scatter about their pointing by 0.01 px. Each frame is a
+    stamp of :func:`calibration_stamp_half_px` about the star's nearest pixel
+    with ``flux_aperture_e`` electrons in the ``simulation.aperture_radius_px``
+    aperture, the sky, physical Fowler noise and read noise of ``mode``.
+    Streams: ``("simulate", "calibration", chunk, "positions"|"photon"|"read")``,
+    so the output depends on the seed only, not on how chunks are spread over
+    workers.
     """
-    from ..simulate.challenge import read_noise_of
-
     sim = cfg.simulation
     seed = cfg.challenge.seed
     n_total = sim.calibration_frames if n_total is None else int(n_total)
@@ -156,10 +118,7 @@ def calibration_chunk(cfg: Config, chunk: int, n_total: int | None = None, *,
                               sim.background_reference)
     obs = cfg.observation
     bg_per_tick = sky_e * mode.t_exp_s / ((obs.fowler + obs.wait) * obs.sample_time_s) / ticks_exp
-    read_sigma = read_noise_of(cfg) * np.sqrt(2.0 / mode.fowler)
-    w = fowler_weights(mode).astype(float)
-    var_per_e = float((w**2).sum() / (mode.fowler**2 * ticks_exp))
-    table = _weight_table(sim.aperture_radius_px)
+    read_sigma_e = read_noise_of(cfg) * np.sqrt(2.0 / mode.fowler)
 
     g = rng(seed, "simulate", "calibration", chunk, "positions")
     n_point = -(-n // FRAMES_PER_POINTING)
@@ -167,26 +126,44 @@ def calibration_chunk(cfg: Config, chunk: int, n_total: int | None = None, *,
     pos = np.repeat(centres, FRAMES_PER_POINTING, axis=0)[:n]
     pos = pos + g.normal(0.0, JITTER_PX, size=pos.shape)
     x_true, y_true = pos[:, 0], pos[:, 1]
-    stamps, x0, y0 = star.prf.render_stamp(x_true, y_true, half=STAMP_HALF)
+    half = calibration_stamp_half_px(cfg.photometry)
+    stamps, x0, y0 = star.prf.render_stamp(x_true, y_true, half=half)
     rate = stamps * (e_per_unit / ticks_exp) + bg_per_tick
     frames = fowler_uniform(rate, mode, rng(seed, "simulate", "calibration", chunk, "photon"))
     frames += rng(seed, "simulate", "calibration", chunk, "read").standard_normal(
-        frames.shape) * read_sigma
-    m = measure_stamps(frames, radius_px=sim.aperture_radius_px, annulus_px=(3.0, 7.0),
-                       var_per_e=var_per_e, read_var_e2=read_sigma**2, weight_table=table)
-    return {"x": x0 + STAMP_HALF + m["x_off"], "y": y0 + STAMP_HALF + m["y_off"],
+        frames.shape) * read_sigma_e
+    return CalibrationFrames(frames, x0, y0, x_true, y_true)
+
+
+def measure_calibration_frames(cfg: Config, frames: CalibrationFrames, *,
+                               mode: ReadoutMode = SUB_0P1S) -> dict[str, np.ndarray]:
+    """Science photometry of calibration stamps: :func:`measure_stack` with ``cfg.photometry``.
+
+    The brightest pixel is searched about the stamps' central pixel; the
+    noise model uses the readout ``mode`` and :func:`read_noise_of` ``cfg``.
+
+    Returns
+    -------
+    dict of ndarray
+        :data:`CALIBRATION_COLUMNS`, positions in detector pixels.
+    """
+    half = frames.frames_e.shape[1] // 2
+    m = measure_stack(frames.frames_e, guess_x=half, guess_y=half, options=cfg.photometry,
+                      fowler=mode.fowler, wait=mode.wait, read_noise_e=read_noise_of(cfg))
+    return {"x": frames.x0 + m["x"], "y": frames.y0 + m["y"],
             "noise_pixels": m["noise_pixels"], "flux": m["flux"], "flux_err": m["flux_err"],
-            "x_true": x_true, "y_true": y_true, "background": m["background"]}
+            "x_true": frames.x_true, "y_true": frames.y_true, "background": m["background"]}
 
 
-_TABLES: dict[float, tuple[np.ndarray, float]] = {}
+def calibration_chunk(cfg: Config, chunk: int, n_total: int | None = None, *,
+                      mode: ReadoutMode = SUB_0P1S,
+                      flux_aperture_e: float = CALIBRATION_FLUX_E) -> dict[str, np.ndarray]:
+    """Simulate and measure frames ``chunk * 16384 ...`` of the calibration set.
 
-
-def _weight_table(radius_px: float) -> tuple[np.ndarray, float]:
-    table = _TABLES.get(radius_px)
-    if table is None:
-        table = _TABLES[radius_px] = aperture_weight_table(radius_px)
-    return table
+    :func:`calibration_frames` then :func:`measure_calibration_frames`.
+    """
+    frames = calibration_frames(cfg, chunk, n_total, mode=mode, flux_aperture_e=flux_aperture_e)
+    return measure_calibration_frames(cfg, frames, mode=mode)
 
 
 def n_chunks(cfg: Config, n_total: int | None = None) -> int:
@@ -203,8 +180,8 @@ def simulate_calibration(cfg: Config, *, n_frames: int | None = None) -> dict[st
 
 def concat_chunks(parts: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
     """Concatenate chunk results (in chunk order)."""
-    keys = ("x", "y", "noise_pixels", "flux", "flux_err", "x_true", "y_true", "background")
-    return {k: (np.concatenate([p[k] for p in parts]) if parts else np.zeros(0)) for k in keys}
+    return {k: (np.concatenate([p[k] for p in parts]) if parts else np.zeros(0))
+            for k in CALIBRATION_COLUMNS}
 
 
 def write_calibration_set(cfg: Config, out_dir: str | Path) -> str:
@@ -213,18 +190,21 @@ def write_calibration_set(cfg: Config, out_dir: str | Path) -> str:
 
 
 def write_calibration_table(cfg: Config, data: dict[str, np.ndarray], out_dir: str | Path) -> str:
-    """Write measured calibration frames to ``DIR/calibration/pmap_calibration.fits``."""
-    from astropy.table import Table
+    """Write measured calibration frames to ``DIR/calibration/pmap_calibration.fits``.
 
-    table = Table({k: data[k] for k in ("x", "y", "noise_pixels", "flux", "flux_err",
-                                        "x_true", "y_true", "background")})
+    The header records how they were measured (``[photometry]`` of ``cfg``).
+    """
+    opt = cfg.photometry
+    table = Table({k: data[k] for k in CALIBRATION_COLUMNS})
     for k in ("x", "y", "x_true", "y_true"):
         table[k].unit = "pix"
     table.meta.update({"SIMSEED": cfg.challenge.seed, "NFRAMES": len(table),
                        "READMODE": "SUB 0.1s", "AFOWLNUM": SUB_0P1S.fowler,
                        "AWAITPER": SUB_0P1S.wait, "SAMPTIME": SUB_0P1S.sample_time_s,
-                       "APRADIUS": cfg.simulation.aperture_radius_px,
-                       "ANNULUS": "3-7 px (clipped to 11x11 stamp)",
+                       "APRADIUS": opt.radius_px,
+                       "ANNULUS": f"{opt.annulus_px[0]:g}-{opt.annulus_px[1]:g} px",
+                       "BGEST": opt.background, "CENTROID": opt.centroid,
+                       "STAMPPX": 2 * calibration_stamp_half_px(opt) + 1,
                        "FLUXAPE": CALIBRATION_FLUX_E, "NOISEMOD": "physical",
                        "SIMPRF": prf_label(cfg.simulation.prf), "BUNIT": "electrons per frame",
                        "SIMFLAT": cfg.simulation.flat_gain,
