@@ -94,6 +94,31 @@ def real_cubes(shared_irac, tmp_path):
     return copy
 
 
+def xo3_table(path: Path, *, noise: float = 1e-3, seed: int = 0) -> Path:
+    """A photometry table (contract columns) of an XO-3b epoch: flat flux times (1 + noise)."""
+    from astropy.table import Table
+
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.astro.orbit import eclipse_time_bmjd
+
+    t_ecl = eclipse_time_bmjd(get_system("XO-3b"), 57000.0)
+    time = t_ecl + np.arange(-0.2, 0.17, 6.0 / 86400)
+    n = len(time)
+    rng = np.random.default_rng(seed)
+    x = 15.0 + 0.05 * rng.standard_normal(n)
+    y = 15.0 + 0.05 * rng.standard_normal(n)
+    flux = 2e5 * (1.0 + noise * rng.standard_normal(n))
+    Table({"time_bmjd": time, "aorkey": np.full(n, 20150001), "expid": np.arange(n) // 64,
+           "frame": np.arange(n) % 64, "x": x, "y": y, "x_gauss": x, "y_gauss": y,
+           "noise_pixels": np.full(n, 7.0), "width_x": np.full(n, 0.6),
+           "width_y": np.full(n, 0.6), "background": np.full(n, 0.1), "flux": flux,
+           "flux_err": np.full(n, 200.0), "flag": np.zeros(n, dtype=np.int32),
+           "stamp3": np.broadcast_to(flux[:, None, None] / 9, (n, 3, 3)).copy(),
+           "stamp5": np.broadcast_to(flux[:, None, None] / 25, (n, 5, 5)).copy()},
+          meta={"EPOCH": 1}).write(path)
+    return path
+
+
 @pytest.fixture
 def cli(capsys):
     """``cli(*argv) -> (code, stdout, stderr lines)``."""
@@ -106,4 +131,5 @@ def bad():
     import types
 
     return types.SimpleNamespace(assert_one_line=assert_one_line, snapshot=snapshot,
-                                 star_cube=star_cube, write_cube=write_cube)
+                                 star_cube=star_cube, write_cube=write_cube,
+                                 xo3_table=xo3_table)

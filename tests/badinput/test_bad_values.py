@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from astropy.table import Table
 
@@ -62,31 +61,8 @@ def test_bare_command_prints_usage_on_stderr(cli, bad):
     assert out == ""
 
 
-def _constant_table(path):
-    """A photometry table of an XO-3b epoch whose flux never changes."""
-    from eclipsebench.astro.catalogue import get_system
-    from eclipsebench.astro.orbit import eclipse_time_bmjd
-
-    t_ecl = eclipse_time_bmjd(get_system("XO-3b"), 57000.0)
-    time = t_ecl + np.arange(-0.2, 0.17, 6.0 / 86400)
-    n = len(time)
-    rng = np.random.default_rng(0)
-    x = 15.0 + 0.05 * rng.standard_normal(n)
-    y = 15.0 + 0.05 * rng.standard_normal(n)
-    flux = np.full(n, 2e5)
-    Table({"time_bmjd": time, "aorkey": np.full(n, 20150001), "expid": np.arange(n) // 64,
-           "frame": np.arange(n) % 64, "x": x, "y": y, "x_gauss": x, "y_gauss": y,
-           "noise_pixels": np.full(n, 7.0), "width_x": np.full(n, 0.6),
-           "width_y": np.full(n, 0.6), "background": np.full(n, 0.1), "flux": flux,
-           "flux_err": np.full(n, 200.0), "flag": np.zeros(n, dtype=np.int32),
-           "stamp3": np.broadcast_to(flux[:, None, None] / 9, (n, 3, 3)).copy(),
-           "stamp5": np.broadcast_to(flux[:, None, None] / 25, (n, 5, 5)).copy()},
-          meta={"EPOCH": 1}).write(path)
-
-
 def test_reduce_refuses_a_zero_error(tmp_path, cli, bad):
-    table = tmp_path / "epoch_01.fits"
-    _constant_table(table)
+    table = bad.xo3_table(tmp_path / "epoch_01.fits", noise=0.0)
     before = bad.snapshot(tmp_path)
     code, out, err = cli("reduce", table, "--method", "segpoly", "--prayer-bead", "0", "--quiet")
     bad.assert_one_line(code, err, str(table), "segpoly", "error")
