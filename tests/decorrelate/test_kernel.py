@@ -8,7 +8,7 @@ from astropy.io import fits
 from scipy.optimize import minimize_scalar
 
 from eclipsebench.decorrelate import get_method
-from eclipsebench.decorrelate.base import EpochData, MethodContext
+from eclipsebench.decorrelate.base import EpochData
 from eclipsebench.decorrelate.pmap import (
     GriddedPmap,
     interpolate_grid,
@@ -18,12 +18,10 @@ from eclipsebench.decorrelate.pmap import (
 from eclipsebench.errors import DataError, InputError
 
 
-
 def _kr_pmap(data, pmap, **options):
     """KR/Pmap built as the reducer builds it: the calibration set loaded into the context."""
-    cls = get_method("kr-pmap")
-    context = MethodContext(method="kr-pmap", resources=cls.load_resources(data, {"pmap": pmap}))
-    return cls(data, context=context, **options)
+    return get_method("kr-pmap").build(data, options, resources={"pmap": pmap})
+
 
 def _random_epoch(n=400, seed=3, meta=None):
     g = np.random.default_rng(seed)
@@ -167,16 +165,16 @@ def test_kr_pmap_removes_the_noise_pixel_offset_of_the_calibration_set(tmp_path)
 
 
 def test_kr_pmap_finds_the_simulation_calibration_set(epoch_sys, simdir):
-    model = get_method("kr-pmap")(epoch_sys.data)
+    model = get_method("kr-pmap").build(epoch_sys.data)
     assert model.diagnostics()["pmap"] == str(simdir / "calibration" / "pmap_calibration.fits")
 
 
 def test_kr_pmap_without_any_pmap_is_a_clear_error(tmp_path):
     data = _random_epoch()
     with pytest.raises(InputError, match="needs a pmap"):
-        get_method("kr-pmap")(data)
+        get_method("kr-pmap").build(data)
     with pytest.raises(InputError, match="does not exist"):
-        get_method("kr-pmap")(_random_epoch(meta={"SIMDIR": str(tmp_path)}))
+        get_method("kr-pmap").build(_random_epoch(meta={"SIMDIR": str(tmp_path)}))
     with pytest.raises(InputError, match="no such file"):
         _kr_pmap(data, str(tmp_path / "nope.fits"))
 

@@ -53,7 +53,7 @@ def built(epoch_small):
     out = {}
     for name in METHODS:
         before = _snapshot(epoch_small.data)
-        model = get_method(name)(epoch_small.data)
+        model = get_method(name).build(epoch_small.data)
         out[name] = (model, before)
     return out
 

@@ -299,6 +299,10 @@ class Systematics(ABC):
     #: mean) leaves residuals that are not the noise the bead should shift,
     #: and may set this to False (its errors then come from the Jacobian and MCMC).
     use_prayer_bead: ClassVar[bool] = True
+    #: Whether :meth:`with_flux` equals a fresh build on the new fluxes. A method
+    #: whose data-derived state is a fixed pre-processing step (SP(K2)'s detrend)
+    #: may keep it on refits and set this to False.
+    with_flux_rebuilds: ClassVar[bool] = True
 
     def __init__(self, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
                  *, context: MethodContext | None = None, **kwargs: Any) -> None:
@@ -312,6 +316,27 @@ class Systematics(ABC):
                              "in the photometry table")
         self.data = data
         self.context = context if context is not None else MethodContext(method=self.name)
+
+    @classmethod
+    def build(cls, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
+              *, seed: int = 0, epoch: int = 0,
+              resources: Mapping[str, Any] | None = None) -> Systematics:
+        """Build the method as the reducer does: resources loaded, streams from ``seed``.
+
+        Parameters
+        ----------
+        data : EpochData
+            The frames.
+        options : Mapping or MethodOptions, optional
+            The method's options.
+        seed, epoch : int
+            Run seed and epoch number of the random streams.
+        resources : Mapping, optional
+            Paths or loaded objects for the names in ``cls.resources``.
+        """
+        context = MethodContext(seed=int(seed), epoch=int(epoch), method=cls.name,
+                                resources=cls.load_resources(data, dict(resources or {})))
+        return cls(data, options, context=context)
 
     @classmethod
     def load_resources(cls, data: EpochData, sources: Mapping[str, Any]) -> dict[str, Any]:

@@ -26,7 +26,6 @@ IRSA correction code does.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -342,10 +341,6 @@ class KernelRegressionPmap(Systematics):
         o = self.options
         k, use_np, match_np = o.k, o.use_noise_pixels, o.match_noise_pixels
         max_d, max_frac = o.max_distance_px, o.max_uncovered_fraction
-        if "pmap" not in self.context.resources:
-            self.context = dataclasses.replace(
-                self.context, resources={**self.context.resources,
-                                         **self.load_resources(data, {})})
         self.pmap = self.context.resource("pmap")
         path = self.pmap.source or "the calibration set"
         x = np.asarray(data.x, float)

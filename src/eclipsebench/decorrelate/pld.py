@@ -219,6 +219,12 @@ class PixelLevelDecorrelation(Systematics):
         self.design = PldDesign(regressors, data.flux, data.flux_err, int(bin_frames),
                                 time=data.time_bmjd)
 
+    def diagnostics(self) -> dict[str, Any]:
+        """The stamp, the regressors and the points the coefficients are fitted on."""
+        return {"stamp": self.stamp, "n_regressors": int(self.design.n_regressors),
+                "bin_frames": self.options.bin_frames,
+                "n_fit_points": -(-len(self.data) // self.options.bin_frames)}
+
     def coefficients(self, astro: np.ndarray) -> np.ndarray:
         """The PLD coefficients ``c_i`` (of the unscaled regressors) for ``astro``."""
         return pld_solve(self.design, astro) / self.design.col_scale

@@ -264,6 +264,8 @@ class SegmentedPolynomial(Systematics):
                                   "detrendings combined by the median (Buzasi et al. 2015)")
     #: The SP(K2) team fitted a box eclipse (paper B.6); the fitter may use the shared model instead.
     default_eclipse_shape: ClassVar[str] = "box"
+    #: The prayer bead's refits keep the detrend of the original data (see with_flux).
+    with_flux_rebuilds: ClassVar[bool] = False
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:

@@ -28,7 +28,7 @@ from ..astro.orbit import eclipse_time_bmjd
 from ..config.reduce import ReduceSection
 from ..config.system import SystemSection
 from ..decorrelate import get_method
-from ..decorrelate.base import MethodContext, MethodOptions, Systematics, parse_method_options
+from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
 from ..errors import InputError
 from ..photometry.table import read_photometry
 from ..seeding import rng
@@ -165,9 +165,8 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     system = resolve_system(system)
     t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source)
     epoch_number = _epoch_number(table, epoch)
-    context = MethodContext(seed=int(seed), epoch=epoch_number or 0, method=method,
-                            resources=cls.load_resources(data, dict(resources or {})))
-    systematics = cls(data, method_opts, context=context)
+    systematics = cls.build(data, method_opts, seed=seed, epoch=epoch_number or 0,
+                            resources=resources)
     return PreparedEpoch(table=table, systematics=systematics, system=system,
                          epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
                          source=source, n_frames=len(data))

@@ -1,0 +1,244 @@
+"""The public Python API: ``import eclipsebench as eb``.
+
+Every command of the CLI is a thin shell around one of these functions, so a
+notebook can do what the command line does, with the same checks. Errors are
+:class:`~eclipsebench.errors.InputError` (or a subclass) whose one-line
+message names the argument or file at fault. ``docs/api.md`` walks through
+them: simulate a small epoch, measure it, reduce it with two methods, score
+the depths.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from astropy.table import Table
+
+from .challenge.engine import RunReport
+from .challenge.runner import run_challenge as _run_challenge
+from .config import Config
+from .config import load_config as _load_config
+from .decorrelate.base import MethodOptions, Systematics, available_methods, get_method
+from .errors import InputError
+from .fit.reduce import EpochResult, reduce_epoch
+from .photometry.pipeline import photometry_tables, replace_options
+from .photometry.table import write_photometry
+from .simulate.challenge import ChallengeResult, simulate_challenge
+from .stats.depth_table import check_depth_table, read_depth_table
+from .stats.summary import summarize
+
+__all__ = ["load_config", "methods", "method_class", "measure", "reduce", "simulate",
+           "run_challenge", "score"]
+
+
+def load_config(path: str | os.PathLike | None = None, overrides: Sequence[str] = (),
+                **sections: Mapping[str, Any]) -> Config:
+    """A validated configuration: a TOML file (or the defaults), then overrides.
+
+    Parameters
+    ----------
+    path : path, optional
+        A TOML configuration file; None gives the built-in XO-3b challenge.
+    overrides : sequence of str
+        ``"section.key=value"`` overrides, as ``--set`` on the command line.
+    **sections : mapping
+        Whole-section overrides, e.g. ``challenge={"epochs": 2}``.
+
+    Examples
+    --------
+    >>> cfg = load_config(challenge={"epochs": 2}, overrides=["challenge.seed=7"])
+    >>> cfg.challenge.epochs, cfg.challenge.seed
+    (2, 7)
+    """
+    extra = [f"{section}.{key}={_toml_literal(value)}"
+             for section, table in sections.items() for key, value in dict(table).items()]
+    return _load_config(path, list(overrides) + extra)
+
+
+def _toml_literal(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_literal(v) for v in value) + "]"
+    return repr(value)
+
+
+def _config(config: Config | str | os.PathLike | None) -> Config:
+    if config is None:
+        return _load_config(None)
+    if isinstance(config, Config):
+        return config
+    if isinstance(config, (str, os.PathLike)):
+        return _load_config(config)
+    raise InputError(f"config: expected a Config, the path of a TOML file or None, "
+                     f"got {type(config).__name__}")
+
+
+def methods() -> tuple[str, ...]:
+    """The registered method names, built-in and plugins (the paper's seven first).
+
+    Examples
+    --------
+    >>> methods()[:3]
+    ('bliss', 'gp', 'ica')
+    """
+    return available_methods()
+
+
+def method_class(name: str) -> type[Systematics]:
+    """The class registered as ``name`` (its ``Options`` lists the options).
+
+    Examples
+    --------
+    >>> method_class("kr-data").Options().k
+    50
+    """
+    return get_method(name)
+
+
+def measure(input_dir: str | os.PathLike, out: str | os.PathLike | None = None, *,
+            config: Config | str | os.PathLike | None = None, channel: int | None = None,
+            **photometry: Any) -> list[Table]:
+    """Photometry of every epoch of IRAC BCD cubes under ``input_dir``.
+
+    Parameters
+    ----------
+    input_dir : path
+        A folder of BCD cubes (``*_bcd.fits``), simulated or from the archive.
+    out : path, optional
+        A folder: each epoch's table is also written there as ``epoch_NN.fits``.
+    config : Config or path, optional
+        Its ``[photometry]`` section is used (default: the built-in one).
+    channel : int, optional
+        Keep only this IRAC channel's files.
+    **photometry
+        ``[photometry]`` values to change, e.g. ``centroid="gaussian"``.
+
+    Returns
+    -------
+    list of astropy.table.Table
+        One photometry table per epoch (``docs/contracts.md``), in epoch order.
+    """
+    options = _config(config).photometry
+    if photometry:
+        options = replace_options(options, **photometry)
+    tables = []
+    for epoch, table in photometry_tables(input_dir, options, channel=channel):
+        if out is not None:
+            write_photometry(table, Path(out) / f"epoch_{epoch.number:02d}.fits")
+        tables.append(table)
+    return tables
+
+
+def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
+           seed: int = 0, options: Mapping[str, Any] | MethodOptions | None = None,
+           config: Config | str | os.PathLike | None = None, epoch: int | None = None,
+           resources: Mapping[str, Any] | None = None, **reduce_options: Any) -> EpochResult:
+    """Fit one epoch with one method and the shared eclipse + phase-curve model.
+
+    Parameters
+    ----------
+    table : astropy.table.Table or path
+        One epoch's photometry table (from :func:`measure` or a file).
+    method : str
+        A name from :func:`methods`.
+    system : str or PlanetSystem, optional
+        The planet (default: the configuration's, XO-3b).
+    seed : int
+        Run seed: every random stream of the fit and the method derives from it.
+    options : mapping or the method's Options, optional
+        The method's options, over ``[reduce.options.<method>]`` of ``config``.
+    config : Config or path, optional
+        Its ``[reduce]`` and ``[system]`` sections are used.
+    epoch : int, optional
+        Epoch number (default: the table's ``EPOCH``).
+    resources : mapping, optional
+        What a method needs besides the table, e.g. ``{"pmap": path}`` for
+        ``kr-pmap`` (simulated tables find their calibration set themselves).
+    **reduce_options
+        ``[reduce]`` values to change, e.g. ``phase="linear"``, ``sampler="mcmc"``.
+
+    Returns
+    -------
+    EpochResult
+        ``depth_ppm``, ``depth_err_ppm``, every error estimate, the decorrelated
+        light curve; ``to_dict()`` is the result file's content.
+    """
+    cfg = _config(config)
+    section = cfg.reduce
+    if reduce_options:
+        section = replace(section, **reduce_options)
+        section.validate()
+    if system is None:
+        system = cfg.system.name
+    return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
+                        method_options=options, resources=resources)
+
+
+def simulate(out: str | os.PathLike, *, config: Config | str | os.PathLike | None = None,
+             seed: int | None = None, epochs: int | None = None, workers: int | None = None,
+             calibration: bool | None = None) -> ChallengeResult:
+    """Simulate a data challenge (IRAC BCD cubes and the truth) into the folder ``out``.
+
+    Parameters
+    ----------
+    out : path
+        The output folder (resumed if it holds an interrupted simulation of
+        the same configuration).
+    config : Config or path, optional
+        The challenge (default: the built-in ten-epoch XO-3b challenge).
+    seed, epochs : int, optional
+        ``challenge.seed`` and ``challenge.epochs`` to change.
+    workers : int, optional
+        Parallel workers (default ``run.workers``).
+    calibration : bool, optional
+        Write the KR/Pmap calibration-star set (default ``simulation.write_calibration``).
+    """
+    cfg = _config(config)
+    changes = {k: v for k, v in (("seed", seed), ("epochs", epochs)) if v is not None}
+    if changes:
+        cfg = replace(cfg, challenge=replace(cfg.challenge, **changes))
+        cfg.challenge.validate()
+    return simulate_challenge(cfg, out, workers=workers, calibration=calibration)
+
+
+def run_challenge(out: str | os.PathLike, *, config: Config | str | os.PathLike | None = None,
+                  workers: int | None = None,
+                  scheduler: str | None = None) -> tuple[dict, RunReport]:
+    """Simulate, measure, reduce with every method and score: the whole challenge.
+
+    Resumes an interrupted run in the same folder. Returns the summary (the
+    content of ``out/summary.json``) and what ran.
+    """
+    return _run_challenge(_config(config), out, workers=workers, scheduler=scheduler)
+
+
+def score(depths: Table | str | os.PathLike | Mapping[str, Sequence], *,
+          truth_ppm: float | None = None, sigma_phot_ppm: float | None = None,
+          methods: Sequence[str] | None = None, seed: int = 0, n_bootstrap: int = 2000) -> dict:
+    """The paper's statistics of many epochs and methods (Section 3, Tables 3-6).
+
+    Parameters
+    ----------
+    depths : Table, path or mapping of columns
+        Columns ``method``, ``epoch``, ``depth_ppm``, ``error_ppm``.
+    truth_ppm, sigma_phot_ppm : float, optional
+        The true depth (accuracy statistics) and the photon limit.
+    methods : sequence of str, optional
+        Restrict to these methods.
+    seed, n_bootstrap : int
+        The bootstrap of the confidence intervals.
+    """
+    if isinstance(depths, (str, os.PathLike)):
+        table = read_depth_table(depths)
+    else:
+        table = check_depth_table(depths if isinstance(depths, Table) else Table(dict(depths)),
+                                  "depths")
+    return summarize(table, sigma_phot_ppm=sigma_phot_ppm, truth_ppm=truth_ppm,
+                     methods=methods, seed=seed, n_bootstrap=n_bootstrap)
