@@ -118,5 +118,7 @@ def test_internal_error_exits_1_without_traceback(capsys, monkeypatch):
     assert code == 1 and "kaboom" in err and "Traceback" not in err
 
 
-def test_no_command_prints_help_and_exits_2(capsys):
+def test_no_command_prints_usage_on_stderr_and_exits_2(capsys):
     assert main([]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "usage: eclipsebench COMMAND" in err
