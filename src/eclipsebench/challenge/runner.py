@@ -105,14 +105,13 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
     plm = photon_limit_method(cfg, methods) if cfg.run.empirical_photon_limit else None
     tasks: list[Task] = []
     for flat in [False] + ([True] if plm is not None else []):
-        prefix = "simulate_flat" if flat else "simulate"
-        sim_tasks = plan_simulate_tasks(twin_config(cfg) if flat else cfg, layout.sim(flat),
-                                        calibration=None if not flat else False, prefix=prefix)
+        vcfg = twin_config(cfg) if flat else cfg  # the twin writes no calibration set
+        sim_tasks = plan_simulate_tasks(vcfg, layout.sim(flat),
+                                        prefix="simulate_flat" if flat else "simulate")
         tasks += sim_tasks
-        tasks += plan_photometry_tasks(twin_config(cfg) if flat else cfg, layout, plans,
-                                       flat=flat, after=(sim_tasks[-1].key,))
-        tasks += plan_reduce_tasks(twin_config(cfg) if flat else cfg, layout, epochs,
-                                   [plm] if flat else methods, flat=flat)
+        tasks += plan_photometry_tasks(vcfg, layout, plans, flat=flat,
+                                       after=(sim_tasks[-1].key,))
+        tasks += plan_reduce_tasks(vcfg, layout, epochs, [plm] if flat else methods, flat=flat)
     reads = ([reduce_key(m, e) for e in epochs for m in methods]
              + ([reduce_key(plm, e, True) for e in epochs] if plm is not None else [])
              + [photometry_key(e) for e in epochs] + ["simulate/truth"])

@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
@@ -32,7 +33,6 @@ def _figure(width: float, height: float) -> Figure:
 
 
 def _colors(n: int):
-    from matplotlib import colormaps
     cmap = colormaps["tab10" if n <= 10 else "turbo"]
     return [cmap(i if n <= 10 else i / max(n - 1, 1)) for i in range(n)]
 
