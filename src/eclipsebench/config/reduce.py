@@ -41,6 +41,11 @@ class ReduceSection:
         Pixel stamp handed to pixel-level methods (PLD, ICA).
     max_nfev : int
         Cap on function evaluations of one least-squares fit.
+    error_rule : {"largest", "method"}
+        The reported depth error: the largest of the Jacobian error times
+        ``max(1, beta_red)``, the prayer bead and the MCMC width, for every
+        method alike; or the estimate each method's authors reported (its
+        ``reported_error``, e.g. PLD's time-averaging extrapolation).
     options : dict
         Per-method options, ``[reduce.options.<method>]`` tables (the keys of
         each method's ``Options``; ``docs/methods.md``). Checked against the
@@ -60,6 +65,7 @@ class ReduceSection:
     radius_px: float = 0.0
     stamp: Literal["stamp3", "stamp5"] = "stamp3"
     max_nfev: int = 200
+    error_rule: Literal["largest", "method"] = "largest"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def validate(self) -> None:

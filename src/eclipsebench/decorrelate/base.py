@@ -299,6 +299,11 @@ class Systematics(ABC):
     #: mean) leaves residuals that are not the noise the bead should shift,
     #: and may set this to False (its errors then come from the Jacobian and MCMC).
     use_prayer_bead: ClassVar[bool] = True
+    #: The depth error its authors reported: a key of the fit's estimates
+    #: ("jacobian_beta", "prayer_bead", "mcmc") or of :meth:`depth_error_estimates`
+    #: (PLD: "time_averaging"). Used when ``[reduce] error_rule = "method"``;
+    #: "largest" is the shared rule (the largest of the fit's three, Wong et al. 2014).
+    reported_error: ClassVar[str] = "largest"
     #: Whether :meth:`with_flux` equals a fresh build on the new fluxes. A method
     #: whose data-derived state is a fixed pre-processing step (SP(K2)'s detrend)
     #: may keep it on refits and set this to False.
@@ -425,6 +430,25 @@ class Systematics(ABC):
         the depth at the solution.
         """
         return 0.0
+
+    def dropped_frames(self) -> dict[str, int]:
+        """Frames of the input that the method left out of ``self.data``, by reason.
+
+        A method that drops frames (BLISS's sparse knots, KR/Pmap's low
+        occupancy) builds ``self.data`` as the subset it keeps and counts the
+        rest here; the result file adds them to ``n_frames_dropped``.
+        """
+        return {}
+
+    def depth_error_estimates(self, astro: np.ndarray, dastro_ddepth: np.ndarray,
+                              theta: np.ndarray | None = None) -> dict[str, float]:
+        """The method's own estimates of the depth error (fractions), by name; default none.
+
+        Called once at the best fit. Each estimate is written to the result as
+        ``depth_err_<name>_ppm``; the one named by ``reported_error`` is
+        reported under ``[reduce] error_rule = "method"``.
+        """
+        return {}
 
     def n_effective_params(self) -> int:
         """Free parameters that the systematics model adds, for BIC and AIC."""

@@ -215,6 +215,7 @@ class EpochResult:
     seed: int
     options: dict[str, Any]
     diagnostics: dict[str, Any]
+    depth_err_own_ppm: dict[str, float]
     lightcurve: dict[str, np.ndarray] = field(repr=False, compare=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -244,6 +245,7 @@ class EpochResult:
                 out[f"{name}_err"] = self.param_errors[name]
         if self.mcmc is not None:
             out.update({f"mcmc_{k}": v for k, v in self.mcmc.items()})
+        out.update({f"depth_err_{k}_ppm": v for k, v in self.depth_err_own_ppm.items()})
         out["options"] = dict(self.options)
         out["diagnostics"] = dict(self.diagnostics)
         return out
@@ -278,14 +280,18 @@ def _mcmc_noise_scale(systematics: Systematics, fit: FitResult) -> float:
     return float(np.sqrt(max(fit.chi2_red, 1e-12)))
 
 
-def _extra_depth_variance(systematics: Systematics, astro_model: AstroModel,
-                          fit: FitResult) -> float:
-    """The method's extra depth variance (ICA's component separation), fraction squared."""
+def _depth_derivative(astro_model: AstroModel, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
+    """The best-fitting astrophysical curve and its derivative with respect to the depth."""
     theta = fit.theta_astro.copy()
     astro = astro_model(theta)
     h = 1e-6
     theta[0] += h
-    dastro = (astro_model(theta) - astro) / h
+    return astro, (astro_model(theta) - astro) / h
+
+
+def _extra_depth_variance(systematics: Systematics, astro: np.ndarray,
+                          dastro: np.ndarray) -> float:
+    """The method's extra depth variance (ICA's component separation), fraction squared."""
     value = float(systematics.extra_depth_variance(astro, dastro))
     return value if np.isfinite(value) and value > 0 else 0.0
 
@@ -372,11 +378,21 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
                      "acceptance": mc.acceptance, "converged": mc.converged,
                      "depth_median_ppm": float(mc.median[0] * 1e6)}
 
-    separation_var = _extra_depth_variance(systematics, astro_model, fit)
-    depth_err, err_method = _largest({
-        "jacobian_beta": jac_depth * inflate,
-        "prayer_bead": pb_depth,
-        "mcmc": mc.error("depth") if mc is not None else None})
+    astro_fit, dastro = _depth_derivative(astro_model, fit)
+    separation_var = _extra_depth_variance(systematics, astro_fit, dastro)
+    shared = {"jacobian_beta": jac_depth * inflate, "prayer_bead": pb_depth,
+              "mcmc": mc.error("depth") if mc is not None else None}
+    own = {name: float(v) for name, v in systematics.depth_error_estimates(
+        astro_fit, dastro, fit.theta[fit.n_astro:] if len(systematics.param_names) else None
+    ).items()} if errors else {}
+    depth_err, err_method = _largest(shared)
+    wanted = systematics.reported_error
+    if options.error_rule == "method" and wanted != "largest":
+        value = {**shared, **own}.get(wanted)
+        if value is None or not np.isfinite(value):
+            raise InputError(f"method '{method}': its reported error '{wanted}' was not "
+                             "computed (error_rule = 'method' needs it)")
+        depth_err, err_method = float(value), wanted
     if separation_var > 0:
         depth_err = float(np.hypot(depth_err, np.sqrt(separation_var)))
         err_method += "+separation"
@@ -412,7 +428,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
         mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
         options=systematics.options.to_dict(), diagnostics=_jsonable(systematics.diagnostics()),
-        lightcurve=lightcurve)
+        depth_err_own_ppm={k: v * 1e6 for k, v in own.items()}, lightcurve=lightcurve)
 
 
 def _jsonable(obj: Any) -> Any:
