@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .eclipse import EclipseShape
 from .phase_curves import design_matrix
 
 __all__ = ["EPOCH10_START_BMJD", "epoch_times", "phase_model_bias"]
@@ -44,7 +45,6 @@ def phase_model_bias(lc, time_bmjd, phase_models=("flat", "linear", "quadratic")
         Mid-eclipse time held fixed in the fit (default: the true one nearest
         the middle of the data).
     """
-    from .eclipse import EclipseShape
 
     t = np.asarray(time_bmjd, dtype=float)
     if t_ecl_bmjd is None:

@@ -31,6 +31,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 if TYPE_CHECKING:  # pragma: no cover
     from .catalogue import PlanetSystem
@@ -209,7 +210,6 @@ class OrbitClock:
 
     def _mid_event_geom(self, t_conj: float, which: str) -> float:
         """Geometric time of minimum projected separation near a conjunction."""
-        from scipy.optimize import minimize_scalar
 
         span = 0.02 * self.period
 

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 
+from ..astro.catalogue import get_system
 from ..config import dump_toml, load_config, to_mapping
+from ..errors import InputError
 from .options import add_config_options
 
 NAME = "config"
@@ -19,9 +21,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _check_system(config, args: argparse.Namespace) -> None:
     """The planet must be in the catalogue: name ``system.name`` and where it was set."""
-    from ..astro.catalogue import get_system
-    from ..errors import InputError
-
     try:
         get_system(config.system.name, config.system.catalogue or None)
     except InputError as exc:

@@ -5,9 +5,15 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+from astropy.table import Table
 
-from ..astro.bias import EPOCH10_START_BMJD
+from ..astro.bias import EPOCH10_START_BMJD, epoch_times
+from ..astro.catalogue import get_system
+from ..astro.lightcurve import light_curve_function
+from ..astro.orbit import BMJD_OFFSET
 from ..errors import InputError
+from ..io.atomic import atomic_path
+from ..io.paths import check_plot_path
 from .options import check_output_path, finite_float, nonnegative_float, positive_float
 
 NAME = "lightcurve"
@@ -46,12 +52,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..astro.bias import epoch_times
-    from ..astro.catalogue import get_system
-    from ..astro.lightcurve import light_curve_function
-    from ..astro.orbit import BMJD_OFFSET
-    from ..io.paths import check_plot_path
-
     if args.out:
         check_output_path(args.out, "--out", "file")
     if args.plot:
@@ -106,10 +106,6 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def _write_table(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
-    from astropy.table import Table
-
-    from ..io.atomic import atomic_path
-
     table = Table({"time_bmjd": time, "flux": flux,
                    "planet_flux": lc.planet_flux(time),
                    "visible_fraction": lc.visible_fraction(time),
@@ -124,10 +120,9 @@ def _write_table(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
 
 
 def _plot(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
+    # matplotlib (about 0.5 s to import) only when a plot is asked for.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
-
-    from ..io.atomic import atomic_path
 
     fig = Figure(figsize=(7, 3.5))
     FigureCanvasAgg(fig)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import InputError
 from ..stats.photon_limit import SHOT_NOISE_FORMS, photon_limit
 from .options import nonnegative_float, open_unit_float, positive_float, positive_int
 
@@ -41,8 +42,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..errors import InputError
-
     if (args.frames is None) != (args.depth_ppm is None):
         raise InputError("--frames and --depth-ppm: give both to compute sigma_phot_ppm")
     if args.flux_aperture < args.flux_net:

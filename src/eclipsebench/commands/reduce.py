@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import argparse
 import math
+from dataclasses import replace
 from pathlib import Path
 
+from ..astro.catalogue import get_system
+from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
 from ..fit.astro_model import ECLIPSE_SHAPES, PHASE_MODELS, RAMP_MODELS
+from ..io.atomic import atomic_path, write_json
+from ..io.paths import check_plot_path
 from .options import check_output_path, positive_float, positive_int
 
 NAME = "reduce"
@@ -73,9 +78,6 @@ def _method_options(items: list[str]) -> dict:
 
 
 def _options(args: argparse.Namespace):
-    from dataclasses import replace
-
-    from ..config import load_config
     cfg = load_config(args.config, args.overrides)
     changes = {"phase": args.phase, "ramp": args.ramp, "eclipse_shape": args.eclipse_shape,
                "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
@@ -87,7 +89,6 @@ def _options(args: argparse.Namespace):
         raise InputError(str(exc).replace("config key '", "option '")) from None
     system = args.system or cfg.system.name
     if cfg.system.catalogue:
-        from ..astro.catalogue import get_system
         system = get_system(system, cfg.system.catalogue)
     return options, system
 
@@ -114,9 +115,9 @@ def lightcurve_path(result_path: str | Path) -> Path:
 
 
 def run(args: argparse.Namespace) -> dict:
+    # The fitter pulls in every method (numba, scikit-learn): imported when the command
+    # runs, not for `eclipsebench --help`.
     from ..fit.reduce import reduce_epoch, select_phase_model
-    from ..io.atomic import atomic_path, write_json
-    from ..io.paths import check_plot_path
 
     table_path = Path(args.table)
     if not table_path.is_file():
@@ -148,7 +149,7 @@ def run(args: argparse.Namespace) -> dict:
     with atomic_path(lc_path) as tmp:
         result.lightcurve_table().write(tmp, format="ascii.ecsv")
     if args.plot:
-        from ..fit.plot import plot_reduced_lightcurve
+        from ..fit.plot import plot_reduced_lightcurve  # matplotlib, only for --plot
         plot_reduced_lightcurve(result, args.plot)
         summary["plot_file"] = str(args.plot)
     summary = _clean(summary)

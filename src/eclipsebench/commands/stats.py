@@ -7,6 +7,7 @@ import csv
 from pathlib import Path
 
 import numpy as np
+from astropy.table import Table
 
 from ..errors import DataError
 from ..report.tables import format_text_table
@@ -55,8 +56,6 @@ def _check_methods(path: Path) -> None:
     """Refuse a row whose method name is blank (astropy would read it as masked '--')."""
     try:
         if path.suffix.lower() == ".ecsv":
-            from astropy.table import Table
-
             column = Table.read(path, format="ascii.ecsv")["method"]
             mask = np.asarray(getattr(column, "mask", np.zeros(len(column), bool)), bool)
             names = ["" if m else str(v) for v, m in zip(column, mask, strict=True)]

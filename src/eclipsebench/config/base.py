@@ -14,6 +14,7 @@ Nothing is ever passed to ``eval``.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import tomllib
 import types
@@ -184,8 +185,6 @@ def parse_override(text: str) -> tuple[list[str], Any]:
 
 def apply_overrides(mapping: Mapping[str, Any], overrides: list[str]) -> dict[str, Any]:
     """Return a deep copy of ``mapping`` with each ``--set`` override applied."""
-    import copy
-
     result = copy.deepcopy(dict(mapping))
     for text in overrides:
         path, value = parse_override(text)

@@ -33,6 +33,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..astro.eclipse import EclipseShape
 from ..errors import InputError
 
 __all__ = ["AstroModel", "PHASE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES", "box_visible_fraction",
@@ -162,7 +163,6 @@ class AstroModel:
         if shape is None:
             if system is None:
                 raise InputError("AstroModel: give a planetary system or a precomputed shape")
-            from ..astro.eclipse import EclipseShape
             shape = EclipseShape(self.time_bmjd, system)
         self.shape = shape
         self.period_d = period_d if period_d is not None else system_period_days(system)
@@ -195,7 +195,6 @@ class AstroModel:
         eclipse placed at the middle of the data.
         """
         if system is not None and self.period_d:
-            from ..astro.eclipse import EclipseShape
             mid = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
             grid = mid + np.linspace(-0.25, 0.25, 20001) * self.period_d
             return _half_depth_duration(grid, EclipseShape(grid, system).visible_fraction(mid))

@@ -6,6 +6,8 @@ import os
 
 import numpy as np
 
+from ..io.atomic import atomic_path
+
 __all__ = ["bin_series", "plot_reduced_lightcurve"]
 
 
@@ -28,11 +30,11 @@ def bin_series(time: np.ndarray, values: np.ndarray, width_d: float):
 
 def plot_reduced_lightcurve(result, path: str | os.PathLike, *, bin_minutes: float = 5.0) -> None:
     """Write a PNG of ``result`` (an EpochResult): binned decorrelated flux, model, residuals."""
+    # matplotlib (about 0.5 s to import) only when a plot is asked for.
     import matplotlib
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from ..io.atomic import atomic_path
 
     lc = result.lightcurve
     t0 = result.t_ecl_bmjd

@@ -252,7 +252,6 @@ class EpochResult:
 
     def lightcurve_table(self):
         """The decorrelated light curve as an astropy Table (``RESULT.lc.ecsv`` columns)."""
-        from astropy.table import Table
         t = Table({k: self.lightcurve[k] for k in
                    ("time_bmjd", "flux_corrected", "astro_model", "residual")})
         t.meta.update({"method": self.method, "epoch": self.epoch, "depth_ppm": self.depth_ppm,

@@ -13,6 +13,9 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from astropy import units as u
+from astropy.coordinates import EarthLocation, SkyCoord
+from astropy.time import Time
 
 from .atomic import write_bytes
 from .header_template import (
@@ -49,9 +52,6 @@ def bmjd_to_utc(bmjd: np.ndarray, ra_deg: float, dec_deg: float) -> tuple[np.nda
     to ~0.6 AU, so the real ``MJD_OBS`` differs by up to a few minutes from
     this geocentric value; nothing downstream uses ``MJD_OBS`` for timing.
     """
-    from astropy import units as u
-    from astropy.coordinates import EarthLocation, SkyCoord
-    from astropy.time import Time
 
     bmjd = np.atleast_1d(np.asarray(bmjd, dtype=float))
     star = SkyCoord(ra_deg * u.deg, dec_deg * u.deg, frame="icrs")

@@ -116,6 +116,7 @@ def check_plot_path(path: str | os.PathLike, option: str = "--plot") -> Path:
     p = check_output_path(path, option, "file")
     suffix = p.suffix.lower().lstrip(".")
     if suffix:
+        # matplotlib (about 0.5 s to import) only when a plot is asked for.
         from matplotlib.backend_bases import FigureCanvasBase
 
         formats = FigureCanvasBase.get_supported_filetypes()
