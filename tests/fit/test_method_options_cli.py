@@ -86,3 +86,18 @@ def test_ica_seed_same_bytes_other_seed_other_result(tmp_path, table_file):
     a, c = json.loads(one), json.loads(two)
     assert a["seed"] == 1 and c["seed"] == 2
     assert a["diagnostics"] != c["diagnostics"]
+
+
+@pytest.mark.parametrize("toml, key", [
+    ("[reduce.options.bliss]\nknot_spacing = 0.03\n", "reduce.options.bliss.knot_spacing"),
+    ("[reduce.options.blis]\nknot_spacing_px = 0.03\n", "reduce.options.blis"),
+    ('[reduce.options.kr-data]\nk = "fifty"\n', "reduce.options.kr-data.k"),
+])
+def test_run_refuses_bad_method_options_before_any_work(tmp_path, capsys, toml, key):
+    cfg = tmp_path / "run.toml"
+    cfg.write_text(toml)
+    out = tmp_path / "run"
+    assert main(["run", str(cfg), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and key in err
+    assert not out.exists()

@@ -82,7 +82,12 @@ def result_ok(method: str, epoch: int, path: Path) -> bool:
 
 def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: list[str], *,
                       flat: bool = False) -> list[Task]:
-    """One task per (method, epoch), each after its epoch's photometry task."""
+    """One task per (method, epoch), each after its epoch's photometry task.
+
+    ``[reduce.options.<method>]`` is checked first: a bad key stops the run
+    before any work, naming it.
+    """
+    fit_reduce.check_method_options(cfg.reduce)
     seed = cfg.challenge.seed
     tasks = []
     for e in epochs:

@@ -37,6 +37,7 @@ from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
+from ..io.paths import check_output_path
 from ..report.challenge import plan_report_tasks
 from ..simulate.challenge import challenge_plans, plan_simulate_tasks
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
@@ -166,9 +167,7 @@ def run_challenge(cfg: Config, root: str | Path, *, workers: int | None = None,
         run is working in it (``run.lock``); a :class:`ConfigError` for a
         configuration that cannot make a run (e.g. fewer than 2 epochs).
     """
-    layout = Layout(Path(root))
-    if layout.root.exists() and not layout.root.is_dir():
-        raise InputError(f"--out {layout.root}: exists and is not a folder")
+    layout = Layout(check_output_path(root, "root", "folder"))
     tasks = build_tasks(cfg, layout.root)  # every configuration error before any work
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):

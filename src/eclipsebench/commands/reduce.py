@@ -117,7 +117,7 @@ def lightcurve_path(result_path: str | Path) -> Path:
 def run(args: argparse.Namespace) -> dict:
     # The fitter pulls in every method (numba, scikit-learn): imported when the command
     # runs, not for `eclipsebench --help`.
-    from ..fit.reduce import reduce_epoch, select_phase_model
+    from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
 
     table_path = Path(args.table)
     if not table_path.is_file():
@@ -130,6 +130,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.plot:
         check_plot_path(args.plot, "--plot")
     options, system = _options(args)
+    check_method_options(options)
     method_options = _method_options(args.method_options)
     result = reduce_epoch(str(table_path), args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,

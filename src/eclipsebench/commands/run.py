@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..config import load_config
+from ..io.paths import check_output_path
 from ..report.tables import format_text_table
 from .options import add_config_options, method_list, positive_int
 
@@ -54,6 +55,7 @@ def run(args: argparse.Namespace) -> dict:
     cfg = load_config(args.config, _overrides(args))
     out = Path(args.out) if args.out else Path(
         "runs") / f"{cfg.challenge.name}-seed{cfg.challenge.seed}-{cfg.challenge.epochs}ep"
+    check_output_path(out, "--out", "folder")
     summary, report = run_challenge(cfg, out)
     if args.json:
         return summary

@@ -27,9 +27,9 @@ from ..astro.catalogue import get_system
 from ..astro.orbit import eclipse_time_bmjd
 from ..config.reduce import ReduceSection
 from ..config.system import SystemSection
-from ..decorrelate import get_method
+from ..decorrelate import available_methods, get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
-from ..errors import InputError
+from ..errors import ConfigError, InputError
 from ..photometry.table import read_photometry
 from ..seeding import rng
 from .astro_model import PHASE_MODELS, AstroModel
@@ -47,7 +47,8 @@ from .mcmc import McmcResult, run_mcmc
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
-           "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options"]
+           "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options",
+           "check_method_options"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
 _DEFAULT_OPTIONS = ReduceSection()
@@ -145,6 +146,26 @@ def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTION
     if isinstance(method_options, MethodOptions):
         return parse_method_options(cls, method_options)
     return parse_method_options(cls, {**base.to_dict(), **dict(method_options)})
+
+
+def check_method_options(options: ReduceSection) -> None:
+    """Every ``[reduce.options.<method>]`` table names a registered method and its options.
+
+    Called before any work (the runner's planner, the reduce command), so that
+    a typo in a configuration file is one line naming the dotted key.
+
+    Raises
+    ------
+    ConfigError
+        ``reduce.options.<name>`` for an unknown method, or
+        ``reduce.options.<name>.<key>`` for an unknown or ill-typed option.
+    """
+    known = available_methods()
+    for name, table in options.options.items():
+        if name not in known:
+            raise ConfigError(f"reduce.options.{name}",
+                              f"unknown method (known: {', '.join(known)})")
+        parse_method_options(get_method(name), table, prefix=f"reduce.options.{name}")
 
 
 def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
