@@ -41,6 +41,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from eclipsebench.instrument import prf as P  # noqa: E402
+from eclipsebench.photometry.estimators import (  # noqa: E402
+    aperture_flux,
+    centroid_col,
+    noise_pixels,
+)
 
 OCC_MIN = 20.0
 
@@ -99,7 +104,7 @@ def beta_at(blur_px, obscuration, os_, half_px, x, y, jitter_px):
     u, v = np.meshgrid(nodes * jitter_px, nodes * jitter_px)
     w = np.outer(weights, weights).ravel() / weights.sum() ** 2
     image = np.tensordot(w, prf.render(x + u.ravel(), y + v.ravel()), axes=1)
-    return float(P.noise_pixels(image[None])[0])
+    return float(noise_pixels(image[None])[0])
 
 
 def weighted_poly(u, v, target, weights, degree):
@@ -156,8 +161,8 @@ def main(argv=None) -> int:
     gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
     xs, ys = gx.ravel(), gy.ravel()
     img = prf.render(xs, ys)
-    xc, yc = P.centroid_col(img, around=(15, 15))
-    ap_flux = P.aperture_flux(img, xc, yc, args.radius)
+    xc, yc = centroid_col(img, around=(15, 15))
+    ap_flux = aperture_flux(img, xc, yc, args.radius)
     val, occ = pmap_interpolator(pm)
     pts = np.column_stack([yc, xc])
     target = val(pts)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
+from ..instrument.constants import READ_NOISE_E, SUB_2S
 from ..stats.photon_limit import SHOT_NOISE_FORMS, photon_limit
 from .options import nonnegative_float, open_unit_float, positive_float, positive_int
 
@@ -26,12 +27,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="eclipse depth D in ppm")
     p.add_argument("--f-in", type=open_unit_float(), default=1.0 / 3.0, metavar="F",
                    help="fraction of frames in eclipse, 0 < F < 1")
-    p.add_argument("--fowler", type=positive_int(), default=8, metavar="FN", help="Fowler number")
-    p.add_argument("--wait", type=positive_int(minimum=0), default=184, metavar="WT",
+    p.add_argument("--fowler", type=positive_int(), default=SUB_2S.fowler, metavar="FN", help="Fowler number")
+    p.add_argument("--wait", type=positive_int(minimum=0), default=SUB_2S.wait, metavar="WT",
                    help="wait ticks between pedestal and signal reads")
-    p.add_argument("--sample-time", type=positive_float(), default=0.01, metavar="S",
+    p.add_argument("--sample-time", type=positive_float(), default=SUB_2S.sample_time_s, metavar="S",
                    help="sample time in seconds (0.01 subarray, 0.2 full array)")
-    p.add_argument("--read-noise", type=nonnegative_float(), default=9.4, metavar="E",
+    p.add_argument("--read-noise", type=nonnegative_float(), default=READ_NOISE_E, metavar="E",
                    help="read noise per read, electrons")
     p.add_argument("--aperture-pixels", type=positive_float(), metavar="NPIX",
                    help="aperture area in pixels; adds read noise per pixel (default: the paper's "

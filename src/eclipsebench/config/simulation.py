@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from ..instrument.constants import FLUXCONV_WARM_CH2, GAIN_E_PER_DN, SUB_2S
 from .base import check
 
 # Table 2 (sim_xo3meas) of the paper: start of the first exposure of each
@@ -39,9 +40,9 @@ class ObservationSection:
     pre_cubes: int = 11
     main_cubes: int = 233
     frames_per_cube: int = 64
-    fowler: int = 8
-    wait: int = 184
-    sample_time_s: float = 0.01
+    fowler: int = SUB_2S.fowler
+    wait: int = SUB_2S.wait
+    sample_time_s: float = SUB_2S.sample_time_s
     frame_interval_s: float = 2.008
     cube_interval_s: float = 129.4
     aor_gap_s: float = 300.0
@@ -100,8 +101,8 @@ class SimulationSection:
     background_reference: Literal["annulus", "sky"] = "annulus"
     background_slope_per_day: float = 0.0
     read_noise_e: float | None = None  # unset: 9.4 e (physical), 16.8 e (iracsim2015)
-    gain_e_per_dn: float = 3.71
-    fluxconv: float = 0.1469
+    gain_e_per_dn: float = GAIN_E_PER_DN
+    fluxconv: float = FLUXCONV_WARM_CH2
     subsamples: int = 10
     prf: str = "builtin"
     stamp_px: int = 13

@@ -64,14 +64,11 @@ from scipy import signal, special
 
 from eclipsebench.errors import DataError, InputError
 
-# The estimators are defined once, in the photometry package; aperture_flux,
-# centroid_col and noise_pixels stay importable from here for simulate/star.py
-# and tools/fit_gainmap.py.
-from ..photometry.estimators import aperture_flux, centroid_col, noise_pixels
+from ..photometry.estimators import aperture_flux, centroid_col
 from . import _spline, constants
 
 __all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial",
-           "load_gainmap_coefficients", "aperture_flux", "centroid_col", "noise_pixels",
+           "load_gainmap_coefficients",
            "electrons_per_second_scale", "jy_to_electrons_per_second", "psf_fine",
            "pixel_integrated_table", "warm_rescaling"]
 

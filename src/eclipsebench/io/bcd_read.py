@@ -49,6 +49,7 @@ from astropy.io import fits
 from astropy.time import Time
 
 from ..errors import DataError, InputError
+from ..instrument.constants import READ_NOISE_E
 
 __all__ = ["BCD_NAME", "BcdInfo", "BcdCube", "Epoch", "find_bcd_files", "read_bcd_header",
            "read_bcd", "frame_times_bmjd", "group_epochs", "electrons_per_mjysr"]
@@ -339,7 +340,7 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
             subarray=subarray, bmjd_obs=values["BMJD_OBS"], tdb=tdb,
             framtime_s=values["FRAMTIME"], exptime_s=values["EXPTIME"], gain=values["GAIN"],
             fluxconv=values["FLUXCONV"], fowler=max(int(fowler), 1), wait=max(int(wait), 0),
-            read_noise_e=_card(header, "RONOISE", path, float, 9.4), frame_interval_s=interval,
+            read_noise_e=_card(header, "RONOISE", path, float, READ_NOISE_E), frame_interval_s=interval,
             sample_time_s=sample_s, epoch=epoch, simulate=simulate,
             extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD")})
 

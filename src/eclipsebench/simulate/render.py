@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..instrument.constants import ReadoutMode
+from ..instrument.constants import READ_NOISE_E, ReadoutMode
 from ..instrument.fowler import fowler_sample_grouped, fowler_sample_iracsim2015, fowler_weights
 
 __all__ = ["FrameModel", "tick_moments", "weight_groups", "read_intervals",
@@ -74,7 +74,7 @@ class FrameModel:
 
     mode: ReadoutMode
     noise_model: str = "physical"
-    read_noise_e: float = 9.4
+    read_noise_e: float = READ_NOISE_E
     subsamples: int = 10
     stamp_px: int = 13
     shape: tuple[int, int] = (32, 32)

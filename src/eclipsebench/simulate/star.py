@@ -25,15 +25,13 @@ import numpy as np
 
 from ..config import Config
 from ..errors import ConfigError, InputError
-from ..instrument.prf import PRF, BuiltinPRF, IrsaPRF, aperture_flux
+from ..instrument.prf import PRF, BuiltinPRF, IrsaPRF
+from ..photometry.estimators import annulus_background, aperture_flux
 from .render import N_MOMENTS
 
 __all__ = ["StarImager", "make_star_imager", "make_prf", "prf_label"]
 
 _PRF_CACHE: dict[tuple, PRF] = {}
-ANNULUS_PX = (3.0, 7.0)
-
-
 def prf_label(name: str) -> str:
     """``simulation.prf`` without folders (headers carry no absolute paths)."""
     name = name.strip()
@@ -79,16 +77,18 @@ class StarImager:
         Where ``flux_aperture_e`` is defined (the peak-up target).
     radius_px : float
         Aperture radius of the flux definition.
+    annulus_px : (float, float)
+        The background annulus photometry uses (``[photometry] annulus_px``):
+        the star's wings in it set the ``"annulus"`` background reference.
     """
 
-    def __init__(self, prf: PRF, *, x_ref_px: float, y_ref_px: float, radius_px: float):
+    def __init__(self, prf: PRF, *, x_ref_px: float, y_ref_px: float, radius_px: float,
+                 annulus_px: tuple[float, float] = (3.0, 7.0)):
         self.prf = prf
         im = prf.render(np.array([x_ref_px]), np.array([y_ref_px]), shape=(32, 32))
         self.aperture_per_unit = float(aperture_flux(im, x_ref_px, y_ref_px, radius_px)[0])
-        py, px = np.mgrid[0:32, 0:32]
-        r = np.hypot(px - x_ref_px, py - y_ref_px)
-        ring = (r >= ANNULUS_PX[0]) & (r <= ANNULUS_PX[1])
-        self.annulus_per_unit = float(im[0][ring].mean())
+        self.annulus_per_unit = float(
+            annulus_background(im, x_ref_px, y_ref_px, annulus_px)["mean_e"][0])
 
     def electrons_per_unit(self, flux_aperture_e: float) -> float:
         """Electrons per exposure per PRF unit for an aperture flux ``flux_aperture_e``."""
@@ -153,4 +153,5 @@ def make_star_imager(cfg: Config) -> StarImager:
     """The :class:`StarImager` of a configuration."""
     prf = make_prf(cfg.simulation.prf.strip(), flat_gain=cfg.simulation.flat_gain)
     return StarImager(prf, x_ref_px=cfg.observation.x0_px, y_ref_px=cfg.observation.y0_px,
-                      radius_px=cfg.simulation.aperture_radius_px)
+                      radius_px=cfg.simulation.aperture_radius_px,
+                      annulus_px=tuple(cfg.photometry.annulus_px))

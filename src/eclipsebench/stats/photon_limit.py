@@ -27,12 +27,15 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import stats as sps
 
+from ..instrument.constants import READ_NOISE_E, SUB_2S
+
 __all__ = ["SHOT_NOISE_FORMS", "fowler_variance", "frame_snr", "eclipse_depth_photon_noise", "PhotonLimit",
            "photon_limit", "SUBARRAY_2S", "analytic_photon_limit", "empirical_photon_limit",
            "in_eclipse_fraction"]
 
 #: IRAC 2 s subarray readout (paper Section 3.3): FN, WT, sample time (s), read noise (e).
-SUBARRAY_2S = {"fowler": 8, "wait": 184, "sample_time_s": 0.01, "read_noise_e": 9.4}
+SUBARRAY_2S = {"fowler": SUB_2S.fowler, "wait": SUB_2S.wait,
+               "sample_time_s": SUB_2S.sample_time_s, "read_noise_e": READ_NOISE_E}
 
 
 #: How :func:`fowler_variance` counts the shot noise: ``"paper"``, the paper's
@@ -48,7 +51,7 @@ def _check_readout(fowler: int, wait: int) -> None:
         raise ValueError(f"wait: expected an integer >= 0, got {wait}")
 
 
-def fowler_variance(flux_e, *, fowler: int = 8, wait: int = 184, read_noise_e: float = 9.4,
+def fowler_variance(flux_e, *, fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait, read_noise_e: float = READ_NOISE_E,
                     n_pixels: float = 1.0, shot_noise: str = "paper"):
     """Variance of Fowler-sampled electron counts (Garnett & Forrest 1993).
 
@@ -105,8 +108,8 @@ def fowler_variance(flux_e, *, fowler: int = 8, wait: int = 184, read_noise_e: f
     return float(result) if result.ndim == 0 else result
 
 
-def frame_snr(flux_net_e, flux_aperture_e, flux_background_e, *, fowler: int = 8, wait: int = 184,
-              read_noise_e: float = 9.4, aperture_pixels: float | None = None,
+def frame_snr(flux_net_e, flux_aperture_e, flux_background_e, *, fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait,
+              read_noise_e: float = READ_NOISE_E, aperture_pixels: float | None = None,
               shot_noise: str = "paper"):
     """S/N of one aperture-photometry frame (Section 3.3).
 
@@ -175,8 +178,8 @@ class PhotonLimit:
 
 def photon_limit(flux_net_e: float, flux_aperture_e: float, flux_background_e: float, *,
                  frames: float | None = None, depth_ppm: float | None = None,
-                 f_in: float = 1.0 / 3.0, fowler: int = 8, wait: int = 184,
-                 sample_time_s: float = 0.01, read_noise_e: float = 9.4,
+                 f_in: float = 1.0 / 3.0, fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait,
+                 sample_time_s: float = SUB_2S.sample_time_s, read_noise_e: float = READ_NOISE_E,
                  aperture_pixels: float | None = None, shot_noise: str = "paper") -> PhotonLimit:
     """Single-frame S/N and, given ``frames`` and ``depth_ppm``, sigma_phot.
 
@@ -213,8 +216,8 @@ def in_eclipse_fraction(visible_fraction) -> float:
 def analytic_photon_limit(flux_e: Sequence[np.ndarray], background_e_per_px: Sequence[np.ndarray],
                           *, depth_ppm: float, f_in: float = 1.0 / 3.0,
                           aperture_radius_px: float = 2.25,
-                          annulus_px: tuple[float, float] = (3.0, 7.0), fowler: int = 8,
-                          wait: int = 184, read_noise_e: float = 9.4) -> dict:
+                          annulus_px: tuple[float, float] = (3.0, 7.0), fowler: int = SUB_2S.fowler,
+                          wait: int = SUB_2S.wait, read_noise_e: float = READ_NOISE_E) -> dict:
     """sigma_phot of one epoch's depth from photometry (Section 3.3).
 
     Parameters
