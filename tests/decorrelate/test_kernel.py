@@ -10,8 +10,10 @@ from scipy.optimize import minimize_scalar
 from eclipsebench.decorrelate import get_method
 from eclipsebench.decorrelate.base import EpochData
 from eclipsebench.decorrelate.pmap import (
+    CalibrationSet,
     GriddedPmap,
     interpolate_grid,
+    kernel_occupancy,
     load_calibration_table,
     load_pmap,
 )
@@ -48,49 +50,80 @@ def _brute_kr(qx, qy, qb, tx, ty, tb, values, k, scales, exclude_self):
     return out
 
 
+def _brute_kr_data(x, y, beta, values, k):
+    """KR/Data the slow way: Euclidean k nearest others, widths = std of their offsets."""
+    cols = [x, y] + ([np.sqrt(beta)] if beta is not None else [])
+    pts = np.column_stack(cols)
+    out = np.empty(len(x))
+    trace = 0.0
+    for i in range(len(x)):
+        d = np.sum((pts - pts[i]) ** 2, axis=1)
+        d[i] = np.inf
+        nn = np.argsort(d)[:k]
+        off = pts[nn] - pts[i]
+        z = np.sum((off / off.std(axis=0)) ** 2, axis=1)
+        w = np.exp(-0.5 * z)
+        out[i] = np.sum(w * values[nn]) / np.sum(w)
+        trace += 1.0 / (1.0 + np.sum(w))
+    return out, trace
+
+
 @pytest.mark.parametrize("use_np", [False, True])
 def test_kr_data_matches_brute_force(use_np):
     data = _random_epoch()
     astro = 1 + 1e-3 * np.sin(np.arange(len(data)) / 50.0)
     model = get_method("kr-data")(data, k=12, use_noise_pixels=use_np)
-    scales = [np.std(data.x), np.std(data.y)] + ([np.std(np.sqrt(data.noise_pixels))] if use_np else [])
-    expected = astro * _brute_kr(data.x, data.y, data.noise_pixels if use_np else None,
-                                 data.x, data.y, data.noise_pixels, data.flux / astro,
-                                 12, scales, exclude_self=True)
-    np.testing.assert_allclose(model.predict(astro), expected, rtol=1e-12)
+    kr, trace = _brute_kr_data(data.x, data.y, data.noise_pixels if use_np else None,
+                               data.flux / astro, 12)
+    np.testing.assert_allclose(model.predict(astro), astro * kr, rtol=1e-12)
+    assert model.n_effective_params() == round(trace)
+
+
+def test_kr_data_widths_come_from_each_frames_neighbours():
+    # Two clouds of the same shape, one ten times wider: with epoch-wide widths
+    # the narrow cloud's weights would all be ~1 (a plain mean); with the
+    # neighbours' own spread both clouds get the same weight pattern.
+    g = np.random.default_rng(4)
+    base = g.standard_normal((300, 2)) * [0.01, 0.02]
+    x = np.concatenate([15 + base[:, 0], 16 + 10 * base[:, 0]])
+    y = np.concatenate([15 + base[:, 1], 16 + 10 * base[:, 1]])
+    n = len(x)
+    data = EpochData(time_bmjd=np.arange(n) / 43200.0, flux=np.full(n, 1e5),
+                     flux_err=np.full(n, 300.0), x=x, y=y)
+    model = get_method("kr-data")(data, k=20)
+    w = model.smoother.toarray()
+    np.testing.assert_allclose(w[:300, :300], w[300:, 300:], atol=1e-9)
+    np.testing.assert_allclose(model.widths[300:], 10 * model.widths[:300], rtol=1e-9)
+
+
+def test_kr_data_kernel_weighs_on_the_synthetic_epoch(epoch_sys):
+    # The epoch-wide widths of the stand-in gave a median largest/smallest weight
+    # ratio of 1.0066 here: a plain 50-nearest-neighbour mean.
+    model = get_method("kr-data")(epoch_sys.data)
+    diag = model.diagnostics()
+    assert diag["weight_ratio_median"] > 1.5
+    assert np.all(np.asarray(diag["width_median"]) > 0)
 
 
 def test_kr_data_excludes_the_point_itself():
-    # Two far-apart clusters of k+1 frames: each frame's estimate is the mean of
-    # the other k frames of its cluster, never its own value.
+    # Two far-apart clusters of k+1 frames: each frame's estimate is a weighted
+    # mean of the other k frames of its cluster, never its own value.
     x = np.concatenate([np.zeros(6), np.ones(6)]) + np.linspace(0, 1e-3, 12)
     y = np.concatenate([np.zeros(6), np.ones(6)])
     f = np.arange(12.0) + 100
     data = EpochData(time_bmjd=np.arange(12.0), flux=f, flux_err=np.ones(12), x=x, y=y)
-    pred = get_method("kr-data")(data, k=5).predict(np.ones(12))
-    for i in range(12):
-        group = slice(0, 6) if i < 6 else slice(6, 12)
-        others = np.delete(f[group], i % 6)
-        assert pred[i] == pytest.approx(others.mean(), rel=1e-6)
-
-
-def test_kr_data_effective_params_is_smoother_trace():
-    data = _random_epoch(n=200)
-    model = get_method("kr-data")(data, k=10)
-    sx, sy = np.std(data.x), np.std(data.y)
-    trace = 0.0
-    for i in range(len(data)):
-        d2 = ((data.x - data.x[i]) / sx) ** 2 + ((data.y - data.y[i]) / sy) ** 2
-        d2[i] = np.inf
-        nn = np.argsort(d2)[:10]
-        trace += 1.0 / (1.0 + np.sum(np.exp(-0.5 * d2[nn])))
-    assert model.n_effective_params() == round(trace)
+    model = get_method("kr-data")(data, k=5)
+    w = model.smoother.toarray()
+    assert np.all(np.diag(w) == 0)
+    assert np.all(w[:6, 6:] == 0) and np.all(w[6:, :6] == 0)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0)
 
 
 def test_kr_data_options():
     data = _random_epoch()
     with pytest.raises(InputError, match="option 'k'"):
         get_method("kr-data")(data, k=0)
+    assert get_method("kr-pmap").Options().min_occupancy == 20
     with pytest.raises(InputError, match="unknown option"):
         get_method("kr-data")(data, neighbours=5)
     with pytest.raises(InputError, match="noise_pixels"):
@@ -125,7 +158,7 @@ def test_kr_pmap_matches_brute_force_and_closed_form_scale(tmp_path, use_np):
     data = _random_epoch()
     astro = 1 + 1e-3 * np.cos(np.arange(len(data)) / 70.0)
     model = _kr_pmap(data, str(path), k=15, use_noise_pixels=use_np,
-                                  match_noise_pixels=False)
+                     match_noise_pixels=False, min_occupancy=0)
     scales = [np.std(data.x), np.std(data.y)] + ([np.std(np.sqrt(data.noise_pixels))] if use_np else [])
     gain = _brute_kr(data.x, data.y, data.noise_pixels if use_np else None, cal.x, cal.y,
                      cal.noise_pixels, cal.flux, 15, scales, exclude_self=False) / cal.flux.mean()
@@ -155,11 +188,11 @@ def test_kr_pmap_removes_the_noise_pixel_offset_of_the_calibration_set(tmp_path)
                         x=data.x, y=data.y, noise_pixels=beta(data.x, data.y) + 0.3)
     same = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                      x=data.x, y=data.y, noise_pixels=beta(data.x, data.y))
-    matched = _kr_pmap(shifted, str(path))
+    matched = _kr_pmap(shifted, str(path), min_occupancy=0)
     assert matched.noise_pixels_offset == pytest.approx(0.3, abs=0.002)
-    reference = _kr_pmap(same, str(path), match_noise_pixels=False)
+    reference = _kr_pmap(same, str(path), match_noise_pixels=False, min_occupancy=0)
     np.testing.assert_allclose(matched.gain, reference.gain, rtol=2e-5)
-    unmatched = _kr_pmap(shifted, str(path), match_noise_pixels=False)
+    unmatched = _kr_pmap(shifted, str(path), match_noise_pixels=False, min_occupancy=0)
     assert np.max(np.abs(unmatched.gain - reference.gain)) > 10 * np.max(
         np.abs(matched.gain - reference.gain))
 
@@ -193,16 +226,18 @@ def test_kr_pmap_refuses_frames_the_map_does_not_cover(tmp_path):
     far = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                     x=data.x + 1.0, y=data.y, noise_pixels=data.noise_pixels)
     with pytest.raises(InputError, match="max_distance_px"):
+        _kr_pmap(far, str(path), min_occupancy=0)
+    with pytest.raises(InputError, match="every frame .400. falls where the map's occupancy"):
         _kr_pmap(far, str(path))
     # A few uncovered frames are tolerated and counted.
     x = data.x.copy()
     x[:3] += 1.0
     few = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                     x=x, y=data.y, noise_pixels=data.noise_pixels)
-    model = _kr_pmap(few, str(path))
+    model = _kr_pmap(few, str(path), min_occupancy=0)
     assert model.n_uncovered == 3 and np.all(np.isfinite(model.gain))
     with pytest.raises(InputError, match="max_uncovered_fraction"):
-        _kr_pmap(few, str(path), max_uncovered_fraction=0.0)
+        _kr_pmap(few, str(path), max_uncovered_fraction=0.0, min_occupancy=0)
 
 
 def _write_grid(folder, suffix="test_0001.fits", n=41):
@@ -231,14 +266,59 @@ def test_gridded_pmap_is_interpolated(tmp_path):
     f0 = np.sum(data.flux * expected_gain) / np.sum(expected_gain**2)
     np.testing.assert_allclose(model.predict(astro), f0 * expected_gain, rtol=1e-10)
     assert model.n_low_occupancy == 0          # occupancy 51 below y = 15.3, 1 above
+    assert model.dropped_frames() == {"low_occupancy": 0}
     high = EpochData(time_bmjd=data.time_bmjd, flux=data.flux, flux_err=data.flux_err,
                      x=data.x, y=data.y + 0.4)
-    n_low = _kr_pmap(high, str(folder)).n_low_occupancy
+    kept = _kr_pmap(high, str(folder))
+    n_low = kept.n_low_occupancy
     # Beyond one cell above the step every frame is low, one cell below none is.
     assert np.sum(high.y > 15.3 + 1 / 41) <= n_low <= np.sum(high.y > 15.3 - 1 / 41)
     assert n_low > 300
+    # The low frames are out of the fit (as iracpc_pmap_corr sets them MISSING).
+    assert len(kept.data) == len(high) - n_low and np.all(kept.data.y < 15.3 + 1 / 41)
+    assert kept.dropped_frames() == {"low_occupancy": n_low}
+    assert kept.diagnostics()["n_low_occupancy"] == n_low
+    assert len(kept.predict(np.ones(len(kept.data)))) == len(kept.data)
+    assert _kr_pmap(high, str(folder), min_occupancy=0).n_low_occupancy == 0
     with pytest.raises(InputError, match="min_occupancy"):
         _kr_pmap(_random_epoch(n=400, seed=9), str(folder), min_occupancy=1e9)
+
+
+def test_kernel_occupancy_is_the_gaussian_weighted_count():
+    g = np.random.default_rng(11)
+    cx, cy = g.uniform(0, 0.1, 3000), g.uniform(0, 0.1, 3000)
+    x, y = g.uniform(0, 0.1, 50), g.uniform(0, 0.1, 50)
+    sigma = 0.004
+    brute = np.array([np.sum(np.exp(-((cx - a) ** 2 + (cy - b) ** 2) / (2 * sigma**2)))
+                      for a, b in zip(x, y, strict=True)])
+    np.testing.assert_allclose(kernel_occupancy(cx, cy, x, y, sigma_px=sigma), brute, rtol=1e-5)
+
+
+def test_kr_pmap_drops_and_counts_frames_of_low_calibration_occupancy(epoch_sys):
+    # The synthetic calibration set with a hole (no calibration point within
+    # 0.01 px of the median science position): the science frames in the hole
+    # have occupancy below 20 and leave the fit, counted; the others stay.
+    cal = load_pmap(epoch_sys.data.meta["SIMDIR"] + "/calibration/pmap_calibration.fits")
+    data = epoch_sys.data
+    x0, y0 = np.median(data.x), np.median(data.y)
+    out = np.hypot(cal.x - x0, cal.y - y0) > 0.01
+    holed = CalibrationSet(x=cal.x[out], y=cal.y[out], noise_pixels=cal.noise_pixels[out],
+                           flux=cal.flux[out], flux_err=cal.flux_err[out], source="holed")
+    occ = kernel_occupancy(holed.x, holed.y, data.x, data.y, sigma_px=0.004)
+    expected = int(np.sum(occ < 20))
+    assert expected > 100
+    in_hole = np.hypot(data.x - x0, data.y - y0) < 0.005
+    assert np.all(occ[in_hole] < 20)
+    model = _kr_pmap(data, holed)
+    assert model.dropped_frames() == {"low_occupancy": expected}
+    assert model.diagnostics()["n_low_occupancy"] == expected
+    assert len(model.data) == len(data) - expected
+    np.testing.assert_array_equal(model.data.time_bmjd, data.time_bmjd[occ >= 20])
+    assert model.gain.shape == (len(model.data),)
+    # The whole calibration set covers every frame: nothing dropped.
+    assert _kr_pmap(data, cal).dropped_frames() == {"low_occupancy": 0}
+    # min_occupancy = 0 keeps every frame.
+    assert len(_kr_pmap(data, holed, min_occupancy=0).data) == len(data)
 
 
 def test_gridded_pmap_with_a_missing_companion(tmp_path):
@@ -272,3 +352,21 @@ def test_real_warm_pmap_uses_our_zero_based_convention(shared_irac):
     iy, ix = 123, 321
     assert interpolate_grid(pm.gain, pm.x_grid, pm.y_grid, pm.x_grid[[ix]],
                             pm.y_grid[[iy]])[0] == pytest.approx(pm.gain[iy, ix])
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("folder", ["pmap_ch2", "pmap_ch2_120827"])
+def test_both_real_channel2_maps_load_and_cover_the_real_xo3_centroids(shared_irac, folder):
+    pm = load_pmap(shared_irac / folder)
+    assert isinstance(pm, GriddedPmap) and pm.gain.shape == (500, 500)
+    assert pm.x_grid[0] == pytest.approx(14.501) and pm.y_grid[-1] == pytest.approx(15.499)
+    assert 0.95 < np.median(pm.gain) < 1.05
+    # A cloud at the paper's Table 1 mean centroid of the real XO-3 epochs: kept.
+    g = np.random.default_rng(2)
+    n = 500
+    x, y = 15.18 + 0.01 * g.standard_normal(n), 15.03 + 0.01 * g.standard_normal(n)
+    data = EpochData(time_bmjd=np.arange(n) / 43200.0, flux=np.full(n, 7e4),
+                     flux_err=np.full(n, 300.0), x=x, y=y)
+    model = _kr_pmap(data, pm)
+    assert model.n_low_occupancy < n / 10
+    assert np.all(np.isfinite(model.gain)) and model.n_uncovered == 0

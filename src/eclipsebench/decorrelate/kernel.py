@@ -5,14 +5,19 @@ al. 2014) uses the science frames as their own training set: the sensitivity
 at frame i is the Gaussian-kernel weighted mean of ``flux / astro`` over its k
 nearest neighbours (k = 50) in centroid space, the frame itself excluded::
 
-    w_ij = exp(-(x_i-x_j)^2 / 2 s_x^2 - (y_i-y_j)^2 / 2 s_y^2 [- (sqrt b_i - sqrt b_j)^2 / 2 s_b^2])
+    w_ij = exp(-(x_j-x_i)^2 / 2 s_x,i^2 - (y_j-y_i)^2 / 2 s_y,i^2 [- (sqrt b_j - sqrt b_i)^2 / 2 s_b,i^2])
     model_i = astro_i * sum_j w_ij (flux_j / astro_j) / sum_j w_ij
 
-with the scale lengths ``s_x, s_y, s_b`` the standard deviations of x, y and
-sqrt(noise pixels) over the epoch (Knutson et al. 2012; Lewis et al. 2013).
-The neighbour lists and normalised weights depend only on the centroids, so
-they are built once (:func:`knn_weights`) into a sparse matrix; evaluating the
-model is one sparse matrix-vector product.
+The kernel widths belong to each frame: ``s_x,i``, ``s_y,i`` (and ``s_b,i``)
+are the standard deviations of the offsets of frame i's k neighbours from it,
+as the field's public kernel-regression codes compute them (J. Fraine's
+Python translation of N. Lewis's IDL code, ``exowanderer/GaussianKernelRegression``,
+``find_qhull_one_point``: ``sigx = std(x0[inds[point]] - x0[point])``; K.
+Pearson's ``gaussian_weights``, same rule). The neighbours themselves are the
+k nearest in Euclidean distance in (x, y[, sqrt b]) (Appendix B.4: "based on
+the Euclidean distance"). The neighbour lists and normalised weights depend
+only on the centroids, so they are built once (:func:`local_kernel_weights`)
+into a sparse matrix; evaluating the model is one sparse matrix-vector product.
 
 KR/Pmap (Krick et al. 2016) trains the same regression on a separate
 calibration star: for each science frame the k nearest calibration frames in
@@ -21,7 +26,9 @@ calibration flux averaged over the pixel, so the gain map is fixed and only a
 flux scale ``F0`` is fitted (in closed form): ``model = F0 * astro * gain``.
 For the real gridded SSC pmap (500x500 cells, itself a kernel-regression
 product) the gain is the bilinear interpolation of the map at (x, y), as the
-IRSA correction code does.
+IRSA correction code does. Frames where the map's occupancy is below
+``min_occupancy`` (20, the IRSA code's ``THRESHOLD_VAL``) are left out of the
+fit, as that code sets them to ``MISSING``.
 """
 
 from __future__ import annotations
@@ -38,15 +45,25 @@ from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 from .bliss import _with_flux
-from .pmap import CalibrationSet, GriddedPmap, find_pmap_path, interpolate_grid, load_pmap
+from .pmap import (
+    CalibrationSet,
+    GriddedPmap,
+    find_pmap_path,
+    interpolate_grid,
+    kernel_occupancy,
+    load_pmap,
+)
 
-__all__ = ["scale_lengths", "knn_weights", "smoother_trace", "KernelRegressionData",
-           "KernelRegressionPmap", "pmap_gain", "noise_pixels_offset"]
+__all__ = ["scale_lengths", "knn_weights", "local_kernel_weights", "smoother_trace",
+           "KernelRegressionData", "KernelRegressionPmap", "pmap_gain", "noise_pixels_offset"]
 
 
 def scale_lengths(x: np.ndarray, y: np.ndarray,
                   noise_pixels: np.ndarray | None = None) -> np.ndarray:
-    """Kernel scale lengths: standard deviations of x, y [and sqrt(noise pixels)].
+    """Epoch-wide scale lengths: standard deviations of x, y [and sqrt(noise pixels)].
+
+    KR/Pmap's kernel widths (the calibration neighbours lie far closer to
+    each science frame than these, so its weights are nearly equal).
 
     Returns
     -------
@@ -58,35 +75,17 @@ def scale_lengths(x: np.ndarray, y: np.ndarray,
     return np.array([np.std(c) for c in cols])
 
 
-def _coords(x, y, noise_pixels, scales: np.ndarray) -> np.ndarray:
+def _coords(x, y, noise_pixels, scales: np.ndarray | None = None) -> np.ndarray:
     cols = [np.asarray(x, float), np.asarray(y, float)]
     if noise_pixels is not None:
         cols.append(np.sqrt(np.asarray(noise_pixels, float)))
-    return np.column_stack(cols) / scales
+    pts = np.column_stack(cols)
+    return pts if scales is None else pts / scales
 
 
-def knn_weights(query: np.ndarray, train: np.ndarray, *, k: int,
+def _neighbours(query: np.ndarray, train: np.ndarray, *, k: int,
                 exclude_self: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Neighbour indices and normalised Gaussian weights in scaled coordinates.
-
-    Parameters
-    ----------
-    query : ndarray, shape (n, d)
-        Points to estimate, already divided by the scale lengths.
-    train : ndarray, shape (m, d)
-        Training points, in the same scaled coordinates.
-    k : int
-        Neighbours per point.
-    exclude_self : bool
-        When query and train are the same set: drop each point from its own
-        neighbour list (KR/Data's leave-one-out average).
-
-    Returns
-    -------
-    index : ndarray of int, shape (n, k)
-    weight : ndarray, shape (n, k)
-        ``exp(-d^2/2)`` normalised to sum to 1 along axis 1.
-    """
+    """Indices and distances of the k nearest training points (self left out if asked)."""
     n = len(query)
     kk = k + 1 if exclude_self else k
     dist, idx = cKDTree(train).query(query, k=kk)
@@ -101,23 +100,104 @@ def knn_weights(query: np.ndarray, train: np.ndarray, *, k: int,
         keep[np.arange(n), drop] = False
         dist = dist[keep].reshape(n, k)
         idx = idx[keep].reshape(n, k)
-    # Shift by the nearest distance before exponentiating so the weights never
-    # underflow to all zeros; normalisation removes the shift exactly.
-    d2 = dist**2
-    w = np.exp(-0.5 * (d2 - d2[:, :1]))
-    w /= w.sum(axis=1, keepdims=True)
-    return idx, w
+    return idx, dist
 
 
-def smoother_trace(query: np.ndarray, train: np.ndarray, index: np.ndarray) -> float:
+def _normalised_gaussian(sq_dist: np.ndarray) -> np.ndarray:
+    # Shift by the smallest squared distance before exponentiating so the
+    # weights never underflow to all zeros; normalisation removes the shift.
+    w = np.exp(-0.5 * (sq_dist - sq_dist.min(axis=1, keepdims=True)))
+    return w / w.sum(axis=1, keepdims=True)
+
+
+def knn_weights(query: np.ndarray, train: np.ndarray, *, k: int,
+                exclude_self: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Neighbour indices and normalised Gaussian weights in already-scaled coordinates.
+
+    Fixed kernel widths (KR/Pmap): the coordinates are divided by the scale
+    lengths beforehand, so the weight is ``exp(-d^2/2)``.
+
+    Parameters
+    ----------
+    query : ndarray, shape (n, d)
+        Points to estimate, already divided by the scale lengths.
+    train : ndarray, shape (m, d)
+        Training points, in the same scaled coordinates.
+    k : int
+        Neighbours per point.
+    exclude_self : bool
+        When query and train are the same set: drop each point from its own
+        neighbour list (a leave-one-out average).
+
+    Returns
+    -------
+    index : ndarray of int, shape (n, k)
+    weight : ndarray, shape (n, k)
+        ``exp(-d^2/2)`` normalised to sum to 1 along axis 1.
+    """
+    idx, dist = _neighbours(query, train, k=k, exclude_self=exclude_self)
+    return idx, _normalised_gaussian(dist**2)
+
+
+def local_kernel_weights(points: np.ndarray, *, k: int
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """KR/Data's neighbours and weights, with kernel widths from each point's neighbours.
+
+    For each point i: its k nearest other points (Euclidean distance in the
+    coordinates as given), the widths ``s_i`` = standard deviations of their
+    offsets from i along each coordinate (``numpy.std``, about the mean
+    offset, as in Lewis's and Fraine's code), and the weights
+    ``exp(-sum_c (offset_c / s_c,i)^2 / 2)`` normalised to sum to 1. A
+    coordinate along which every neighbour has the same offset (zero width)
+    scales all of i's weights alike and drops out.
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, d)
+        x, y [, sqrt(noise pixels)] of every frame, unscaled.
+    k : int
+        Neighbours per point (the point itself excluded).
+
+    Returns
+    -------
+    index : ndarray of int, shape (n, k)
+    weight : ndarray, shape (n, k)
+        Normalised along axis 1.
+    sq_dist : ndarray, shape (n, k)
+        ``sum_c (offset_c / s_c,i)^2``, the squared kernel distances.
+    widths : ndarray, shape (n, d)
+        The per-point kernel widths.
+
+    Examples
+    --------
+    >>> g = np.random.default_rng(1)
+    >>> pts = g.normal(size=(500, 2)) * [0.03, 0.05]
+    >>> idx, w, d2, s = local_kernel_weights(pts, k=50)
+    >>> bool(np.median(w.max(axis=1) / w.min(axis=1)) > 1.5)
+    True
+    """
+    idx, _ = _neighbours(points, points, k=k, exclude_self=True)
+    offsets = points[idx] - points[:, None, :]
+    widths = offsets.std(axis=1)
+    inv = np.divide(1.0, widths, out=np.zeros_like(widths), where=widths > 0)
+    sq_dist = np.sum((offsets * inv[:, None, :]) ** 2, axis=2)
+    return idx, _normalised_gaussian(sq_dist), sq_dist, widths
+
+
+def smoother_trace(sq_dist: np.ndarray) -> float:
     """Effective number of parameters of a kernel smoother that includes each point.
 
-    ``tr(S)`` of the smoother whose weights are the k-neighbour Gaussian plus
-    the point itself at distance 0 (the usual effective degrees of freedom of
-    a linear smoother; the leave-one-out form used for the fit has trace 0).
+    ``tr(S)`` of the smoother whose weights are the k-neighbour Gaussian
+    ``exp(-sq_dist/2)`` plus the point itself at distance 0 (the usual
+    effective degrees of freedom of a linear smoother; the leave-one-out form
+    used for the fit has trace 0).
+
+    Parameters
+    ----------
+    sq_dist : ndarray, shape (n, k)
+        Squared kernel distances of each point's neighbours.
     """
-    d2 = np.sum((train[index] - query[:, None, :]) ** 2, axis=2)
-    return float(np.sum(1.0 / (1.0 + np.exp(-0.5 * d2).sum(axis=1))))
+    return float(np.sum(1.0 / (1.0 + np.exp(-0.5 * sq_dist).sum(axis=1))))
 
 
 def _check_finite(name: str, method: str, *arrays) -> None:
@@ -141,6 +221,10 @@ class KrDataOptions(MethodOptions):
 class KernelRegressionData(Systematics):
     """KR/Data: leave-one-out Gaussian kernel regression on the science frames.
 
+    Each frame's kernel widths are the standard deviations of its k
+    neighbours' offsets from it (:func:`local_kernel_weights`; Lewis et al.
+    2013, Knutson et al. 2012, Wong et al. 2014 as their codes compute them).
+
     Options (:class:`KrDataOptions`)
     --------------------------------
     k : int, default 50
@@ -148,6 +232,17 @@ class KernelRegressionData(Systematics):
     use_noise_pixels : bool, default False
         Add sqrt(noise pixels) as a third coordinate (Lewis et al. 2013); Wong
         et al. used x and y only.
+
+    Examples
+    --------
+    >>> g = np.random.default_rng(0)
+    >>> n = 2000
+    >>> x, y = 15 + 0.03 * g.standard_normal(n), 15 + 0.05 * g.standard_normal(n)
+    >>> data = EpochData(time_bmjd=np.arange(n) / 43200, flux=1e5 * (1 + 0.1 * (x - 15)),
+    ...                  flux_err=np.full(n, 300.0), x=x, y=y)
+    >>> model = KernelRegressionData(data)
+    >>> bool(model.diagnostics()["weight_ratio_median"] > 1.5)
+    True
     """
 
     name: ClassVar[str] = "kr-data"
@@ -170,24 +265,20 @@ class KernelRegressionData(Systematics):
         _check_finite("x, y" + (", noise_pixels" if use_np else ""), self.name, data.x, data.y, beta)
         if use_np and np.any(np.asarray(beta) <= 0):
             raise InputError("method 'kr-data': noise_pixels must be positive")
-        self.scales = scale_lengths(data.x, data.y, beta)
-        if not np.all(self.scales > 0):
-            raise InputError("method 'kr-data': a kernel coordinate does not vary over the epoch "
-                             "(zero standard deviation)")
-        pts = _coords(data.x, data.y, beta, self.scales)
-        idx, w = knn_weights(pts, pts, k=k, exclude_self=True)
+        idx, w, sq_dist, self.widths = local_kernel_weights(_coords(data.x, data.y, beta), k=k)
         self.k = k
         self.smoother = sp.csr_matrix((w.ravel(), idx.ravel(), np.arange(0, n * k + 1, k)),
                                       shape=(n, n))
-        self._dof = smoother_trace(pts, pts, idx)
+        self._dof = smoother_trace(sq_dist)
         self._weight_ratio_median = float(np.median(w.max(axis=1) / w.min(axis=1)))
         self._flux = np.asarray(data.flux, float)
 
     def diagnostics(self) -> dict[str, Any]:
-        """Kernel scale lengths, effective degrees of freedom, and how much the kernel
-        weighs: the median over frames of the largest/smallest weight among its neighbours
-        (1 is a plain nearest-neighbour mean)."""
-        return {"scales": self.scales.tolist(), "dof": float(self._dof),
+        """Median per-frame kernel widths (x, y[, sqrt(beta)]), effective degrees of freedom,
+        and how much the kernel weighs: the median over frames of the largest/smallest
+        weight among its neighbours (1 is a plain nearest-neighbour mean)."""
+        return {"width_median": np.median(self.widths, axis=0).tolist(),
+                "dof": float(self._dof),
                 "weight_ratio_median": self._weight_ratio_median}
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
@@ -268,7 +359,8 @@ class KrPmapOptions(MethodOptions):
     match_noise_pixels: bool = True
     max_distance_px: float = 0.1
     max_uncovered_fraction: float = 0.05
-    min_occupancy: float = 0.0
+    min_occupancy: float = 20.0
+    occupancy_sigma_px: float = 0.004
 
     def validate(self) -> None:
         check(self.k >= 1, "k", "an integer >= 1")
@@ -276,6 +368,7 @@ class KrPmapOptions(MethodOptions):
         check(0 <= self.max_uncovered_fraction <= 1, "max_uncovered_fraction",
               "a fraction 0-1")
         check(self.min_occupancy >= 0, "min_occupancy", "an occupancy >= 0")
+        check(self.occupancy_sigma_px > 0, "occupancy_sigma_px", "a positive width in pixels")
 
 
 @register
@@ -313,11 +406,23 @@ class KernelRegressionPmap(Systematics):
     max_uncovered_fraction : float, default 0.05
         More uncovered frames than this fraction raise InputError (a map of
         another pixel, or a pointing far off the sweet spot).
-    min_occupancy : float, default 0
-        Gridded map only: frames where the interpolated occupancy is below
-        this raise InputError (the IRSA code's ``THRESHOLD_VAL``, 20 there,
-        marks the well-measured sweet spot). The count below 20 is always
-        kept in ``n_low_occupancy``.
+    min_occupancy : float, default 20
+        Frames whose occupancy is below this are left out of the fit and
+        counted (``dropped_frames()["low_occupancy"]``, ``n_low_occupancy``),
+        as the IRSA correction code flags them (``/THRESHOLD_OCC``, default
+        ``THRESHOLD_VAL = 20``). Occupancy: the gridded map's ``occu_`` image
+        interpolated at (x, y); for a calibration table the Gaussian
+        kernel-weighted number of calibration points around (x, y)
+        (:func:`~eclipsebench.decorrelate.pmap.kernel_occupancy`). 0 keeps
+        every frame.
+    occupancy_sigma_px : float, default 0.004
+        Calibration table only: the width of the occupancy kernel, pixels. The
+        SSC does not document the width behind its ``occu_`` images; 0.004 px
+        is what the ch2 maps themselves imply (the Gaussian fall-off of the
+        occupancy image's power spectrum: 0.0041-0.0049 px; the total
+        occupancy over 2 pi N with the ~400,000 points of Appendix B.4:
+        0.0032-0.0038 px), so a calibration table's occupancy counts points
+        at the resolution of the SSC map.
     """
 
     name: ClassVar[str] = "kr-pmap"
@@ -342,10 +447,25 @@ class KernelRegressionPmap(Systematics):
         k, use_np, match_np = o.k, o.use_noise_pixels, o.match_noise_pixels
         max_d, max_frac = o.max_distance_px, o.max_uncovered_fraction
         self.pmap = self.context.resource("pmap")
+        self._tree_xy: cKDTree | None = None
         path = self.pmap.source or "the calibration set"
         x = np.asarray(data.x, float)
         y = np.asarray(data.y, float)
         _check_finite("x, y", self.name, x, y)
+        occupancy = self._occupancy(x, y)
+        low = occupancy < o.min_occupancy
+        self.n_low_occupancy = int(low.sum())
+        if self.n_low_occupancy == len(x):
+            raise InputError(f"pmap {path}: every frame ({len(x)}) falls where the map's occupancy "
+                             f"is below min_occupancy={o.min_occupancy} (median occupancy "
+                             f"{np.median(occupancy):.3g}): a map of another pixel?")
+        if self.n_low_occupancy:
+            # Left out of the fit as the IRSA code flags them (MISSING); the fitter
+            # evaluates the astrophysical model at self.data's times.
+            data = data.subset(np.flatnonzero(~low))
+            self.data = data
+            x, y = x[~low], y[~low]
+        self.occupancy_median = float(np.median(occupancy[~low]))
         if isinstance(self.pmap, GriddedPmap):
             g = self.pmap
             out_x = np.maximum(g.x_grid[0] - x, x - g.x_grid[-1])
@@ -354,12 +474,6 @@ class KernelRegressionPmap(Systematics):
             beta = None
             self.scales = None
             self.noise_pixels_offset = 0.0
-            occ = interpolate_grid(g.occupancy, g.x_grid, g.y_grid, x, y)
-            self.n_low_occupancy = int(np.sum(occ < 20.0))
-            min_occ = o.min_occupancy
-            if np.sum(occ < min_occ):
-                raise InputError(f"pmap {path}: {int(np.sum(occ < min_occ))} of {len(x)} frames "
-                                 f"fall where the map's occupancy is below min_occupancy={min_occ}")
         else:
             if len(self.pmap) < k:
                 raise InputError(f"pmap {path}: {len(self.pmap)} calibration rows, fewer than k = {k}")
@@ -368,7 +482,7 @@ class KernelRegressionPmap(Systematics):
                 raise InputError("method 'kr-pmap' with use_noise_pixels: needs the column "
                                  "noise_pixels in the photometry table (or use_noise_pixels=false)")
             _check_finite("noise_pixels", self.name, beta)
-            tree_xy = cKDTree(np.column_stack([self.pmap.x, self.pmap.y]))
+            tree_xy = self._cal_tree()
             self.noise_pixels_offset = 0.0
             if beta is not None and match_np:
                 self.noise_pixels_offset = noise_pixels_offset(self.pmap, x, y, beta, k=k,
@@ -384,7 +498,6 @@ class KernelRegressionPmap(Systematics):
                                  "epoch (zero standard deviation)")
             dist, _ = tree_xy.query(np.column_stack([x, y]), k=1)
             far = dist > max_d
-            self.n_low_occupancy = 0
         self.n_uncovered = int(far.sum())
         if self.n_uncovered > max_frac * len(x):
             raise InputError(f"pmap {path}: {self.n_uncovered} of {len(x)} frames lie more than "
@@ -394,6 +507,25 @@ class KernelRegressionPmap(Systematics):
         self.gain = pmap_gain(self.pmap, x, y, beta, k=k, scales=self.scales)
         self._flux = np.asarray(data.flux, float)
         self._ivar = 1.0 / np.asarray(data.flux_err, float) ** 2
+
+    def _cal_tree(self) -> cKDTree:
+        """The k-d tree of the calibration (x, y), built once."""
+        if self._tree_xy is None:
+            self._tree_xy = cKDTree(np.column_stack([self.pmap.x, self.pmap.y]))
+        return self._tree_xy
+
+    def _occupancy(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The pixel map's occupancy at each science centroid (see ``min_occupancy``)."""
+        if isinstance(self.pmap, GriddedPmap):
+            g = self.pmap
+            return interpolate_grid(g.occupancy, g.x_grid, g.y_grid, x, y)
+        return kernel_occupancy(self.pmap.x, self.pmap.y, x, y,
+                                sigma_px=self.options.occupancy_sigma_px, tree=self._cal_tree())
+
+    def dropped_frames(self) -> dict[str, int]:
+        """``{"low_occupancy": n}``: frames left out where the map's occupancy is below
+        ``min_occupancy``."""
+        return {"low_occupancy": self.n_low_occupancy}
 
     def flux_scale(self, astro: np.ndarray) -> float:
         """Weighted least-squares ``F0`` of ``flux = F0 * astro * gain`` (electrons)."""
@@ -409,9 +541,12 @@ class KernelRegressionPmap(Systematics):
         return (np.einsum("i,i->", wm, self._flux) / np.einsum("i,i->", wm, m)) * m
 
     def diagnostics(self) -> dict[str, Any]:
-        """The calibration set used and how well it covers the science frames."""
+        """The calibration set used and how well it covers the science frames (frames
+        dropped for low occupancy, the median occupancy of those kept, frames farther
+        than ``max_distance_px`` from the calibration data)."""
         return {"pmap": str(self.pmap.source), "pmap_kind": type(self.pmap).__name__,
                 "n_uncovered": self.n_uncovered, "n_low_occupancy": self.n_low_occupancy,
+                "occupancy_median": self.occupancy_median,
                 "noise_pixels_offset": float(self.noise_pixels_offset)}
 
     def with_flux(self, flux: np.ndarray) -> KernelRegressionPmap:
