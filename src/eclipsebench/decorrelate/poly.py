@@ -229,7 +229,7 @@ class _Polynomial(LinearDetectorModel):
     """SPCA's 2-D polynomial of total degree ``order`` in the centroid (module docstring)."""
 
     order: ClassVar[int] = 0
-    requires: ClassVar[tuple[str, ...]] = ()
+    requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = PolyOptions
 
     def regressors(self, data: EpochData) -> np.ndarray:
