@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -25,60 +27,106 @@ def test_default_spacing_is_rms_frame_to_frame_motion():
     assert dy == pytest.approx(np.sqrt((0.0 + 0.04 + 0.01) / 3))
 
 
-def test_knot_means_and_bilinear_interpolation_by_hand():
-    # Knots at x = 0, 1 and y = 0, 1 (spacing 1). Frames sit near each knot,
-    # four per knot, with ratios chosen so the knot means are 10, 20, 30, 40.
-    off = np.array([[-0.1, -0.1], [0.1, 0.1], [-0.1, 0.1], [0.1, -0.1]])
-    knots = {(0, 0): 10.0, (1, 0): 20.0, (0, 1): 30.0, (1, 1): 40.0}
+def test_grid_is_laid_out_as_poet_does():
+    # Relative to the rounded median (15), x spans [0.012, 0.087]: POET's grid
+    # runs from floor(0.12)/10 - 0.03 = -0.03 to ceil(0.87)/10 + 0.03 = 0.13,
+    # with int(0.16 / 0.03 + 1) = 6 knots spread evenly (step 0.032, not 0.03).
+    x = np.array([15.012, 15.05, 15.087])
+    y = np.array([14.96, 15.0, 15.04])
+    grid = bliss_setup(x, y, dx_px=0.03, dy_px=0.07, min_points=1)
+    np.testing.assert_allclose(grid.x_knots, 15.0 + np.linspace(-0.03, 0.13, 6))
+    # y: [-0.04, 0.04] -> -0.1 - 0.07 = -0.17 .. 0.1 + 0.07 = 0.17, int(0.34 / 0.07 + 1) = 5
+    np.testing.assert_allclose(grid.y_knots, 15.0 + np.linspace(-0.17, 0.17, 5))
+    assert grid.n_knots == 30 and grid.keep.all()
+    assert grid.steps_px == pytest.approx((0.032, 0.085))
+
+
+def _cell_epoch():
+    # Knots every 0.1 px from 14.8 to 15.3 (POET's edges around x in
+    # [14.98, 15.12]: floor/ceil to 0.1 px, one step beyond); five frames near each of the four knots (15.0, 15.0),
+    # (15.1, 15.0), (15.0, 15.1), (15.1, 15.1) with ratios whose means are 10,
+    # 20, 30 and 40, and frames spread inside that cell.
+    off = np.array([-0.025, -0.015, 0.005, 0.015, 0.025])
+    knots = {(15.0, 15.0): 10.0, (15.1, 15.0): 20.0, (15.0, 15.1): 30.0, (15.1, 15.1): 40.0}
     xs, ys, fs = [], [], []
     for (kx, ky), mean in knots.items():
-        for j, (ox, oy) in enumerate(off):
-            xs.append(min(max(kx + ox, 0.0), 1.0))
-            ys.append(min(max(ky + oy, 0.0), 1.0))
-            fs.append(mean + (-1.5, -0.5, 0.5, 1.5)[j])
-    x, y, f = map(np.array, (xs, ys, fs))
-    grid = bliss_setup(x, y, dx_px=1.0, dy_px=1.0, min_points=4)
-    assert grid.n_knots == 4 and grid.n_live == 4
+        xs += list(kx + off)
+        ys += list(ky - off)
+        fs += list(mean + np.array([-2.0, -1.0, 0.0, 1.0, 2.0]))
+    return np.array(xs), np.array(ys), np.array(fs)
+
+
+def test_knot_means_and_bilinear_interpolation_by_hand():
+    x, y, f = _cell_epoch()
+    grid = bliss_setup(x, y, dx_px=0.1, dy_px=0.1, min_points=4)
+    assert grid.n_live == 4 and grid.keep.all()
+    np.testing.assert_allclose(grid.x_knots, [14.8, 14.9, 15.0, 15.1, 15.2, 15.3], atol=1e-12)
     gain = bliss_gain(grid, f)
-    # Independent bilinear interpolation of the knot means 10, 20, 30, 40.
-    expected = (10 * (1 - x) * (1 - y) + 20 * x * (1 - y) + 30 * (1 - x) * y + 40 * x * y)
-    np.testing.assert_allclose(gain, expected, rtol=1e-12)
+    inside = (x > 15.0) & (x < 15.1) & (y > 15.0) & (y < 15.1)
+    u, v = (x - 15.0) / 0.1, (y - 15.0) / 0.1
+    expected = 10 * (1 - u) * (1 - v) + 20 * u * (1 - v) + 30 * (1 - u) * v + 40 * u * v
+    np.testing.assert_allclose(gain[inside], expected[inside], rtol=1e-10)
+    # Outside the populated cell a corner is empty: the frame takes its own knot's mean.
+    own = np.select([(np.abs(x - 15.0) < 0.05) & (np.abs(y - 15.0) < 0.05),
+                     (np.abs(x - 15.1) < 0.05) & (np.abs(y - 15.0) < 0.05),
+                     (np.abs(x - 15.0) < 0.05) & (np.abs(y - 15.1) < 0.05)], [10.0, 20.0, 30.0],
+                    40.0)
+    np.testing.assert_allclose(gain[~inside], own[~inside], rtol=1e-12)
+    assert np.count_nonzero(grid.nearest_neighbour) == np.count_nonzero(~inside)
 
 
-def test_sparse_knot_frames_join_the_nearest_live_knot():
-    # Knots at x = 0, 1, 2, 3 (spacing 1). Knot 0 has five frames, knot 3 four;
-    # knots 1 and 2 have one frame each and are dead with min_points = 2: the
-    # frame at x = 1 joins knot 0 (nearest live), the one at x = 1.5 rounds to
-    # knot 2 and joins knot 3. Dead knots take their nearest live knot's value.
-    x = np.array([0.0] * 5 + [1.0, 1.5] + [3.0] * 4)
-    y = np.zeros_like(x)
+def test_sparse_knot_frames_are_masked_and_counted():
+    # Spacing 0.15 px: POET's grid spans 14.85-15.65 with int(0.8 / 0.15 + 1) = 6
+    # knots (step 0.16: 14.85, 15.01, 15.17, 15.33, 15.49, 15.65). Five frames
+    # near knot 15.01, four near 15.49, one alone near each of 15.17 and 15.33.
+    # With POET's minnumpts = 2 the two lone frames are masked: they leave the
+    # fit instead of joining a knot 0.16 px away (the stand-in merged them into
+    # the nearest live knot's mean).
+    x = np.array([15.0] * 5 + [15.15, 15.3] + [15.45] * 4)
+    y = np.full_like(x, 15.0)
     f = np.arange(1.0, 12.0)
-    grid = bliss_setup(x, y, dx_px=1.0, dy_px=1.0, min_points=2)
-    assert grid.n_live == 2
-    mean0 = f[[0, 1, 2, 3, 4, 5]].mean()
-    mean3 = f[[6, 7, 8, 9, 10]].mean()
-    expected = np.array([mean0] * 6 + [0.5 * mean0 + 0.5 * mean3] + [mean3] * 4)
-    np.testing.assert_allclose(bliss_gain(grid, f), expected, rtol=1e-12)
+    data = _data(x, y, f)
+    model = get_method("bliss")(data, knot_spacing_px=0.15, min_points_per_knot=2)
+    assert model.dropped_frames() == {"sparse_knot": 2}
+    assert model.diagnostics()["n_sparse_knot_frames"] == 2
+    assert len(model.data) == 9
+    np.testing.assert_array_equal(model.data.time_bmjd, np.r_[0:5, 7:11].astype(float))
+    np.testing.assert_array_equal(model.data.flux, f[np.r_[0:5, 7:11]])
+    # Each kept frame's cell has a corner without frames: it takes its own knot's mean.
+    expected = np.r_[np.full(5, f[:5].mean()), np.full(4, f[7:].mean())]
+    np.testing.assert_allclose(model.predict(np.ones(9)), expected, rtol=1e-12)
+    assert model.n_effective_params() == 2
 
 
-def test_dead_knots_take_nearest_live_value():
-    rng = np.random.default_rng(1)
-    x = np.concatenate([rng.uniform(0.0, 0.4, 200), [2.9]])     # one stray frame far away
-    y = np.concatenate([rng.uniform(0.0, 0.4, 200), [0.1]])
-    f = np.concatenate([np.full(200, 7.0), [9.0]])
-    grid = bliss_setup(x, y, dx_px=1.0, dy_px=1.0, min_points=4)
-    gain = bliss_gain(grid, f)
-    # Only knot (0, 0) is live: the stray frame joins it, so every value is the mean.
-    assert grid.n_live == 1
-    np.testing.assert_allclose(gain, f.mean())
+def test_sparse_frames_on_a_drift_track_are_masked(epoch_sys):
+    # A stray excursion of 30 frames far along the drift track: with a spacing
+    # of 0.01 px each of its knots holds one or two frames. They are masked and
+    # counted, never modelled with the mean of a knot hundredths of a pixel away.
+    data = epoch_sys.data
+    x = data.x.copy()
+    y = data.y.copy()
+    x[5000:5030] = x.max() + 0.02 + 0.015 * np.arange(30)
+    model = get_method("bliss")(dataclasses.replace(data, x=x, y=y), knot_spacing_px=0.01)
+    dropped = model.dropped_frames()["sparse_knot"]
+    assert dropped >= 30
+    assert len(model.data) == len(data) - dropped
+    assert not np.any(np.isin(model.data.time_bmjd, data.time_bmjd[5000:5030]))
+
+
+def test_all_sparse_is_refused():
+    x = np.array([15.0, 15.3, 15.6])
+    with pytest.raises(InputError, match="min_points_per_knot"):
+        bliss_setup(x, np.full(3, 15.0), dx_px=0.1, dy_px=0.1, min_points=2)
 
 
 def test_class_options_and_effective_params(epoch_sys):
     data = epoch_sys.data
     model = get_method("bliss")(data, knot_spacing_px=0.01)
     assert model.knot_spacing_px == (0.01, 0.01)
-    # Independent count of knots with >= 4 nearest frames.
-    xk0, yk0 = data.x.min(), data.y.min()
+    # Independent count of knots with >= 4 nearest frames, on POET's grid
+    # (first knot one step below the tenth of a pixel under the smallest centroid).
+    xk0 = np.floor(10 * data.x.min()) / 10 - 0.01
+    yk0 = np.floor(10 * data.y.min()) / 10 - 0.01
     ix = np.rint((data.x - xk0) / 0.01).astype(int)
     iy = np.rint((data.y - yk0) / 0.01).astype(int)
     _, counts = np.unique(np.column_stack([ix, iy]), axis=0, return_counts=True)
@@ -106,8 +154,11 @@ def test_static_pointing_needs_explicit_spacing():
 
 def test_with_flux_reuses_grid(epoch_sys):
     model = get_method("bliss")(epoch_sys.data)
-    new_flux = epoch_sys.data.flux * 1.01
+    assert model.dropped_frames()["sparse_knot"] > 0
+    keep = model.grid.keep
+    new_flux = model.data.flux * 1.01
     other = model.with_flux(new_flux)
     assert other.grid is model.grid
-    np.testing.assert_allclose(other.predict(epoch_sys.astro), 1.01 * model.predict(epoch_sys.astro))
-    np.testing.assert_array_equal(model.data.flux, epoch_sys.data.flux)
+    np.testing.assert_allclose(other.predict(epoch_sys.astro[keep]),
+                               1.01 * model.predict(epoch_sys.astro[keep]))
+    np.testing.assert_array_equal(model.data.flux, epoch_sys.data.flux[keep])

@@ -7,15 +7,21 @@ interpolation of the four knots around it::
 
     model_i = astro_i * sum_c w_ic * K[c_i],   K[k] = mean_{j: knot(j)=k} flux_j / astro_j
 
-Everything except the two averages (the knot assignment, the bilinear corner
-indices and weights) depends only on the centroids and is done once in
-:func:`bliss_setup`; :func:`bliss_gain` is the cheap evaluation.
+The rules are those of POET, the BLISS team's pipeline (kevin218/POET,
+``code/lib/p6model.py``, the ``ipmap`` set-up):
 
-Sparse knots: POET (Stevenson et al. 2012) masks out the frames whose nearest
-knot holds fewer than ``minnumpts`` frames. The interface here models every
-frame, so such frames are instead merged into their nearest well-populated
-knot, and a sparse (or empty) knot that is a corner of some frame's cell takes
-the value of its nearest well-populated knot.
+* the grid runs from ``floor(10 min)/10 - step`` to ``ceil(10 max)/10 + step``
+  along each axis (positions relative to the rounded median pixel), with
+  ``int(span / step + 1)`` knots spread evenly over that span;
+* a frame belongs to the knot within half a step of it along both axes (its
+  nearest knot);
+* frames whose nearest knot holds fewer than ``minnumpts`` frames are masked
+  out of the fit (``minnumptsmask``);
+* a frame whose grid cell has a corner knot without frames is interpolated by
+  nearest neighbour (the value of its own knot), otherwise bilinearly.
+
+Everything except the knot averages depends only on the centroids and is done
+once in :func:`bliss_setup`; :func:`bliss_gain` is the cheap evaluation.
 """
 
 from __future__ import annotations
@@ -26,13 +32,16 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
-__all__ = ["BlissGrid", "knot_spacing_from_data", "bliss_setup", "bliss_gain", "Bliss"]
+__all__ = ["BlissGrid", "knot_spacing_from_data", "poet_axis_knots", "bliss_setup",
+           "bliss_knot_values", "bliss_gain", "Bliss"]
+
+#: POET rounds the grid edges to tenths of a pixel (``yfactor = xfactor = 10``).
+_EDGE_PER_PX = 10.0
 
 
 @dataclass(frozen=True)
@@ -45,34 +54,49 @@ class BlissGrid:
         Knot coordinates along each axis (pixels).
     n_knots : int
         ``len(x_knots) * len(y_knots)``; knot ``k = iy * nx + ix``.
-    assign : ndarray of int, shape (n,)
-        The (well-populated) knot whose mean each frame contributes to.
+    keep : ndarray of bool, shape (n,)
+        Frames kept: their nearest knot holds at least ``min_points`` frames.
+    assign : ndarray of int, shape (n_kept,)
+        The nearest knot of each kept frame.
     counts : ndarray of float, shape (n_knots,)
-        Frames per knot after merging (0 for dead knots).
+        Kept frames per knot (0 for the knots that are not live).
     live : ndarray of bool, shape (n_knots,)
         Knots holding at least ``min_points`` frames.
-    fill_from : ndarray of int, shape (n_knots,)
-        For each knot, the live knot whose value it takes (itself if live).
-    corners : ndarray of int, shape (4, n)
-        The four knots around each frame: (x0,y0), (x1,y0), (x0,y1), (x1,y1).
-    weights : ndarray of float, shape (4, n)
-        The bilinear weights of those corners (sum to 1).
+    corners : ndarray of int, shape (4, n_kept)
+        The four knots around each kept frame: (x0,y0), (x1,y0), (x0,y1),
+        (x1,y1); all four are the frame's own knot where it is interpolated by
+        nearest neighbour.
+    weights : ndarray of float, shape (4, n_kept)
+        The interpolation weights of those corners (sum to 1).
+    nearest_neighbour : ndarray of bool, shape (n_kept,)
+        Frames whose cell has a corner that is not live (nearest-neighbour value).
     """
 
     x_knots: np.ndarray
     y_knots: np.ndarray
     n_knots: int
+    keep: np.ndarray
     assign: np.ndarray
     counts: np.ndarray
     live: np.ndarray
-    fill_from: np.ndarray
     corners: np.ndarray
     weights: np.ndarray
+    nearest_neighbour: np.ndarray
 
     @property
     def n_live(self) -> int:
         """Number of knots whose value is a mean of their own frames."""
         return int(self.live.sum())
+
+    @property
+    def n_masked(self) -> int:
+        """Frames masked out because their nearest knot is sparse."""
+        return int(self.keep.size - np.count_nonzero(self.keep))
+
+    @property
+    def steps_px(self) -> tuple[float, float]:
+        """The knot steps actually used along x and y (pixels)."""
+        return (float(self.x_knots[1] - self.x_knots[0]), float(self.y_knots[1] - self.y_knots[0]))
 
 
 def knot_spacing_from_data(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -85,99 +109,124 @@ def knot_spacing_from_data(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     Returns
     -------
     (dx_px, dy_px) : tuple of float
+
+    Examples
+    --------
+    >>> [round(s, 4) for s in knot_spacing_from_data([0.0, 0.3, 0.1], [1.0, 1.0, 1.2])]
+    [0.255, 0.1414]
     """
     dx = float(np.sqrt(np.mean(np.diff(np.asarray(x, float)) ** 2)))
     dy = float(np.sqrt(np.mean(np.diff(np.asarray(y, float)) ** 2)))
     return dx, dy
 
 
-def _axis_knots(v: np.ndarray, step: float) -> np.ndarray:
-    """Knots at ``min(v) + i*step`` until the last one reaches ``max(v)`` (at least 2)."""
-    lo, hi = float(v.min()), float(v.max())
-    n = max(2, int(np.ceil((hi - lo) / step - 1e-9)) + 1)
-    return lo + step * np.arange(n)
+def poet_axis_knots(v: np.ndarray, step_px: float) -> np.ndarray:
+    """Knot positions along one axis, as POET lays them out.
+
+    Relative to the rounded median ``c``, the grid runs from
+    ``floor(10 min(v - c)) / 10 - step`` to ``ceil(10 max(v - c)) / 10 + step``
+    with ``int(span / step + 1)`` evenly spread knots (so the step actually used
+    is ``span / (n - 1)``, at least the requested one).
+
+    Examples
+    --------
+    >>> poet_axis_knots(np.array([15.02, 15.08]), 0.05)
+    array([14.95, 15.  , 15.05, 15.1 , 15.15])
+    """
+    v = np.asarray(v, float)
+    centre = float(np.round(np.median(v)))
+    lo = np.floor(_EDGE_PER_PX * (v.min() - centre)) / _EDGE_PER_PX - step_px
+    hi = np.ceil(_EDGE_PER_PX * (v.max() - centre)) / _EDGE_PER_PX + step_px
+    n = int((hi - lo) / step_px + 1)
+    return centre + np.linspace(lo, hi, max(n, 2))
 
 
 def bliss_setup(x: np.ndarray, y: np.ndarray, *, dx_px: float, dy_px: float,
                 min_points: int = 4) -> BlissGrid:
-    """Build the knot grid, the nearest-knot assignment and the bilinear weights.
+    """Build the knot grid, the sparse-knot mask, the nearest knots and the interpolation.
 
     Parameters
     ----------
     x, y : ndarray, shape (n,)
         Centroids (pixels).
     dx_px, dy_px : float
-        Knot spacing along x and y (pixels), > 0.
+        Requested knot spacing along x and y (pixels), > 0.
     min_points : int
-        A knot needs at least this many nearest frames to be used; frames of
-        sparser knots join their nearest live knot.
+        POET's ``minnumpts``: a frame whose nearest knot holds fewer frames is
+        masked out (``BlissGrid.keep`` is False).
 
     Returns
     -------
     BlissGrid
+
+    Examples
+    --------
+    >>> x = np.array([15.00, 15.01, 15.00, 15.30])
+    >>> g = bliss_setup(x, np.full(4, 15.0), dx_px=0.1, dy_px=0.1, min_points=2)
+    >>> g.keep.tolist(), g.n_live
+    ([True, True, True, False], 1)
     """
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     if not (dx_px > 0 and dy_px > 0 and np.isfinite(dx_px) and np.isfinite(dy_px)):
         raise InputError(f"option knot_spacing_px: expected positive spacings, got ({dx_px}, {dy_px})")
-    xk = _axis_knots(x, dx_px)
-    yk = _axis_knots(y, dy_px)
+    xk = poet_axis_knots(x, dx_px)
+    yk = poet_axis_knots(y, dy_px)
     nx, ny = len(xk), len(yk)
+    sx, sy = xk[1] - xk[0], yk[1] - yk[0]
     n_knots = nx * ny
 
-    # Nearest knot: round to the grid.
-    ixn = np.clip(np.rint((x - xk[0]) / dx_px).astype(np.intp), 0, nx - 1)
-    iyn = np.clip(np.rint((y - yk[0]) / dy_px).astype(np.intp), 0, ny - 1)
-    nearest = iyn * nx + ixn
-    counts0 = np.bincount(nearest, minlength=n_knots)
-    live = counts0 >= max(1, int(min_points))
-    if not live.any():
+    # Nearest knot: within half a step along both axes.
+    fx = (x - xk[0]) / sx
+    fy = (y - yk[0]) / sy
+    nearest = (np.clip(np.rint(fy).astype(np.intp), 0, ny - 1) * nx
+               + np.clip(np.rint(fx).astype(np.intp), 0, nx - 1))
+    counts_all = np.bincount(nearest, minlength=n_knots)
+    live = counts_all >= max(1, int(min_points))
+    keep = live[nearest]
+    if not keep.any():
         raise InputError(f"option min_points_per_knot={min_points}: no knot has that many "
                          "frames; use a coarser knot_spacing_px")
+    assign = nearest[keep]
+    counts = np.where(live, counts_all, 0).astype(float)
 
-    # Every knot (live or not) borrows from its nearest live knot, in units of the spacing.
-    kx, ky = np.meshgrid(np.arange(nx), np.arange(ny))
-    kpos = np.column_stack([kx.ravel(), ky.ravel()]).astype(float)
-    live_idx = np.flatnonzero(live)
-    _, j = cKDTree(kpos[live_idx]).query(kpos, k=1)
-    fill_from = live_idx[np.asarray(j, dtype=np.intp)]
-    assign = fill_from[nearest]
-    counts = np.bincount(assign, minlength=n_knots).astype(float)
-
-    # Bilinear cell: the knots at floor() and floor()+1 along each axis.
-    fx = np.clip((x - xk[0]) / dx_px, 0.0, nx - 1.0)
-    fy = np.clip((y - yk[0]) / dy_px, 0.0, ny - 1.0)
-    ix = np.minimum(fx.astype(np.intp), nx - 2)
-    iy = np.minimum(fy.astype(np.intp), ny - 2)
-    tx, ty = fx - ix, fy - iy
+    # The cell of a frame: knots m, m+1 with knot[m] < v <= knot[m+1] (POET's convention).
+    ix = np.clip(np.ceil(fx[keep]).astype(np.intp) - 1, 0, nx - 2)
+    iy = np.clip(np.ceil(fy[keep]).astype(np.intp) - 1, 0, ny - 2)
+    tx = np.clip(fx[keep] - ix, 0.0, 1.0)
+    ty = np.clip(fy[keep] - iy, 0.0, 1.0)
     k00 = iy * nx + ix
     corners = np.stack([k00, k00 + 1, k00 + nx, k00 + nx + 1])
     weights = np.stack([(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty])
-    return BlissGrid(x_knots=xk, y_knots=yk, n_knots=n_knots, assign=assign, counts=counts,
-                     live=live, fill_from=fill_from, corners=fill_from[corners], weights=weights)
+    nn = ~np.all(live[corners], axis=0)
+    corners[:, nn] = assign[nn]
+    weights[:, nn] = np.array([1.0, 0.0, 0.0, 0.0])[:, None]
+    return BlissGrid(x_knots=xk, y_knots=yk, n_knots=n_knots, keep=keep, assign=assign,
+                     counts=counts, live=live, corners=corners, weights=weights,
+                     nearest_neighbour=nn)
 
 
 def bliss_knot_values(grid: BlissGrid, ratio: np.ndarray) -> np.ndarray:
-    """Mean of ``ratio`` over the frames of each knot (dead knots: their live neighbour's)."""
+    """Mean of ``ratio`` (kept frames) over the frames of each knot; NaN for knots not live."""
     sums = np.bincount(grid.assign, weights=ratio, minlength=grid.n_knots)
     with np.errstate(invalid="ignore", divide="ignore"):
         return sums / grid.counts
 
 
 def bliss_gain(grid: BlissGrid, ratio: np.ndarray) -> np.ndarray:
-    """The BLISS sensitivity at every frame for the flux ratio ``flux / astro``.
+    """The BLISS sensitivity at every kept frame for the flux ratio ``flux / astro``.
 
     Parameters
     ----------
     grid : BlissGrid
         From :func:`bliss_setup`.
-    ratio : ndarray, shape (n,)
-        ``flux / astro`` (electrons).
+    ratio : ndarray, shape (n_kept,)
+        ``flux / astro`` of the kept frames (electrons).
 
     Returns
     -------
-    ndarray, shape (n,)
-        Bilinearly interpolated knot means (electrons).
+    ndarray, shape (n_kept,)
+        Interpolated knot means (electrons).
     """
     k = bliss_knot_values(grid, ratio)
     c, w = grid.corners, grid.weights
@@ -185,7 +234,10 @@ def bliss_gain(grid: BlissGrid, ratio: np.ndarray) -> np.ndarray:
 
 
 def _with_flux(model: Systematics, flux: np.ndarray) -> Systematics:
-    """A shallow copy of ``model`` whose data (and cached flux) are ``flux``."""
+    """A shallow copy of ``model`` whose data (and cached flux) are ``flux``.
+
+    Also used by the kernel-regression methods (:mod:`.kernel`).
+    """
     flux = np.asarray(flux, dtype=float)
     if flux.shape != model.data.flux.shape:
         raise InputError(f"with_flux: expected {model.data.flux.shape[0]} fluxes, got {flux.shape}")
@@ -211,16 +263,31 @@ class BlissOptions(MethodOptions):
 
 @register
 class Bliss(Systematics):
-    """BLISS mapping (Stevenson et al. 2012; paper Appendix B.1).
+    """BLISS mapping (Stevenson et al. 2012; paper Appendix B.1), with POET's rules.
+
+    The frames whose nearest knot is sparse are left out: ``self.data`` is the
+    kept subset, and :meth:`dropped_frames` counts the others as
+    ``"sparse_knot"``.
 
     Options (:class:`BlissOptions`)
     -------------------------------
     knot_spacing_px : float or (float, float), optional
-        Knot spacing in x and y (pixels). Default: the rms frame-to-frame
-        centroid motion along each axis, as Stevenson et al. choose it.
+        Requested knot spacing in x and y (pixels). Default: the rms
+        frame-to-frame centroid motion along each axis, Stevenson et al.'s
+        rule. POET spreads the knots evenly over its grid, so the step used
+        (``diagnostics()["knot_step_px"]``) can be slightly larger.
     min_points_per_knot : int, default 4
-        Knots with fewer nearest frames are not used on their own (see module
-        docstring).
+        POET's ``minnumpts``: frames whose nearest knot holds fewer frames are
+        masked out of the fit.
+
+    Examples
+    --------
+    >>> x = np.r_[np.full(6, 15.0), 15.3]
+    >>> d = EpochData(time_bmjd=np.arange(7.0), flux=np.ones(7), flux_err=np.ones(7),
+    ...               x=x, y=np.full(7, 15.0))
+    >>> m = Bliss(d, knot_spacing_px=0.1)
+    >>> len(m.data), m.dropped_frames()
+    (6, {'sparse_knot': 1})
     """
 
     name: ClassVar[str] = "bliss"
@@ -229,6 +296,10 @@ class Bliss(Systematics):
     description: ClassVar[str] = "bilinearly interpolated knot means of flux/astro over (x, y)"
     #: The BLISS team sampled with DE-MC (ter Braak 2006); the fitter uses emcee's DE move.
     preferred_move: ClassVar[str] = "de"
+    #: The grid and the mask depend only on the centroids, which a refit does not
+    #: change; a rebuild on the kept subset would re-derive the spacing from other
+    #: frame-to-frame differences, so refits keep the grid.
+    with_flux_rebuilds: ClassVar[bool] = False
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:
@@ -246,23 +317,34 @@ class Bliss(Systematics):
         else:
             sp = np.atleast_1d(np.asarray(spacing, dtype=float))
             dx, dy = float(sp[0]), float(sp[-1])
-        min_points = self.options.min_points_per_knot
         self.knot_spacing_px = (dx, dy)
-        self.grid = bliss_setup(x, y, dx_px=dx, dy_px=dy, min_points=int(min_points))
-        self._flux = np.asarray(data.flux, float)
+        self.grid = bliss_setup(x, y, dx_px=dx, dy_px=dy,
+                                min_points=int(self.options.min_points_per_knot))
+        self.n_input_frames = len(data)
+        if self.grid.n_masked:
+            self.data = data.subset(np.flatnonzero(self.grid.keep))
+        self._flux = np.asarray(self.data.flux, float)
 
     def diagnostics(self) -> dict[str, Any]:
-        """Knot spacing, knots in the grid and live ones."""
-        return {"knot_spacing_px": list(self.knot_spacing_px), "n_knots": int(self.grid.n_knots),
-                "n_live_knots": self.grid.n_live}
+        """Knot spacing and step, knots in the grid and live ones, masked and NN frames."""
+        return {"knot_spacing_px": list(self.knot_spacing_px),
+                "knot_step_px": list(self.grid.steps_px),
+                "n_knots": int(self.grid.n_knots), "n_live_knots": self.grid.n_live,
+                "min_points_per_knot": int(self.options.min_points_per_knot),
+                "n_sparse_knot_frames": self.grid.n_masked,
+                "n_nearest_neighbour_frames": int(np.count_nonzero(self.grid.nearest_neighbour))}
+
+    def dropped_frames(self) -> dict[str, int]:
+        """The frames masked because their nearest knot is sparse (POET's ``minnumpts``)."""
+        return {"sparse_knot": self.grid.n_masked}
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """``astro * BLISS(flux / astro)`` (electrons)."""
+        """``astro * BLISS(flux / astro)`` at the kept frames (electrons)."""
         astro = np.asarray(astro, float)
         return astro * bliss_gain(self.grid, self._flux / astro)
 
     def with_flux(self, flux: np.ndarray) -> Bliss:
-        """The same knot grid on new fluxes (the grid depends only on the centroids)."""
+        """The same knot grid and mask on new fluxes of the kept frames."""
         return _with_flux(self, flux)
 
     def n_effective_params(self) -> int:
