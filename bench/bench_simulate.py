@@ -63,8 +63,8 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
 
     from eclipsebench.config import load_config
-    from eclipsebench.simulate.challenge import light_curve_of, simulate_challenge
-    from eclipsebench.simulate.star import make_star_imager
+    from eclipsebench.simulation.challenge import light_curve_of, simulate_challenge
+    from eclipsebench.simulation.star import make_star_imager
 
     cfg = load_config(None, [f"challenge.epochs={args.epochs}"])
     t0 = time.perf_counter()

@@ -27,7 +27,7 @@ from .errors import InputError
 from .fit.reduce import EpochResult, reduce_epoch
 from .photometry.pipeline import photometry_tables, replace_options
 from .photometry.table import write_photometry
-from .simulate.challenge import ChallengeResult, simulate_challenge
+from .simulation.challenge import ChallengeResult, simulate_challenge
 from .stats.depth_table import check_depth_table, read_depth_table
 from .stats.summary import summarize
 

@@ -16,7 +16,7 @@ def _no_work(monkeypatch):
         raise AssertionError("work started before the output path was checked")
 
     for module, name in (("eclipsebench.commands.photometry", "photometry_tables"),
-                         ("eclipsebench.simulate.challenge", "simulate_challenge"),
+                         ("eclipsebench.simulation.challenge", "simulate_challenge"),
                          ("eclipsebench.fit.reduce", "reduce_epoch"),
                          ("eclipsebench.astro.lightcurve", "light_curve_function")):
         monkeypatch.setattr(importlib.import_module(module), name, boom)

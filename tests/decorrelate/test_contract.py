@@ -32,6 +32,14 @@ PLUGIN_DIR = Path(__file__).parent / "plugin_dist"
 PLUGIN = "test-quadgain"
 #: Largest |fitted - injected| depth on the noiseless 15,000-frame epoch.
 DEPTH_BOUND_PPM = 20.0
+#: Faithful methods that cannot meet DEPTH_BOUND_PPM on ``epoch_sys``: the measured error
+#: and a documented bound (docs/methods.md, the method's section).
+DEPTH_BOUND_PPM_BY_METHOD = {
+    # SP(K2) detrends blind to the eclipse (paper B.6): on this epoch the pointing follows
+    # time (corr(y, t) = -0.93), so its (x, y) cubic takes half the eclipse: measured
+    # -898.1 ppm, and -899.5 ppm on flat pixels (no systematics at all).
+    "segpoly": 920.0,
+}
 METHODS = (*eb.methods(), PLUGIN)
 
 
@@ -68,7 +76,8 @@ def test_depth_recovered_on_noiseless_data_with_systematics(method, epoch_sys, s
     model = method.build(epoch_sys.data, _opts(method.name))
     depth, t_ecl = synth.fit_depth(model, model.data.time_bmjd,
                                    t_ecl_guess=epoch_sys.t_ecl_bmjd + 5.0 / 1440)
-    assert abs(depth - epoch_sys.depth_ppm) <= DEPTH_BOUND_PPM, f"{method.name}: {depth:.2f}"
+    bound = DEPTH_BOUND_PPM_BY_METHOD.get(method.name, DEPTH_BOUND_PPM)
+    assert abs(depth - epoch_sys.depth_ppm) <= bound, f"{method.name}: {depth:.2f}"
 
 
 @pytest.mark.parametrize("method", METHODS, indirect=True)

@@ -9,7 +9,7 @@ import pytest
 
 from eclipsebench.config import load_config
 from eclipsebench.instrument import constants as C
-from eclipsebench.simulate import challenge
+from eclipsebench.simulation import challenge
 
 
 def test_read_noise_per_model_and_override():
@@ -28,6 +28,6 @@ def test_simulation_uses_the_one_read_noise_definition():
 
 
 def test_calibration_does_not_import_the_challenge_simulation():
-    code = ("import sys, eclipsebench.simulate.calibration; "
-            "sys.exit('eclipsebench.simulate.challenge' in sys.modules)")
+    code = ("import sys, eclipsebench.simulation.calibration; "
+            "sys.exit('eclipsebench.simulation.challenge' in sys.modules)")
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0

@@ -112,7 +112,7 @@ class EclipseShape(_EventShape):
     >>> t = 57234.6 + np.linspace(-0.1, 0.1, 5)
     >>> shape = EclipseShape(t, s)
     >>> shape.visible_fraction(57234.6).round(3).tolist()
-    [1.0, 0.0, 0.0, 0.0, 1.0]
+    [1.0, 0.401, 0.0, 0.399, 1.0]
     """
 
     _which = "eclipse"

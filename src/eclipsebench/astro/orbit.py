@@ -96,8 +96,8 @@ def solve_kepler(mean_anomaly, ecc, *, tol: float = 1e-14, max_iter: int = 50):
 
     Examples
     --------
-    >>> round(float(solve_kepler(1.0, 0.5)), 12)
-    1.498701133517
+    >>> round(float(solve_kepler(1.0, 0.5)), 10)
+    1.4987011335
     """
     m = np.asarray(mean_anomaly, dtype=float)
     e = np.asarray(ecc, dtype=float)

@@ -16,7 +16,7 @@ from ..config import Config
 from ..io.bcd_read import find_bcd_files, group_epochs, read_bcd_header
 from ..photometry.pipeline import process_epoch
 from ..photometry.table import read_photometry, write_photometry
-from ..simulate.plan import EpochPlan
+from ..simulation.plan import EpochPlan
 from .engine import Task
 from .layout import Layout
 

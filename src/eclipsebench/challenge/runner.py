@@ -7,7 +7,7 @@ runs it on the engine (:mod:`.engine`) and returns the summary.
 =========== ============================================ ===========================
 stage       planner                                       task keys
 =========== ============================================ ===========================
-simulate    :func:`eclipsebench.simulate.challenge.plan_simulate_tasks`
+simulate    :func:`eclipsebench.simulation.challenge.plan_simulate_tasks`
                                                           ``simulate[_flat]/...``
 photometry  :func:`.photometry_stage.plan_photometry_tasks` ``photometry[_flat]/epoch_NN``
 reduce      :func:`.reduce_stage.plan_reduce_tasks`        ``reduce[_flat]/<m>/epoch_NN``
@@ -39,7 +39,7 @@ from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
 from ..io.paths import check_output_path
 from ..report.challenge import plan_report_tasks
-from ..simulate.challenge import challenge_plans, plan_simulate_tasks
+from ..simulation.challenge import challenge_plans, plan_simulate_tasks
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
 from .engine import RunReport, Task, run_tasks
 from .layout import Layout

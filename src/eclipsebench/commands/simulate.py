@@ -29,7 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> dict:
     # the simulation and task engine (~0.5 s to import): loaded by this command only
-    from ..simulate.challenge import simulate_challenge
+    from ..simulation.challenge import simulate_challenge
 
     check_output_path(args.out, "--out", "folder")
     cfg = load_config(args.config, args.overrides)

@@ -17,7 +17,7 @@ circular apertures        ``_frame_apertures``        :func:`aperture_sums`,
 
 :func:`.measure.measure_stack` chains the kernels into the full measurement set
 used for science frames and for the calibration-star set
-(:mod:`eclipsebench.simulate.calibration`); the functions here run a single
+(:mod:`eclipsebench.simulation.calibration`); the functions here run a single
 estimator over a stack, for the PRF checks of
 :mod:`eclipsebench.instrument.prf` and for users.
 

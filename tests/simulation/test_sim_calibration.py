@@ -8,7 +8,7 @@ import pytest
 from eclipsebench.config import load_config
 from eclipsebench.instrument.constants import SUB_0P1S, read_noise_of
 from eclipsebench.photometry.measure import measure_stack
-from eclipsebench.simulate.calibration import (
+from eclipsebench.simulation.calibration import (
     CALIBRATION_COLUMNS,
     calibration_chunk,
     calibration_frames,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from eclipsebench.config import load_config
-from eclipsebench.simulate.plan import epoch_start_times_bmjd, plan_challenge, plan_epoch
+from eclipsebench.simulation.plan import epoch_start_times_bmjd, plan_challenge, plan_epoch
 
 TABLE2 = [2206.1459, 2209.2927, 2212.5079, 2215.7214, 2218.9047, 2222.0547, 2225.2356,
           2228.4898, 2231.6296, 2234.8406]

@@ -13,7 +13,7 @@ from astropy.table import Table
 
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
-from eclipsebench.simulate.challenge import simulate_challenge
+from eclipsebench.simulation.challenge import simulate_challenge
 
 TINY = ["challenge.epochs=1", "observation.pre_cubes=1", "observation.main_cubes=2",
         "simulation.calibration_frames=600"]

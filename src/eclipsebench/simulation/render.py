@@ -1,7 +1,7 @@
 """Render Fowler-sampled subarray frames of a moving point source (paper Appendix A.2-A.3).
 
 Pure kernels on arrays: the orchestration (plans, files) lives in
-:mod:`eclipsebench.simulate.challenge`.
+:mod:`eclipsebench.simulation.challenge`.
 
 How a frame is made
 -------------------

@@ -7,7 +7,7 @@ import pytest
 
 from eclipsebench.instrument.constants import ReadoutMode
 from eclipsebench.instrument.prf import TaylorStamps
-from eclipsebench.simulate.render import (
+from eclipsebench.simulation.render import (
     FrameModel,
     fowler_uniform,
     read_intervals,
@@ -16,7 +16,7 @@ from eclipsebench.simulate.render import (
     tick_moments,
     weight_groups,
 )
-from eclipsebench.simulate.star import StarImager
+from eclipsebench.simulation.star import StarImager
 
 SUB2 = ReadoutMode("sub_2s", 8, 184, 0.01, 2.0, True)
 SMALL = ReadoutMode("small", 4, 5, 0.01, 0.13, True)
