@@ -1,58 +1,43 @@
-"""Wavelet pixel-ICA (Morello et al. 2014, 2015; wavelet variant: Morello et al. 2016, ApJ 820, 86).
+"""Wavelet pixel-ICA (Morello et al. 2014 ApJ 786 22; 2015 ApJ 802 117; 2016 ApJ 820 86).
 
 Paper, Appendix B.3: "the source separation operates on wavelet-transformed
 individual pixel light curves, after which the resulting components are
 transformed back to the time domain ... The sum of an eclipse light curve
-model ... and scaled versions of the non-eclipse independent components was
-then fit to the raw light curve ... The final error bars were then increased
-to include the ICA component separation error."
+model (including a linear phase variation) and scaled versions of the
+non-eclipse independent components was then fit to the raw light curve ...
+The final error bars were then increased to include the ICA component
+separation error."
 
-Steps (all in ``__init__`` except the linear solve):
+Steps (``docs/methods.md``, "ICA", says which are the authors' and which ours):
 
-1. Pixel light curves of the stamp (``data.pixels``, 3x3 or 5x5), all divided
-   by the median summed stamp flux (one common scale; per-pixel scaling would
-   blow up the noise of faint corner pixels).
-2. Discrete wavelet transform of each (PyWavelets, ``wavelet="db4"``,
-   periodic extension, ``level`` = the largest useful for the length, at
-   most 8), all levels' coefficients concatenated: one column per pixel.
-3. FastICA (scikit-learn, ``whiten="unit-variance"``, seeded from
-   :func:`eclipsebench.seeding.spawn_ints` with the key
-   ``("reduce", epoch, "ica", "fastica", restart)``) on the coefficient
-   matrix gives the unmixing matrix.
-4. Back to the time domain: the DWT is linear and orthogonal, so the
-   inverse transform of the separated coefficients equals the unmixing matrix
-   applied to the time-domain pixel series. We apply it to the pixel series
-   centred in time (FastICA centres the coefficients instead, whose inverse
-   transform is not a constant offset).
-5. The astrophysical component is the one whose mixing column is most nearly
-   parallel to the mean stamp (an eclipse changes every pixel by the same
-   fraction, pointing does not); with ``eclipse_template`` given, the
-   component most correlated with the template instead (Morello et al.
-   identify it by its eclipse shape).
-6. ``flux_free=True`` (default; our addition): each component's unmixing row
-   is made orthogonal to the mean stamp before the components are formed, so
-   a uniform change of the stellar flux (the eclipse) does not enter any
-   regressor. Without it (``flux_free=False``, pixel-ICA as published) the
-   eclipse leaks into the "systematic" components whenever the separation is
-   imperfect: on the noiseless synthetic epoch of the tests (pixel series
-   nonlinear in the pointing) the depth was off by +100 to +-2600 ppm,
-   depending on the number of components; with the projection, within 1 ppm.
-7. ``predict(astro)``: ``F0 * astro + sum_k s_k IC_k`` over the other
-   components, ``F0`` and ``s_k`` by weighted linear least squares
-   (``combine="multiplicative"``: ``astro * (F0 + sum_k s_k IC_k)``).
-
-Component-separation error: Morello et al. quantify it with the
-interference-to-signal ratio of the separation. We estimate the same
-quantity by resampling: ``n_restarts`` further FastICA runs, each from another
-seed on a bootstrap resample of the wavelet coefficients (rows). For a fitted
-``astro`` and its derivative by the depth, :meth:`IndependentComponents.extra_depth_variance`
-refits the linearised model with each restart's components and returns the
-variance of the depths, to be added in quadrature to the depth uncertainty.
+1. Pixel light curves of the stamp (``data.pixels``), divided by the median
+   summed stamp flux (one common scale) and centred in time.
+2. Discrete wavelet transform of each (PyWavelets, ``db4``, periodic
+   extension, all levels' coefficients concatenated): :func:`wavelet_coefficients`.
+3. FastICA (scikit-learn, logcosh contrast, symmetric) on the coefficient
+   matrix: :func:`separate`. Its seed is ``context.stream_ints("fastica", 0)``.
+4. Back to the time domain: the DWT is linear and orthogonal, so the inverse
+   transform of the separated coefficients is the unmixing matrix applied to
+   the pixel series (:func:`time_domain_components`).
+5. The eclipse component: the one whose mixing column is most nearly parallel
+   to the mean stamp (an eclipse scales every pixel alike, pointing does not):
+   :func:`eclipse_component`.
+6. Ranking and selection of the non-eclipse components: ranked by the raw
+   light-curve variance each explains, kept while the BIC of the raw light
+   curve fit improves (:func:`select_components`).
+7. ``predict(astro) = F0 astro + sum_j o_j IC_j`` over the selected components,
+   ``F0`` and ``o_j`` by weighted linear least squares for the given ``astro``
+   (the shared astrophysical model: eclipse and phase curve).
+8. Separation error: the interference-to-signal ratio (ISR) of the
+   separation, from the asymptotic formula of symmetric FastICA
+   (:func:`fastica_isr`) or, with ``n_restarts >= 2``, from bootstrap
+   restarts (:func:`bootstrap_isr`); the contamination it implies in the
+   fitted model, ``sigma_ICA^2 = sum_j o_j^2 sum_k ISR_jk``, is propagated to
+   the depth (:meth:`IndependentComponents.extra_depth_variance`).
 """
 
 from __future__ import annotations
 
-import copy
 import warnings
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Literal
@@ -66,7 +51,9 @@ from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
-__all__ = ["IndependentComponents", "wavelet_coefficients", "separate"]
+__all__ = ["IndependentComponents", "IcaOptions", "wavelet_coefficients", "separate",
+           "time_domain_components", "eclipse_component", "select_components",
+           "fastica_isr", "bootstrap_isr", "separation_rms"]
 
 
 def wavelet_coefficients(series: np.ndarray, wavelet: str, level: int) -> np.ndarray:
@@ -84,7 +71,15 @@ def wavelet_coefficients(series: np.ndarray, wavelet: str, level: int) -> np.nda
     Returns
     -------
     ndarray, shape (m, p)
-        Coefficients, approximation first, then details from coarse to fine.
+        Coefficients, approximation first, then details from coarse to fine
+        (``m = n`` for a length divisible by ``2**level``).
+
+    Examples
+    --------
+    >>> x = np.random.default_rng(0).normal(size=(64, 2))
+    >>> c = wavelet_coefficients(x, "haar", 3)
+    >>> bool(np.allclose((c**2).sum(axis=0), (x**2).sum(axis=0)))
+    True
     """
     coeffs = pywt.wavedec(np.asarray(series, dtype=float), wavelet, mode="periodization",
                           level=level, axis=0)
@@ -92,42 +87,232 @@ def wavelet_coefficients(series: np.ndarray, wavelet: str, level: int) -> np.nda
 
 
 def separate(coeffs: np.ndarray, n_components: int, seed_int: int, *, max_iter: int,
-             tol: float) -> tuple[np.ndarray, np.ndarray, bool]:
-    """FastICA on wavelet coefficients.
+             tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Symmetric FastICA (logcosh contrast) on wavelet coefficients.
+
+    Parameters
+    ----------
+    coeffs : ndarray, shape (m, p)
+        Samples in rows, pixels in columns.
+    n_components : int
+        Components to extract (FastICA's whitening keeps the strongest
+        principal directions when fewer than ``p``).
+    seed_int : int
+        FastICA's ``random_state``.
+    max_iter, tol : int, float
+        FastICA's iteration limit and tolerance.
 
     Returns
     -------
     unmixing : ndarray, shape (n_components, p)
-        Rows map (centred) pixel vectors to components.
+        Rows map centred pixel vectors to unit-variance components.
     mixing : ndarray, shape (p, n_components)
         Columns are the pixel signatures of the components.
+    sources : ndarray, shape (m, n_components)
+        The separated coefficients (unit variance), for the ISR.
     converged : bool
-        False when FastICA reached ``max_iter`` (a ConvergenceWarning is
+        False when FastICA reached ``max_iter`` (the ConvergenceWarning is
         recorded, not shown).
     """
-    ica = FastICA(n_components=n_components, whiten="unit-variance", random_state=seed_int,
-                  max_iter=max_iter, tol=tol, whiten_solver="svd")
+    ica = FastICA(n_components=n_components, algorithm="parallel", fun="logcosh",
+                  whiten="unit-variance", random_state=seed_int, max_iter=max_iter, tol=tol,
+                  whiten_solver="svd")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
-        ica.fit(coeffs)
+        sources = ica.fit_transform(coeffs)
     converged = not any(issubclass(w.category, ConvergenceWarning) for w in caught)
     for w in caught:
         if not issubclass(w.category, ConvergenceWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return ica.components_, ica.mixing_, converged
+    return ica.components_, ica.mixing_, sources, converged
 
 
-def _alignment(mixing: np.ndarray, mean_pixels: np.ndarray) -> np.ndarray:
-    """|cosine| between each mixing column and the mean stamp (the signature of a flux change)."""
-    norms = np.linalg.norm(mixing, axis=0) * np.linalg.norm(mean_pixels)
-    return np.abs(mean_pixels @ mixing) / np.where(norms > 0, norms, 1.0)
+def time_domain_components(centred_pixels: np.ndarray, unmixing: np.ndarray) -> np.ndarray:
+    """The components in the time domain, each scaled to unit standard deviation.
+
+    The DWT is linear, so the inverse transform of the separated coefficients
+    equals ``unmixing`` applied to the pixel series; the components are
+    centred in time (the DWT's approximation coefficients carry the mean).
+
+    Examples
+    --------
+    >>> pix = np.random.default_rng(1).normal(size=(100, 3))
+    >>> ic = time_domain_components(pix - pix.mean(axis=0), np.eye(3)[:2])
+    >>> ic.shape, bool(np.allclose(ic.std(axis=0), 1.0))
+    ((100, 2), True)
+    """
+    comps = np.asarray(centred_pixels, dtype=float) @ np.asarray(unmixing, dtype=float).T
+    comps = comps - comps.mean(axis=0)
+    sd = comps.std(axis=0)
+    return comps / np.where(sd > 0, sd, 1.0)
 
 
-def _abs_corr(columns: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    c = columns - columns.mean(axis=0)
-    r = ref - ref.mean()
-    den = np.linalg.norm(c, axis=0) * np.linalg.norm(r)
-    return np.abs(r @ c) / np.where(den > 0, den, 1.0)
+def eclipse_component(mixing: np.ndarray, mean_stamp: np.ndarray) -> tuple[int, np.ndarray]:
+    """The component whose mixing column is most nearly parallel to the mean stamp.
+
+    An eclipse changes every pixel by the same fraction of its mean value, so
+    its pixel signature is the mean stamp; a pointing change moves light
+    between pixels. Returns the index and the |cosine| of every column.
+
+    Examples
+    --------
+    >>> k, cos = eclipse_component(np.array([[1.0, 1.0], [-1.0, 1.0]]), np.array([2.0, 2.0]))
+    >>> k, np.round(cos, 3).tolist()
+    (1, [0.0, 1.0])
+    """
+    a = np.asarray(mixing, dtype=float)
+    m = np.asarray(mean_stamp, dtype=float)
+    den = np.linalg.norm(a, axis=0) * np.linalg.norm(m)
+    cos = np.abs(m @ a) / np.where(den > 0, den, 1.0)
+    return int(np.argmax(cos)), cos
+
+
+def _weighted_chi2(design: np.ndarray, y: np.ndarray, w: np.ndarray) -> float:
+    coef, *_ = np.linalg.lstsq(design * w[:, None], y * w, rcond=None)
+    r = (y - design @ coef) * w
+    return float(r @ r)
+
+
+def select_components(flux: np.ndarray, flux_err: np.ndarray, components: np.ndarray,
+                      k_eclipse: int) -> dict[str, Any]:
+    """Rank the non-eclipse components and keep those the raw light curve needs (BIC).
+
+    The raw light curve is fitted with a constant, the eclipse component (the
+    stand-in for the astrophysical signal, which is not known before the fit)
+    and the non-eclipse components. These are mutually uncorrelated and of
+    unit variance, so the raw light-curve variance each explains is its
+    squared covariance with the flux: they are ranked by it, and the first
+    ``n`` are kept, ``n`` minimising ``BIC = chi2 + k ln N`` over
+    ``n = 0 ... n_max`` (chi2 weighted by ``flux_err``).
+
+    Returns
+    -------
+    dict
+        ``order`` (non-eclipse indices, best first), ``explained`` (fraction of
+        the flux variance of each, in that order), ``bic`` (for ``n = 0 ...``),
+        ``selected`` (the indices kept, in rank order).
+
+    Examples
+    --------
+    >>> g = np.random.default_rng(0)
+    >>> ics = g.normal(size=(2000, 3))
+    >>> flux = 1e5 + 50 * ics[:, 2] + g.normal(0, 10, 2000)
+    >>> select_components(flux, np.full(2000, 10.0), ics, 0)["selected"]
+    [2]
+    """
+    y = np.asarray(flux, dtype=float)
+    w = 1.0 / np.asarray(flux_err, dtype=float)
+    ics = np.asarray(components, dtype=float)
+    others = [j for j in range(ics.shape[1]) if j != k_eclipse]
+    yc = y - y.mean()
+    cov = np.array([ics[:, j] @ yc / len(y) for j in others])
+    rank = np.argsort(-cov**2, kind="stable")
+    order = [others[i] for i in rank]
+    explained = (cov[rank] ** 2 / max(float(yc @ yc) / len(y), 1e-300)).tolist()
+    base = np.column_stack([np.ones(len(y)), ics[:, k_eclipse]])
+    n_log = np.log(len(y))
+    bic = []
+    for n in range(len(order) + 1):
+        design = np.column_stack([base, ics[:, order[:n]]])
+        bic.append(_weighted_chi2(design, y, w) + design.shape[1] * n_log)
+    n_best = int(np.argmin(bic))
+    return {"order": order, "explained": explained, "bic": bic, "selected": order[:n_best]}
+
+
+def fastica_isr(sources: np.ndarray) -> np.ndarray:
+    """Asymptotic interference-to-signal ratio of symmetric FastICA (logcosh).
+
+    Tichavsky, Koldovsky & Oja (2006, IEEE Trans. Signal Process. 54, 1189),
+    symmetric FastICA with the nonlinearity ``g = tanh``::
+
+        ISR_kl = (gamma_k + gamma_l + tau_l^2) / (N (tau_k + tau_l)^2),  k != l
+
+    with, for each unit-variance source, ``mu = E[s g(s)]``, ``rho = E[g'(s)]``,
+    ``beta = E[g(s)^2]``, ``gamma = beta - mu^2``, ``tau = |mu - rho|``, the
+    expectations estimated from the separated samples. ``ISR_kl`` is the
+    expected power of source ``l`` left in the estimate of source ``k``,
+    relative to that of source ``k``. The diagonal is 0.
+
+    Parameters
+    ----------
+    sources : ndarray, shape (N, K)
+        The separated samples (here: wavelet coefficients), unit variance.
+
+    Returns
+    -------
+    ndarray, shape (K, K)
+
+    Examples
+    --------
+    >>> s = np.random.default_rng(0).laplace(size=(20000, 2)) / np.sqrt(2)
+    >>> isr = fastica_isr(s)
+    >>> bool(0 < isr[0, 1] < 1e-3 and isr[0, 0] == 0)
+    True
+    """
+    s = np.asarray(sources, dtype=float)
+    n = s.shape[0]
+    s = (s - s.mean(axis=0)) / s.std(axis=0)
+    g = np.tanh(s)
+    mu = np.mean(s * g, axis=0)
+    rho = np.mean(1.0 - g**2, axis=0)
+    gamma = np.mean(g**2, axis=0) - mu**2
+    tau = np.abs(mu - rho)
+    den = n * (tau[:, None] + tau[None, :]) ** 2
+    isr = (gamma[:, None] + gamma[None, :] + tau[None, :] ** 2) / np.where(den > 0, den, np.inf)
+    np.fill_diagonal(isr, 0.0)
+    return isr
+
+
+def bootstrap_isr(unmixings: list[np.ndarray], mixing: np.ndarray) -> np.ndarray:
+    """Empirical ISR from repeated separations against a reference mixing matrix.
+
+    For each restart ``r`` the gain ``G = W_r A`` (``A`` the reference
+    mixing) is a permuted, scaled identity plus interference; rows are matched
+    to the reference components by their largest |gain| and
+    ``ISR_kl = mean_r (G_kl / G_kk)^2`` (the definition of Tichavsky et al.).
+
+    Examples
+    --------
+    >>> a = np.eye(2)
+    >>> w = [np.array([[0.0, 1.0], [1.0, 0.1]]), np.array([[1.0, 0.0], [0.1, 1.0]])]
+    >>> np.round(bootstrap_isr(w, a), 4).tolist()
+    [[0.0, 0.005], [0.005, 0.0]]
+    """
+    a = np.asarray(mixing, dtype=float)
+    k = a.shape[1]
+    acc = np.zeros((k, k))
+    for w in unmixings:
+        gain = np.asarray(w, dtype=float) @ a
+        row_of = np.full(k, -1)
+        used: set[int] = set()
+        for comp in np.argsort(-np.max(np.abs(gain), axis=0)):
+            for row in np.argsort(-np.abs(gain[:, comp])):
+                if row not in used:
+                    row_of[comp] = row
+                    used.add(row)
+                    break
+        g = gain[row_of]
+        acc += (g / np.diag(g)[:, None]) ** 2
+    isr = acc / max(len(unmixings), 1)
+    np.fill_diagonal(isr, 0.0)
+    return isr
+
+
+def separation_rms(coefficients: np.ndarray, isr: np.ndarray) -> float:
+    """``sigma_ICA = sqrt(sum_j o_j^2 sum_k ISR_jk)`` for unit-variance components.
+
+    ``coefficients`` are the fitted weights ``o_j`` of the components in the
+    model (flux units per unit-variance component); ``isr`` is the ISR matrix
+    restricted to their rows. Morello et al. (2014, 2015): the error on the
+    model of the raw light curve that the imperfect separation implies.
+
+    Examples
+    --------
+    >>> float(separation_rms(np.array([3.0]), np.array([[0.0, 0.01, 0.03]])))
+    0.6
+    """
+    o = np.asarray(coefficients, dtype=float)
+    return float(np.sqrt(np.sum(o**2 * np.asarray(isr, dtype=float).sum(axis=1))))
 
 
 @dataclass(frozen=True)
@@ -138,10 +323,10 @@ class IcaOptions(MethodOptions):
     wavelet: str = "db4"
     level: int = 0
     combine: Literal["additive", "multiplicative"] = "additive"
-    n_restarts: int = 10
+    selection: Literal["bic", "all"] = "bic"
+    n_restarts: int = 0
     max_iter: int = 2000
     tol: float = 1e-5
-    flux_free: bool = True
 
     def validate(self) -> None:
         check(self.n_components == 0 or self.n_components >= 2, "n_components",
@@ -149,14 +334,15 @@ class IcaOptions(MethodOptions):
         check(self.wavelet in pywt.wavelist(kind="discrete"), "wavelet",
               "a PyWavelets discrete wavelet (e.g. 'db4', 'sym8', 'haar')")
         check(self.level >= 0, "level", "0 (the largest allowed, at most 8) or a level >= 1")
-        check(0 <= self.n_restarts <= 1000, "n_restarts", "0-1000 bootstrap restarts")
+        check(0 <= self.n_restarts <= 1000 and self.n_restarts != 1, "n_restarts",
+              "0 (asymptotic ISR) or 2-1000 bootstrap restarts")
         check(self.max_iter >= 1, "max_iter", "at least 1 iteration")
         check(self.tol > 0, "tol", "a positive tolerance")
 
 
 @register
 class IndependentComponents(Systematics):
-    """Wavelet pixel-ICA systematics (Morello et al. 2016).
+    """Wavelet pixel-ICA systematics (Morello et al. 2014, 2015, 2016).
 
     Options (:class:`IcaOptions`)
     -----------------------------
@@ -168,19 +354,21 @@ class IndependentComponents(Systematics):
     level : int
         DWT level (0: the largest PyWavelets allows, at most 8).
     combine : {"additive", "multiplicative"}
-        ``F0 astro + sum s_k IC_k`` (Morello et al.) or ``astro (F0 + sum s_k IC_k)``.
+        ``F0 astro + sum o_j IC_j`` (Morello et al.) or ``astro (F0 + sum o_j IC_j)``.
+    selection : {"bic", "all"}
+        Non-eclipse components kept: ranked by the raw light-curve variance
+        they explain, as many as minimise the BIC ("bic"), or all of them.
     n_restarts : int
-        Bootstrap FastICA restarts for the component-separation error (10);
-        0 disables it.
+        0: the separation's ISR from the asymptotic formula of FastICA; 2 or
+        more: from that many bootstrap FastICA restarts.
     max_iter, tol : int, float
         FastICA iteration limit and tolerance.
-    flux_free : bool
-        Make the non-astrophysical components blind to a uniform flux change
-        (default True, our addition; False is pixel-ICA as published).
 
-    The random streams (FastICA's seeds, the bootstrap rows) come from the
-    context: ``context.stream_ints("fastica", r)`` and
-    ``context.stream("bootstrap")``.
+    Examples
+    --------
+    >>> from eclipsebench.decorrelate import get_method
+    >>> get_method("ica").Options().selection
+    'bic'
     """
 
     name: ClassVar[str] = "ica"
@@ -188,124 +376,119 @@ class IndependentComponents(Systematics):
     Options: ClassVar[type[MethodOptions]] = IcaOptions
     stochastic: ClassVar[bool] = True
     description: ClassVar[str] = ("wavelet pixel-ICA: FastICA on DWT coefficients of the pixel "
-                                  "light curves, eclipse + scaled components (Morello et al. 2016)")
+                                  "light curves, eclipse + selected scaled components, "
+                                  "ISR separation error (Morello et al. 2016)")
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:
         super().__init__(data, options, context=context, **kwargs)
         opts = self.options
-        n_components = opts.n_components or None
-        wavelet, combine = opts.wavelet, opts.combine
-        level = opts.level or None
-        max_iter, tol, n_restarts = opts.max_iter, opts.tol, opts.n_restarts
         pix = np.asarray(data.pixels, dtype=float).reshape(len(data), -1)
         n, p = pix.shape
         if p < 3:
             raise InputError(f"ica: the pixel stamps have {p} pixels; expected a 3x3 or 5x5 stamp")
-        n_comp = min(p, 9) if n_components is None else int(n_components)
+        n_comp = min(p, 9) if opts.n_components == 0 else int(opts.n_components)
         if not 2 <= n_comp <= p:
-            raise InputError(f"method 'ica' option 'n_components': expected 2-{p}, got {n_components!r}")
+            raise InputError(f"method 'ica' option 'n_components': expected 2-{p}, "
+                             f"got {opts.n_components!r}")
         scale = np.median(pix.sum(axis=1))
         if not scale > 0:
             raise InputError("ica: the summed pixel stamps need a positive median flux")
-        max_level = pywt.dwt_max_level(n, pywt.Wavelet(wavelet).dec_len)
-        lev = min(8, max_level) if level is None else int(level)
+        max_level = pywt.dwt_max_level(n, pywt.Wavelet(opts.wavelet).dec_len)
+        lev = min(8, max_level) if opts.level == 0 else int(opts.level)
         if not 1 <= lev <= max(max_level, 1):
-            raise InputError(f"method 'ica' option 'level': expected 1-{max_level} for {n} frames, "
-                             f"got {level!r}")
-        self.combine = combine
+            raise InputError(f"method 'ica' option 'level': expected 1-{max_level} for {n} "
+                             f"frames, got {opts.level!r}")
         norm = pix / scale
         centred = norm - norm.mean(axis=0)
-        coeffs = wavelet_coefficients(centred, wavelet, lev)
-        s0 = self.context.stream_ints("fastica", 0)[0]
-        unmix, mixing, conv = separate(coeffs, n_comp, s0, max_iter=max_iter, tol=tol)
-        self._mean_dir = norm.mean(axis=0) / np.linalg.norm(norm.mean(axis=0))
-        self.flux_free = opts.flux_free
-        comps = centred @ unmix.T
-        score = _alignment(mixing, norm.mean(axis=0))
-        k_astro = int(np.argmax(score))
-        self.astro_component = comps[:, k_astro]
-        self._comps_raw, self._centred, self._unmix = comps, centred, unmix
-        self.components = self._regressors(self._free(centred, unmix), k_astro)
-        self._diagnostics = {"wavelet": wavelet, "level": lev, "n_components": n_comp,
-                            "astro_index": k_astro, "astro_score": float(score[k_astro]),
-                            "next_score": float(np.sort(score)[-2]), "converged": conv}
+        coeffs = wavelet_coefficients(centred, opts.wavelet, lev)
+        seed = self.context.stream_ints("fastica", 0)[0]
+        unmix, mixing, sources, conv = separate(coeffs, n_comp, seed, max_iter=opts.max_iter,
+                                                tol=opts.tol)
+        self.unmixing, self.mixing = unmix, mixing
+        #: All independent components in the time domain, unit variance, (n, K).
+        self.all_components = time_domain_components(centred, unmix)
+        self.eclipse_index, cosines = eclipse_component(mixing, norm.mean(axis=0))
 
-        # Bootstrap restarts for the component-separation error.
-        self.restart_components: list[np.ndarray] = []
-        g = self.context.stream("bootstrap")
-        n_conv = 0
-        for r in range(1, int(n_restarts) + 1):
-            rows = g.integers(0, len(coeffs), len(coeffs))
-            sr = self.context.stream_ints("fastica", r)[0]
-            u_r, _, c_r = separate(coeffs[rows], n_comp, sr, max_iter=max_iter, tol=tol)
-            n_conv += c_r
-            comps_r = centred @ u_r.T
-            k_r = int(np.argmax(_abs_corr(comps_r, self.astro_component)))
-            self.restart_components.append(self._regressors(self._free(centred, u_r), k_r))
-        self._diagnostics["restarts_converged"] = n_conv
+        if opts.n_restarts >= 2:
+            g = self.context.stream("bootstrap")
+            unmixings, n_conv = [], 0
+            for r in range(1, opts.n_restarts + 1):
+                rows = g.integers(0, len(coeffs), len(coeffs))
+                sr = self.context.stream_ints("fastica", r)[0]
+                u_r, _, _, c_r = separate(coeffs[rows], n_comp, sr, max_iter=opts.max_iter,
+                                          tol=opts.tol)
+                unmixings.append(u_r)
+                n_conv += c_r
+            self.isr = bootstrap_isr(unmixings, mixing)
+            isr_kind = "bootstrap"
+        else:
+            self.isr = fastica_isr(sources)
+            isr_kind = "asymptotic"
+            n_conv = None
 
+        self._diagnostics: dict[str, Any] = {
+            "wavelet": opts.wavelet, "level": lev, "n_components": n_comp,
+            "converged": conv, "eclipse_index": self.eclipse_index,
+            "eclipse_cosine": float(cosines[self.eclipse_index]),
+            "next_cosine": float(np.sort(cosines)[-2]),
+            "isr_method": isr_kind, "isr_max": float(self.isr.max()),
+        }
+        if n_conv is not None:
+            self._diagnostics["restarts_converged"] = int(n_conv)
         self._sw = 1.0 / np.asarray(data.flux_err, dtype=float)
-        self._prepare_projection()
+        self._select()
 
-    def diagnostics(self) -> dict[str, Any]:
-        """The decomposition (wavelet, level, components), the astrophysical component's
-        score against the runner-up, and FastICA's convergence."""
-        return dict(self._diagnostics)
-
-    def _prepare_projection(self) -> None:
-        """Weighted projection onto the span of the components, done once."""
-        q, _ = np.linalg.qr(self.components * self._sw[:, None])
+    # ------------------------------------------------------------------ flux-dependent part
+    def _select(self) -> None:
+        """Rank and select the components for the current fluxes; prepare the projection."""
+        if self.options.selection == "all":
+            kept = [j for j in range(self.all_components.shape[1]) if j != self.eclipse_index]
+            ranking: dict[str, Any] = {"order": kept}
+        else:
+            ranking = select_components(self.data.flux, self.data.flux_err,
+                                        self.all_components, self.eclipse_index)
+            kept = ranking["selected"]
+        self.selected = list(kept)
+        #: The regressors of the fit: the selected non-eclipse components, (n, k).
+        self.components = self.all_components[:, self.selected]
+        self._diagnostics.update({
+            "selected": [int(j) for j in self.selected], "n_selected": len(self.selected),
+            "rank_order": [int(j) for j in ranking["order"]]})
+        if "explained" in ranking:
+            self._diagnostics["explained_fraction"] = [float(v) for v in ranking["explained"]]
+            self._diagnostics["selection_bic"] = [float(v) for v in ranking["bic"]]
+        self._diagnostics.pop("depth_err_separation_ppm", None)
+        q, _ = np.linalg.qr(self.components * self._sw[:, None]) if self.selected else \
+            (np.zeros((len(self._sw), 0)), None)
         self._q = q
         fw = np.asarray(self.data.flux, dtype=float) * self._sw
         self._fw_perp = fw - q @ (q.T @ fw)
 
-    def _free(self, centred: np.ndarray, unmix: np.ndarray) -> np.ndarray:
-        """Time-domain components; with ``flux_free`` their unmixing rows are made
-        orthogonal to the mean stamp, so a uniform flux change (the eclipse) leaves them
-        unchanged."""
-        if self.flux_free:
-            unmix = unmix - np.outer(unmix @ self._mean_dir, self._mean_dir)
-        return centred @ unmix.T
+    def diagnostics(self) -> dict[str, Any]:
+        """The decomposition, the eclipse component's |cosine| with the mean stamp (and
+        the runner-up's), the ranking and selection, the ISR and, once
+        :meth:`extra_depth_variance` has run, ``depth_err_separation_ppm``."""
+        return dict(self._diagnostics)
 
-    @staticmethod
-    def _regressors(comps: np.ndarray, k_astro: int) -> np.ndarray:
-        keep = np.delete(comps, k_astro, axis=1)
-        keep = keep - keep.mean(axis=0)
-        sd = keep.std(axis=0)
-        return keep / np.where(sd > 0, sd, 1.0)
-
-    def _solve(self, astro: np.ndarray, comps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Weighted least-squares coefficients and model for one set of components."""
+    def _design(self, astro: np.ndarray) -> np.ndarray:
         a = np.asarray(astro, dtype=float)
-        if self.combine == "additive":
-            design = np.column_stack([a, comps])
-        else:
-            design = np.column_stack([a, a[:, None] * comps])
+        if self.options.combine == "additive":
+            return np.column_stack([a, self.components])
+        return np.column_stack([a, a[:, None] * self.components])
+
+    def _solve(self, astro: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted least-squares ``(F0, o_1, ...)`` and the model, for ``astro``."""
+        design = self._design(astro)
         coef, *_ = np.linalg.lstsq(design * self._sw[:, None], self.data.flux * self._sw,
                                    rcond=None)
         return coef, design @ coef
 
-    def identify_astrophysical(self, astro: np.ndarray) -> int:
-        """Re-pick the astrophysical component as the one most correlated with ``astro``.
-
-        A fitter may call this once with its starting astrophysical model (the
-        expected eclipse), as Morello et al. identify the eclipse component by
-        its shape. Returns the component index; the regressors are rebuilt.
-        """
-        a = np.asarray(astro, dtype=float)
-        k = int(np.argmax(_abs_corr(self._comps_raw, a)))
-        self.astro_component = self._comps_raw[:, k]
-        self.components = self._regressors(self._free(self._centred, self._unmix), k)
-        self._diagnostics["astro_index"] = k
-        self._prepare_projection()
-        return k
-
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """``F0 astro + sum_k s_k IC_k`` (or its multiplicative form), solved linearly."""
+        """``F0 astro + sum_j o_j IC_j`` (or ``astro (F0 + ...)``), solved linearly."""
         a = np.asarray(astro, dtype=float)
-        if self.combine != "additive":
-            return self._solve(a, self.components)[1]
+        if self.options.combine != "additive":
+            return self._solve(a)[1]
         aw = a * self._sw
         a_perp = aw - self._q @ (self._q.T @ aw)
         f0 = a_perp.dot(self._fw_perp) / a_perp.dot(a_perp)
@@ -313,48 +496,57 @@ class IndependentComponents(Systematics):
         return fit_w / self._sw
 
     def with_flux(self, flux: np.ndarray) -> IndependentComponents:
-        """The same components with ``flux`` replaced (for the prayer bead).
+        """The method on ``flux`` (prayer bead): equal to a fresh build.
 
-        The components come from the pixel stamps, which the prayer bead does
-        not shift, so FastICA is not rerun; only the linear projection is.
+        The separation depends on the pixel stamps only, which the prayer bead
+        does not shift, and its seed is the same, so FastICA is not rerun;
+        the ranking, selection and projection are redone for the new fluxes.
         """
-        new = copy.copy(self)
-        new.data = replace(self.data, flux=np.asarray(flux, dtype=float))
-        new._prepare_projection()
+        flux = np.asarray(flux, dtype=float)
+        if flux.shape != self.data.flux.shape:
+            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, "
+                             f"got {flux.shape}")
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new.data = replace(self.data, flux=flux)
+        new._diagnostics = dict(self._diagnostics)
+        new._select()
         return new
 
     def extra_depth_variance(self, astro: np.ndarray, dastro_ddepth: np.ndarray) -> float:
-        """Variance of the depth over the bootstrap ICA restarts (component-separation error).
+        """The depth variance from the component-separation error (fraction squared).
+
+        The fitted weights ``o_j`` of the selected components and the ISR give
+        the model error ``sigma_ICA`` (:func:`separation_rms`, Morello et al.).
+        As a per-frame error it adds to the depth the variance
+        ``sigma_ICA^2 [(D^T D)^-1]_depth`` of the linearised fit, ``D`` the
+        columns ``F0 dastro/ddepth``, ``astro`` (``F0``) and the components.
+        The value is also written to ``diagnostics()["depth_err_separation_ppm"]``.
 
         Parameters
         ----------
         astro : ndarray, shape (n,)
             The best-fitting astrophysical curve.
         dastro_ddepth : ndarray, shape (n,)
-            Its derivative with respect to the depth (per unit depth, as a
-            fraction), e.g. a finite difference of the astrophysical model.
-
-        Returns
-        -------
-        float
-            Variance of the depth (fraction squared; multiply by 1e12 for
-            ppm^2) to add to the fit's depth variance. 0 without restarts.
+            Its derivative with respect to the depth (per unit depth, as a fraction).
         """
-        if len(self.restart_components) < 2:
-            return 0.0
-        a = np.asarray(astro, dtype=float)
-        da = np.asarray(dastro_ddepth, dtype=float)
-        shifts = []
-        for comps in self.restart_components:
-            if self.combine == "additive":
-                design = np.column_stack([a, da, comps])
-            else:
-                design = np.column_stack([a, da, a[:, None] * comps])
-            coef, *_ = np.linalg.lstsq(design * self._sw[:, None], self.data.flux * self._sw,
-                                       rcond=None)
-            shifts.append(coef[1] / coef[0])
-        return float(np.var(shifts, ddof=1))
+        coef, _ = self._solve(astro)
+        f0, weights = coef[0], coef[1:]
+        if not self.selected:
+            sigma = 0.0
+        else:
+            sigma = separation_rms(weights, self.isr[self.selected])
+        design = self._design(astro)
+        da = np.asarray(dastro_ddepth, dtype=float) * f0
+        if self.options.combine != "additive":
+            da = da * (1.0 + self.components @ weights / f0) if self.selected else da
+        full = np.column_stack([da, design])
+        cov = np.linalg.pinv(full.T @ full)
+        var = float(sigma**2 * cov[0, 0])
+        self._diagnostics["separation_rms_ppm"] = float(sigma / f0 * 1e6)
+        self._diagnostics["depth_err_separation_ppm"] = float(np.sqrt(max(var, 0.0)) * 1e6)
+        return var
 
     def n_effective_params(self) -> int:
-        """``F0`` and one weight per non-astrophysical component."""
-        return 1 + self.components.shape[1]
+        """``F0`` and one weight per selected component."""
+        return 1 + len(self.selected)
