@@ -32,8 +32,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from _timing import median_seconds  # noqa: E402
 
-from eclipsebench.instrument import fowler as F  # noqa: E402
-from eclipsebench.instrument.constants import SUB_2S  # noqa: E402
+from eclipsebench.detector import fowler as F  # noqa: E402
+from eclipsebench.detector.constants import SUB_2S  # noqa: E402
 from eclipsebench.instrument.pointing import PointingModel, draw_pointing_params  # noqa: E402
 from eclipsebench.instrument.prf import BuiltinPRF  # noqa: E402
 

@@ -18,11 +18,11 @@ from typing import Any
 
 from astropy.table import Table
 
-from .challenge.engine import RunReport
 from .challenge.runner import run_challenge as _run_challenge
 from .config import Config
 from .config import load_config as _load_config
 from .decorrelate.base import MethodOptions, Systematics, available_methods, get_method
+from .engine import RunReport
 from .errors import InputError
 from .fit.reduce import EpochResult, reduce_epoch
 from .photometry.pipeline import photometry_tables, replace_options

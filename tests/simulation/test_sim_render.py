@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eclipsebench.instrument.constants import ReadoutMode
+from eclipsebench.detector.constants import ReadoutMode
 from eclipsebench.instrument.prf import TaylorStamps
 from eclipsebench.simulation.render import (
     FrameModel,

@@ -1,7 +1,7 @@
 """The photometry stage of a run: one photometry table per simulated epoch.
 
 :func:`plan_photometry_tasks` turns a configuration, the run folder
-(:class:`.layout.Layout`) and the epochs' observing plans into engine tasks
+(:class:`eclipsebench.engine.layout.Layout`) and the epochs' observing plans into engine tasks
 ``photometry[_flat]/epoch_NN``; :func:`photometry_task` runs the photometry
 package's pure pipeline (:func:`eclipsebench.photometry.pipeline.process_epoch`)
 on one epoch's AOR folders. (Its home is here because ``photometry/`` has no
@@ -13,12 +13,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..config import Config
+from ..engine.layout import Layout
+from ..engine.tasks import Task
 from ..io.bcd_read import find_bcd_files, group_epochs, read_bcd_header
 from ..photometry.pipeline import process_epoch
 from ..photometry.table import read_photometry, write_photometry
 from ..simulation.plan import EpochPlan
-from .engine import Task
-from .layout import Layout
 
 __all__ = ["photometry_key", "photometry_task", "plan_photometry_tasks", "PHOTOMETRY_COLUMNS"]
 

@@ -1,7 +1,7 @@
 """The reduce stage of a run: every method on every epoch's photometry table.
 
 :func:`plan_reduce_tasks` turns the configuration, the run folder
-(:class:`.layout.Layout`), the epochs and the methods into engine tasks
+(:class:`eclipsebench.engine.layout.Layout`), the epochs and the methods into engine tasks
 ``reduce[_flat]/<method>/epoch_NN``; :func:`reduce_task` is the one place
 that calls the fitting package (:func:`eclipsebench.fit.reduce.reduce_epoch`)
 for a run. Keep it small: the method seam's context (seeded generator,
@@ -16,12 +16,12 @@ from pathlib import Path
 
 from ..astro.catalogue import get_system
 from ..config import Config
+from ..engine.layout import Layout
+from ..engine.tasks import Task
 from ..errors import InputError
 from ..fit import reduce as fit_reduce
 from ..io.atomic import atomic_path, write_json
 from ..progress import get_logger
-from .engine import Task
-from .layout import Layout
 from .photometry_stage import photometry_key
 
 __all__ = ["reduce_key", "reduce_task", "plan_reduce_tasks", "result_ok"]

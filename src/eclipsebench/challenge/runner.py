@@ -15,7 +15,7 @@ stats       :func:`eclipsebench.stats.challenge.plan_stats_tasks`    ``stats``
 report      :func:`eclipsebench.report.challenge.plan_report_tasks`  ``report``
 =========== ============================================ ===========================
 
-The run folder is described by :class:`.layout.Layout`. Each task writes
+The run folder is described by :class:`eclipsebench.engine.layout.Layout`. Each task writes
 its files atomically, its declared output last, and the engine stamps it
 with the hashes of its outputs and inputs, so rerunning after an
 interruption redoes only what is missing or not whole; and since every
@@ -35,15 +35,15 @@ from astropy.table import Table
 
 from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
+from ..engine.layout import Layout
+from ..engine.lock import run_lock
+from ..engine.tasks import RunReport, Task, run_tasks
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
 from ..io.paths import check_output_path
 from ..report.challenge import plan_report_tasks
 from ..simulation.challenge import challenge_plans, plan_simulate_tasks
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
-from .engine import RunReport, Task, run_tasks
-from .layout import Layout
-from .lock import run_lock
 from .photometry_stage import photometry_key, plan_photometry_tasks
 from .reduce_stage import plan_reduce_tasks, reduce_key
 

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from ..detector.constants import READ_NOISE_E, SUB_2S
+from ..detector.fowler import SHOT_NOISE_FORMS
 from ..errors import InputError
-from ..instrument.constants import READ_NOISE_E, SUB_2S
-from ..stats.photon_limit import SHOT_NOISE_FORMS, photon_limit
+from ..stats.photon_limit import photon_limit
 from .options import nonnegative_float, open_unit_float, positive_float, positive_int
 
 NAME = "photon-limit"

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
-from ..instrument.constants import FLUXCONV_WARM_CH2, GAIN_E_PER_DN, SUB_2S
+from ..detector.constants import FLUXCONV_WARM_CH2, GAIN_E_PER_DN, SUB_2S
 from .base import check
 
 # Table 2 (sim_xo3meas) of the paper: start of the first exposure of each

@@ -46,7 +46,7 @@ import scipy.fft
 
 from eclipsebench.errors import InputError
 
-from .constants import PIXEL_SCALE_ARCSEC
+from ..detector.constants import PIXEL_SCALE_ARCSEC
 
 __all__ = ["PointingParams", "ParamRange", "PointingRanges", "draw_pointing_params",
            "PointingModel", "fbm_series", "skewed_sine"]

@@ -64,8 +64,9 @@ from scipy import signal, special
 
 from eclipsebench.errors import DataError, InputError
 
+from ..detector import constants
 from ..photometry.estimators import aperture_flux, centroid_col
-from . import _spline, constants
+from . import _spline
 
 __all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial",
            "load_gainmap_coefficients",

@@ -48,8 +48,8 @@ import numpy as np
 from astropy.io import fits
 from astropy.time import Time
 
+from ..detector.constants import READ_NOISE_E
 from ..errors import DataError, InputError
-from ..instrument.constants import READ_NOISE_E
 
 __all__ = ["BCD_NAME", "BcdInfo", "BcdCube", "Epoch", "find_bcd_files", "read_bcd_header",
            "read_bcd", "frame_times_bmjd", "group_epochs", "electrons_per_mjysr"]

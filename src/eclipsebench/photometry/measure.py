@@ -16,7 +16,7 @@
 - exact-overlap aperture sums on the grid of radii and on the variable radii
   ``r = a sqrt(beta) + b``; net fluxes subtract background x aperture area;
 - per-frame flux uncertainties from the Fowler-sampling noise model
-  (:func:`eclipsebench.stats.photon_limit.fowler_variance`);
+  (:func:`eclipsebench.detector.fowler.fowler_variance`);
 - 3x3 and 5x5 background-subtracted stamps about a given pixel.
 
 Everything is in electrons per pixel and 0-based pixel coordinates of the
@@ -28,8 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..config.photometry import PhotometrySection
-from ..instrument.constants import READ_NOISE_E, SUB_2S
-from ..stats.photon_limit import fowler_variance
+from ..detector.constants import READ_NOISE_E, SUB_2S
+from ..detector.fowler import fowler_variance
 from . import kernels
 from .estimators import per_frame
 
@@ -103,7 +103,7 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
     fowler, wait, read_noise_e : int, int, float
         Readout of the frames (FN, WT, read noise per read in electrons) for
         the noise model; default the 2 s subarray mode of the XO-3 data
-        (:data:`~eclipsebench.instrument.constants.SUB_2S`, ``READ_NOISE_E``).
+        (:data:`~eclipsebench.detector.constants.SUB_2S`, ``READ_NOISE_E``).
 
     Returns
     -------

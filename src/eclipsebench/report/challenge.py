@@ -16,11 +16,11 @@ from astropy.table import Table
 
 from ..astro.catalogue import get_system
 from ..astro.orbit import orbital_phase
-from ..challenge.engine import Task
-from ..challenge.layout import Layout
 from ..config import Config
 from ..decorrelate.kernel import pmap_gain
 from ..decorrelate.pmap import load_pmap
+from ..engine.layout import Layout
+from ..engine.tasks import Task
 from ..errors import InputError
 from ..photometry.table import read_photometry
 from ..progress import get_logger

@@ -44,7 +44,7 @@ from astropy.table import Table
 
 from ..config import Config
 from ..config.photometry import PhotometrySection
-from ..instrument.constants import SUB_0P1S, ReadoutMode, read_noise_of
+from ..detector.constants import SUB_0P1S, ReadoutMode, read_noise_of
 from ..io.atomic import atomic_path
 from ..photometry.estimators import LSQ_GRID_HALF_PX, LSQ_WINDOW_PX
 from ..photometry.measure import measure_stack

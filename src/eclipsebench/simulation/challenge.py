@@ -9,7 +9,7 @@
 This module is the simulate *stage*: pure functions (:func:`simulate_aor`,
 :func:`epoch_truth_row`, ...), the module-level task functions and the
 planner :func:`plan_simulate_tasks`, which turns a configuration and a
-challenge folder into engine tasks (:mod:`eclipsebench.challenge.engine`):
+challenge folder into engine tasks (:mod:`eclipsebench.engine.tasks`):
 one per AOR, the calibration set, one per epoch (its light-curve table and
 truth row) and ``truth.ecsv`` last. ``simulate_challenge`` runs them on the
 engine, as ``eclipsebench run`` does among its other stages.
@@ -38,11 +38,11 @@ from astropy.table import Table
 
 from ..astro.catalogue import get_system
 from ..astro.lightcurve import LightCurve, cached_light_curve
-from ..challenge.engine import Task, run_tasks
 from ..config import Config, dump_toml, to_mapping
+from ..detector.constants import ReadoutMode, read_noise_of
+from ..detector.fowler import bunc_mjysr, electrons_to_mjysr
+from ..engine.tasks import Task, run_tasks
 from ..errors import ConfigError, InputError
-from ..instrument.constants import ReadoutMode, read_noise_of
-from ..instrument.fowler import bunc_mjysr, electrons_to_mjysr
 from ..instrument.pointing import (
     ParamRange,
     PointingModel,
@@ -479,7 +479,7 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
     """Simulate ``cfg.challenge.epochs`` epochs (and the calibration set) into ``out_dir``.
 
     Plans the simulate stage (:func:`plan_simulate_tasks`) and runs it on the
-    task engine (:func:`eclipsebench.challenge.engine.run_tasks`).
+    task engine (:func:`eclipsebench.engine.tasks.run_tasks`).
 
     Parameters
     ----------

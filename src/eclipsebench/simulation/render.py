@@ -28,12 +28,12 @@ rendered once per cube at the cube's mean position and, with the background,
 give each pixel a constant rate over the frame.
 
 Noise (physical model)
-    Stamp pixels: :func:`eclipsebench.instrument.fowler.fowler_sample_grouped`
+    Stamp pixels: :func:`eclipsebench.detector.fowler.fowler_sample_grouped`
     (FN Poisson draws per pixel, exact). Constant-rate pixels: the same
     distribution with two Poisson draws per pixel (:func:`fowler_uniform`).
     Read noise: one Gaussian per pixel, ``sigma_rn sqrt(2 / FN)``, from its
     own stream. ``iracsim2015``: the per-tick charges of every pixel go
-    through :func:`eclipsebench.instrument.fowler.fowler_sample_iracsim2015`.
+    through :func:`eclipsebench.detector.fowler.fowler_sample_iracsim2015`.
 """
 
 from __future__ import annotations
@@ -42,8 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..instrument.constants import READ_NOISE_E, ReadoutMode
-from ..instrument.fowler import fowler_sample_grouped, fowler_sample_iracsim2015, fowler_weights
+from ..detector.constants import READ_NOISE_E, ReadoutMode
+from ..detector.fowler import fowler_sample_grouped, fowler_sample_iracsim2015, fowler_weights
 
 __all__ = ["FrameModel", "tick_moments", "weight_groups", "read_intervals",
            "star_group_charges", "fowler_uniform",
@@ -190,7 +190,7 @@ def star_group_charges(basis: np.ndarray, group_moments: np.ndarray,
     Returns
     -------
     ndarray, shape (n_groups, n_frames, n_pix)
-        Group-major, as the :mod:`eclipsebench.instrument.fowler` kernels want.
+        Group-major, as the :mod:`eclipsebench.detector.fowler` kernels want.
     """
     q = np.einsum("fgm,fmp->gfp", group_moments, basis, optimize=True)
     q *= rate_e_per_tick[None, :, None]
@@ -203,7 +203,7 @@ def fowler_uniform(rate_e_per_tick: np.ndarray, mode: ReadoutMode,
     """Physical Fowler sampling of pixels whose rate is constant over the frame (no read noise).
 
     The same distribution as
-    :func:`~eclipsebench.instrument.fowler.fowler_sample_grouped` for equal
+    :func:`~eclipsebench.detector.fowler.fowler_sample_grouped` for equal
     tick charges ``r``: the ``WT + 1`` ticks of weight FN give
     ``Poisson((WT + 1) r)``; the ``2 (FN - 1)`` ramp ticks (weights
     ``1 .. FN-1``, two ticks each) give ``Poisson(2 (FN - 1) r)`` electrons in

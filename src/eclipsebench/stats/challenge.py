@@ -17,12 +17,12 @@ from astropy.table import Table
 
 from ..astro.catalogue import get_system
 from ..astro.eclipse import EclipseShape
-from ..challenge.engine import Task
-from ..challenge.layout import Layout
 from ..config import Config
+from ..detector.constants import read_noise_of
+from ..engine.layout import Layout
+from ..engine.tasks import Task
 from ..errors import DataError
 from ..fit.reduce import predicted_eclipse_bmjd
-from ..instrument.constants import read_noise_of
 from ..io.atomic import atomic_path, write_json
 from ..photometry.table import read_photometry
 from .photon_limit import analytic_photon_limit, empirical_photon_limit, in_eclipse_fraction

@@ -27,85 +27,16 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import stats as sps
 
-from ..instrument.constants import READ_NOISE_E, SUB_2S
+from ..detector.constants import READ_NOISE_E, SUB_2S
+from ..detector.fowler import fowler_variance
 
-__all__ = ["SHOT_NOISE_FORMS", "fowler_variance", "frame_snr", "eclipse_depth_photon_noise", "PhotonLimit",
+__all__ = ["frame_snr", "eclipse_depth_photon_noise", "PhotonLimit",
            "photon_limit", "SUBARRAY_2S", "analytic_photon_limit", "empirical_photon_limit",
            "in_eclipse_fraction"]
 
 #: IRAC 2 s subarray readout (paper Section 3.3): FN, WT, sample time (s), read noise (e).
 SUBARRAY_2S = {"fowler": SUB_2S.fowler, "wait": SUB_2S.wait,
                "sample_time_s": SUB_2S.sample_time_s, "read_noise_e": READ_NOISE_E}
-
-
-#: How :func:`fowler_variance` counts the shot noise: ``"paper"``, the paper's
-#: Eq. ``gar_for_var`` as printed; ``"poisson"``, the exact variance of
-#: Fowler-sampled independent Poisson increments (see :func:`fowler_variance`).
-SHOT_NOISE_FORMS = ("paper", "poisson")
-
-
-def _check_readout(fowler: int, wait: int) -> None:
-    if int(fowler) != fowler or fowler < 1:
-        raise ValueError(f"fowler: expected an integer >= 1, got {fowler}")
-    if int(wait) != wait or wait < 0:
-        raise ValueError(f"wait: expected an integer >= 0, got {wait}")
-
-
-def fowler_variance(flux_e, *, fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait, read_noise_e: float = READ_NOISE_E,
-                    n_pixels: float = 1.0, shot_noise: str = "paper"):
-    """Variance of Fowler-sampled electron counts (Garnett & Forrest 1993).
-
-    ``shot_noise="paper"`` implements the paper's Eq. ``gar_for_var``::
-
-        sigma_e^2 = sigma_int^2 [2 sigma_rn^2 / (sigma_int^2 FN)
-                                 + 1 - 2 FN / (3 n_max) + 1 / (6 FN n_max)]
-
-    with ``n_max = 2 FN + WT`` and ``sigma_int^2 = F (t_int / t_exp)``,
-    ``t_int / t_exp = n_max / (FN + WT)`` (the sample time cancels).
-
-    ``shot_noise="poisson"`` replaces the bracket's shot terms by the exact
-    variance of the Fowler difference of a Poisson process read
-    instantaneously every sample, ``1 - 4 FN / (3 n_max) + 1 / (3 FN n_max)``,
-    i.e. ``q [FN + WT - (FN^2 - 1) / (3 FN)]`` for ``q`` electrons per
-    sample. The printed equation exceeds the mean signal ``q (FN + WT)``,
-    which no Poisson process can (for FN = 1, WT = 0 it gives 1.5 q where a
-    correlated double sample has variance q); it is 2.7% above the exact value
-    for FN = 8, WT = 184 (README, "Where the paper is inconsistent").
-
-    Parameters
-    ----------
-    flux_e : float or array
-        Electrons accumulated per exposure time (the BCD value times
-        GAIN x EXPTIME / FLUXCONV, summed over the aperture).
-    fowler, wait : int
-        Fowler number FN (>= 1) and wait ticks WT (>= 0).
-    read_noise_e : float
-        Read noise per read, electrons (9.4 e for warm channel 2).
-    n_pixels : float
-        Pixels whose read noise adds (1 reproduces the paper's use of the
-        equation on an aperture sum; the aperture area adds per-pixel noise).
-    shot_noise : {"paper", "poisson"}
-        The printed equation (default) or the exact Poisson-increment form.
-
-    Returns
-    -------
-    float or array
-        Variance in electrons squared.
-    """
-    _check_readout(fowler, wait)
-    if shot_noise not in SHOT_NOISE_FORMS:
-        raise ValueError(f"shot_noise: expected one of {', '.join(SHOT_NOISE_FORMS)}, "
-                         f"got {shot_noise!r}")
-    flux_e = np.asarray(flux_e, dtype=float)
-    n_max = 2 * fowler + wait
-    sigma_int2 = flux_e * n_max / (fowler + wait)
-    if shot_noise == "paper":  # Eq. gar_for_var
-        shot_factor = 1.0 - 2.0 * fowler / (3.0 * n_max) + 1.0 / (6.0 * fowler * n_max)
-    else:
-        shot_factor = 1.0 - 4.0 * fowler / (3.0 * n_max) + 1.0 / (3.0 * fowler * n_max)
-    read_term = 2.0 * n_pixels * read_noise_e**2 / fowler
-    result = read_term + sigma_int2 * shot_factor
-    return float(result) if result.ndim == 0 else result
 
 
 def frame_snr(flux_net_e, flux_aperture_e, flux_background_e, *, fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait,

@@ -10,7 +10,7 @@ import cloudpickle
 import numpy as np
 import pytest
 
-from eclipsebench.challenge.engine import Task, TaskFailed, run_tasks, stamp_path
+from eclipsebench.engine.tasks import Task, TaskFailed, run_tasks, stamp_path
 from eclipsebench.errors import InputError
 from eclipsebench.io.atomic import write_json
 from eclipsebench.seeding import rng

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from eclipsebench.detector import fowler as F
+from eclipsebench.detector.constants import SUB_0P1S, SUB_2S, ReadoutMode
+from eclipsebench.detector.fowler import fowler_variance
 from eclipsebench.errors import InputError
-from eclipsebench.instrument import fowler as F
-from eclipsebench.instrument.constants import SUB_0P1S, SUB_2S, ReadoutMode
-from eclipsebench.stats.photon_limit import fowler_variance
 
 N_PIX = 200_000
 

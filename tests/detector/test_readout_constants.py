@@ -1,4 +1,4 @@
-"""Readout constants live in one place: instrument/constants.py."""
+"""Readout constants live in one place: detector/constants.py."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from eclipsebench.config import load_config
-from eclipsebench.instrument import constants as C
+from eclipsebench.detector import constants as C
 from eclipsebench.simulation import challenge
 
 
