@@ -177,10 +177,22 @@ def fit_depth(model, time, *, t_ecl_guess, depth_guess=1500.0, phase="flat"):
     return fit.value("depth") * 1e6, fit.value("t_ecl_bmjd")
 
 
+def kept_frames(model, epoch: SyntheticEpoch):
+    """(flux, astro) of the frames ``model`` fits: all of them, or the subset it kept.
+
+    A method that drops frames (BLISS's sparse knots, KR/Pmap's low occupancy)
+    holds the kept frames in ``model.data``; ``astro`` is the epoch's curve there.
+    """
+    if not model.dropped_frames():
+        return epoch.data.flux, epoch.astro
+    keep = np.searchsorted(epoch.data.time_bmjd, model.data.time_bmjd)
+    return epoch.data.flux[keep], epoch.astro[keep]
+
+
 @pytest.fixture(scope="session")
 def synth():
     """The generator functions, for tests that need their own variants."""
-    return SimpleNamespace(make_epoch=make_epoch, eclipse_curve=eclipse_curve,
+    return SimpleNamespace(make_epoch=make_epoch, eclipse_curve=eclipse_curve, kept_frames=kept_frames,
                            fit_depth=fit_depth, write_calibration_table=write_calibration_table,
                            render_stamps=render_stamps, stamp_measurements=stamp_measurements)
 
