@@ -41,6 +41,10 @@ class ReduceSection:
         Pixel stamp handed to pixel-level methods (PLD, ICA).
     max_nfev : int
         Cap on function evaluations of one least-squares fit.
+    settling_aor : {"drop", "keep"}
+        Leave out of the fit the frames of an epoch's first AOR when it is short
+        beside the others (the 30-minute Pre AOR that lets the pointing settle;
+        :mod:`eclipsebench.fit.frames`), or fit every frame.
     error_rule : {"largest", "method"}
         The reported depth error: the largest of the Jacobian error times
         ``max(1, beta_red)``, the prayer bead and the MCMC width, for every
@@ -65,6 +69,7 @@ class ReduceSection:
     radius_px: float = 0.0
     stamp: Literal["stamp3", "stamp5"] = "stamp3"
     max_nfev: int = 200
+    settling_aor: Literal["drop", "keep"] = "drop"
     error_rule: Literal["largest", "method"] = "largest"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
 

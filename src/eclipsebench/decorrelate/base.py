@@ -299,6 +299,9 @@ class Systematics(ABC):
     #: mean) leaves residuals that are not the noise the bead should shift,
     #: and may set this to False (its errors then come from the Jacobian and MCMC).
     use_prayer_bead: ClassVar[bool] = True
+    #: Whether :meth:`log_likelihood` models the white noise itself (GP's fitted
+    #: noise term); otherwise the fitter rescales the flux errors to chi2_red = 1.
+    likelihood_models_noise: ClassVar[bool] = False
     #: The depth error its authors reported: a key of the fit's estimates
     #: ("jacobian_beta", "prayer_bead", "mcmc") or of :meth:`depth_error_estimates`
     #: (PLD: "time_averaging"). Used when ``[reduce] error_rule = "method"``;
@@ -418,7 +421,9 @@ class Systematics(ABC):
 
         The fitter alternates this with the least-squares fit of the joint
         parameters (coordinate ascent) for methods that override it (GP: kernel
-        and white-noise parameters). The default does nothing and returns None.
+        and white-noise parameters; PLD: the bin size). Return None when nothing
+        changed (the fitter then stops alternating), else what was set. The
+        default does nothing and returns None.
         """
         return None
 
@@ -430,6 +435,11 @@ class Systematics(ABC):
         the depth at the solution.
         """
         return 0.0
+
+    @property
+    def n_frames(self) -> int:
+        """Frames the model fits (a method that bins: the frames behind its bins)."""
+        return len(self.data)
 
     def dropped_frames(self) -> dict[str, int]:
         """Frames of the input that the method left out of ``self.data``, by reason.

@@ -234,6 +234,8 @@ class GaussianProcess(Systematics):
     # epoch) and costs one kernel optimisation per shift; Evans et al. (2015)
     # took their errors from MCMC with the kernel fixed, which `--sampler mcmc` does.
     use_prayer_bead: ClassVar[bool] = False
+    #: The kernel's white-noise term ``s`` models the noise.
+    likelihood_models_noise: ClassVar[bool] = True
     description: ClassVar[str] = ("Gaussian process over (x, y, t) with white noise on ~30 s "
                                   "bins; kernel by maximum likelihood (Evans et al. 2015)")
 
@@ -382,6 +384,11 @@ class GaussianProcess(Systematics):
                         "neg_log_ml": float(res.fun), "converged": bool(res.success),
                         "n_evaluations": int(res.nfev)}
         return self.ml_info
+
+    @property
+    def n_frames(self) -> int:
+        """The frames behind the bins."""
+        return len(self.unbinned_data)
 
     def diagnostics(self) -> dict[str, Any]:
         """The kernel in use, the binning, and the last likelihood maximisation."""

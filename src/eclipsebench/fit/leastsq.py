@@ -282,7 +282,10 @@ def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro,
         # coordinate ascent: hyperparameters for the fitted astro, then the joint fit again
         for _ in range(max_alternations):
             previous = sol.x
-            systematics.optimise_hyperparameters(astro_model(previous[:problem.n_astro]))
+            changed = systematics.optimise_hyperparameters(
+                astro_model(previous[:problem.n_astro]))
+            if changed is None:   # the method kept its settings: the fit stands
+                break
             sol = _solve(problem, previous, max_nfev)
             nfev += sol.nfev
             step = np.abs(sol.x[:2] - previous[:2])
@@ -301,8 +304,12 @@ def has_hyperparameters(systematics: Systematics) -> bool:
 
 
 def has_own_likelihood(systematics: Systematics) -> bool:
-    """Whether the method replaces the white-noise likelihood (GP); it then models its noise."""
-    return type(systematics).log_likelihood is not Systematics.log_likelihood
+    """Whether the method's likelihood models its own white noise (GP's ``s``).
+
+    Such a likelihood is used as it is; any other (also a method's own, such as
+    PLD's on bins) has its flux errors rescaled to chi2_red = 1 for the MCMC.
+    """
+    return bool(systematics.likelihood_models_noise)
 
 
 def _summarise(problem: _Problem, theta: np.ndarray, nfev: int, success: bool, message: str,
