@@ -18,7 +18,7 @@ __all__ = ["summarize", "AVERAGED_KEYS"]
 
 #: Columns averaged straight across methods (the paper's "Average" row, note j).
 AVERAGED_KEYS = ("D_mean", "sigma_mean", "SD", "sigma_orig", "f_dis", "sigma_tot", "R", "r",
-                 "RMSE", "bias", "a", "coverage")
+                 "RMSE", "bias", "a", "coverage", "coverage_2sigma", "z_rms")
 
 
 def summarize(table, *, sigma_phot_ppm: float | None = None, truth_ppm: float | None = None,
