@@ -73,7 +73,7 @@ def test_every_referenced_file_exists_and_is_non_empty(report):
     parser = _Refs()
     parser.feed(index.read_text())
     images = [ref for tag, ref in parser.refs if tag == "img"]
-    assert len(images) == 9  # every figure of the paper with truth and photometry
+    assert len(images) == 11  # every figure of the paper, coverage and residuals
     for _tag, ref in parser.refs:
         assert not re.match(r"^[a-z]+:", ref) and not ref.startswith("/"), ref  # offline
         path = dest / ref

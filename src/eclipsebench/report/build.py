@@ -17,6 +17,7 @@ import numpy as np
 
 from ..io.atomic import write_text
 from ..stats.compare import group_by_method
+from ..stats.ensemble import normalised_residuals
 from . import figures as F
 from .tables import display_rows, write_tables
 
@@ -120,6 +121,18 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
             skipped.append("accuracy figures (no truth)")
     else:
         skipped.append("repeatability/reliability and accuracy figures (no photon limit)")
+    if truth_ppm is not None:
+        add("coverage", "Fraction of epochs whose reported 1-sigma (blue) and 2-sigma (red) errors "
+            "cover the input depth, with exact binomial 68% intervals; dashed: 68.3% and 95.4%, "
+            "the coverage of honest Gaussian errors.", F.coverage_per_method(summary))
+        add("normalised_residuals", "Normalised residuals (D - truth) / sigma per epoch with the "
+            "reported sigma: all methods pooled, then per method, against the unit Gaussian "
+            "(black); values beyond +-4 are counted in the outer bins.",
+            F.normalised_residual_histograms(
+                {m: normalised_residuals(g.depth_ppm, g.error_ppm, truth_ppm)
+                 for m, g in groups.items()}))
+    else:
+        skipped.append("coverage and normalised residuals (no truth)")
     summary_path = write_text(root / "statistics.json",
                               json.dumps(_plain(summary), indent=2, sort_keys=True) + "\n")
     page = render_index(title=title, summary=summary, figures=items,

@@ -18,12 +18,13 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ..io.atomic import atomic_path
-from ..stats.ensemble import pairwise_differences
+from ..stats.ensemble import GAUSS_1SIGMA, GAUSS_2SIGMA, pairwise_differences
 
 __all__ = ["save_figure", "bin_mean", "centroid_clouds", "photometry_vs_phase",
            "decorrelated_lightcurves", "depths_per_epoch", "visit_differences",
            "method_differences", "repeatability_vs_reliability", "accuracy_vs_reliability",
-           "accuracy_ratio_vs_bias", "fit_inverse", "fit_line"]
+           "accuracy_ratio_vs_bias", "coverage_per_method", "normalised_residual_histograms",
+           "fit_inverse", "fit_line"]
 
 
 def _figure(width: float, height: float) -> Figure:
@@ -208,8 +209,10 @@ def depths_per_epoch(groups: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarr
             ax.axhline(v, color="tab:red", lw=0.8, ls="-" if v == grand else "--")
     if truth_ppm is not None:
         ax.axhline(truth_ppm, color="tab:blue", lw=1.2, label=f"input {truth_ppm:.0f} ppm")
-    ax.set_xticks(epochs + [right + 0.5 + 0.15 * (len(names) - 1)],
-                  [str(e) for e in epochs] + ["mean"])
+    every = max(1, math.ceil(len(epochs) / 25))  # a Monte Carlo's hundreds of epochs
+    ticks = epochs[::every]
+    ax.set_xticks(ticks + [right + 0.5 + 0.15 * (len(names) - 1)],
+                  [str(e) for e in ticks] + ["mean"])
     ax.set_xlabel("epoch")
     ax.set_ylabel("eclipse depth (ppm)")
     ax.set_title(title)
@@ -379,4 +382,85 @@ def accuracy_ratio_vs_bias(summary: Mapping, *, title: str = "a/r vs |bias|") ->
     ax.set_xlabel("|mean bias| (ppm)")
     ax.set_ylabel("a / r")
     ax.set_title(title)
+    return fig
+
+
+def coverage_per_method(summary: Mapping, *, title: str = "Coverage of the truth") -> Figure:
+    """1- and 2-sigma coverage per method with 68% binomial intervals, against 68% and 95%.
+
+    Parameters
+    ----------
+    summary : mapping
+        The statistics dict: ``methods[m]["coverage"]``, ``["coverage_lo"]``,
+        ``["coverage_hi"]`` and the same for ``coverage_2sigma``; methods
+        without them (no truth) are left out.
+    """
+    rows = [(name, s) for name, s in summary["methods"].items()
+            if s.get("coverage") is not None and s.get("coverage_2sigma") is not None]
+    fig = _figure(max(5.0, 0.55 * len(rows) + 2.5), 4.0)
+    ax = fig.add_subplot()
+    x = np.arange(len(rows))
+    for key, level, color, dx, label in (("coverage", GAUSS_1SIGMA, "tab:blue", -0.12, "1 sigma"),
+                                         ("coverage_2sigma", GAUSS_2SIGMA, "tab:red", 0.12,
+                                          "2 sigma")):
+        c = np.array([s[key] for _, s in rows], float)
+        lo = np.array([s[f"{key}_lo"] for _, s in rows], float)
+        hi = np.array([s[f"{key}_hi"] for _, s in rows], float)
+        ax.errorbar(x + dx, c, yerr=[c - lo, hi - c], fmt="o", ms=4, color=color, lw=1,
+                    capsize=2, label=f"within {label}")
+        ax.axhline(level, color=color, ls="--", lw=0.8)
+        ax.text(1.0, level, f" {100 * level:.1f}%", transform=ax.get_yaxis_transform(),
+                color=color, fontsize=7, va="center")
+    n = sorted({int(s["N"]) for _, s in rows})
+    ax.set_xticks(x, [name for name, _ in rows], rotation=45, ha="right", fontsize=8)
+    ax.set_xlim(-0.6, max(len(rows), 1) - 0.4)
+    ax.set_ylim(0.0, 1.04)
+    ax.set_ylabel("fraction of epochs covering the truth")
+    ax.set_title(title + (f" (N = {n[0]} epochs)" if len(n) == 1 else ""))
+    ax.legend(fontsize=7, loc="lower left")
+    return fig
+
+
+def normalised_residual_histograms(residuals: Mapping[str, np.ndarray], *, limit: float = 4.0,
+                                   bin_width: float = 0.5,
+                                   title: str = "Normalised residuals (D - truth) / sigma"
+                                   ) -> Figure:
+    """Histograms of ``z = (D_i - truth) / sigma_i`` against the unit Gaussian.
+
+    The first panel pools every method; then one panel per method. Each is
+    a density (area 1) with the unit Gaussian density drawn over it; values
+    beyond ``+-limit`` are counted in the outermost bins. The corner gives
+    the number of epochs and the RMS of z (1 for honest errors).
+
+    Parameters
+    ----------
+    residuals : mapping
+        ``{method: z}``.
+    limit, bin_width : float
+        Histogram range ``[-limit, limit]`` and bin width.
+    """
+    panels = {"all methods": np.concatenate([np.asarray(z, float) for z in residuals.values()])
+              if residuals else np.zeros(0)}
+    panels.update({m: np.asarray(z, float) for m, z in residuals.items()})
+    rows, cols = _grid(len(panels))
+    fig = _figure(2.9 * cols, 2.4 * rows)
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True).ravel())
+    edges = np.arange(-limit, limit + bin_width / 2, bin_width)
+    grid = np.linspace(-limit, limit, 201)
+    gauss = np.exp(-0.5 * grid**2) / math.sqrt(2.0 * math.pi)
+    for ax, (name, z) in zip(axes, panels.items(), strict=False):
+        if z.size:
+            ax.hist(np.clip(z, -limit + 1e-9, limit - 1e-9), bins=edges, density=True,
+                    color="0.55" if name == "all methods" else "tab:blue", alpha=0.8)
+        ax.plot(grid, gauss, "-", color="k", lw=1)
+        rms = float(np.sqrt(np.mean(z**2))) if z.size else float("nan")
+        ax.text(0.02, 0.97, f"N = {z.size}\nrms = {rms:.2f}", transform=ax.transAxes, fontsize=7,
+                va="top")
+        ax.set_title(name, fontsize=9)
+        ax.tick_params(labelsize=7)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    fig.supxlabel("(D - truth) / sigma", fontsize=8)
+    fig.supylabel("density", fontsize=8)
+    fig.suptitle(title)
     return fig

@@ -36,7 +36,9 @@ TABLE_COLUMNS = (
 
 _NUMERIC = ("N", "D_mean", "sigma_mean", "SD", "sigma_orig", "f_dis", "f_dis_raw", "f_dis_lo",
             "f_dis_hi", "sigma_tot", "R", "R_lo", "R_hi", "r", "r_lo", "r_hi", "RMSE", "bias",
-            "a", "a_lo", "a_hi", "coverage", "closest_match_mean_ppm", "closest_match_sd_ppm")
+            "a", "a_lo", "a_hi", "coverage", "coverage_lo", "coverage_hi", "coverage_2sigma",
+            "coverage_2sigma_lo", "coverage_2sigma_hi", "z_rms", "closest_match_mean_ppm",
+            "closest_match_sd_ppm")
 
 
 def _num(v) -> float:
