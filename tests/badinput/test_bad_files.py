@@ -130,7 +130,12 @@ def test_config_with_an_unknown_planet_names_the_key_and_file(tmp_path, cli, bad
     code, _, err = cli("config", path)
     bad.assert_one_line(code, err, str(path), "system.name", "XO-99z")
     code, _, err = cli("config", "--set", "system.name=Nope-1b")
-    bad.assert_one_line(code, err, "--set", "system.name", "Nope-1b")
+    bad.assert_one_line(code, err, "system.name", "Nope-1b")
+    out = tmp_path / "sim"
+    for command in ("simulate", "run"):
+        code, _, err = cli(command, path, "--out", out)
+        bad.assert_one_line(code, err, str(path), "system.name", "XO-99z")
+        assert not out.exists()
 
 
 @pytest.mark.parametrize("command", ["photometry", "lightcurve", "reduce-json"])

@@ -11,6 +11,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from ..astro.catalogue import get_system
+from ..errors import ConfigError, InputError
 from .base import (
     apply_overrides,
     check,
@@ -58,4 +60,21 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     """
     mapping: dict[str, Any] = load_toml(path) if path is not None else {}
     mapping = apply_overrides(mapping, list(overrides or []))
-    return from_mapping(Config, mapping)
+    config = from_mapping(Config, mapping)
+    _check_system(config, path, list(overrides or []))
+    return config
+
+
+def _check_system(config: Config, path: str | Path | None, overrides: list[str]) -> None:
+    """The planet must be in a catalogue: one line naming ``system.name`` and where it was set."""
+    try:
+        get_system(config.system.name, config.system.catalogue or None)
+    except InputError as exc:
+        by_override = any(o.split("=", 1)[0].strip() == "system.name" for o in overrides)
+        searched = "the built-in catalogue" + (
+            f" and {config.system.catalogue}" if config.system.catalogue else "")
+        problem = f"{exc} (searched {searched})"
+        error = ConfigError("system.name", problem)
+        if path is not None and not by_override:
+            raise InputError(f"{path}: {error}") from None
+        raise error from None
