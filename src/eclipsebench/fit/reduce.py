@@ -34,6 +34,7 @@ from ..photometry.table import read_photometry
 from ..seeding import rng
 from .astro_model import PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table
+from .frames import settling_aor
 from .leastsq import (
     FitResult,
     _covariance,
@@ -110,7 +111,12 @@ class PreparedEpoch:
     epoch: int | None
     t_ecl_predicted_bmjd: float
     source: str
-    n_frames: int
+    n_frames_dropped: dict[str, int]
+
+    @property
+    def n_frames(self) -> int:
+        """Frames the method fits (after every drop)."""
+        return self.systematics.n_frames
 
     def astro_model(self, options: ReduceSection, *, phase: str | None = None) -> AstroModel:
         """The shared astrophysical model at the method's data times."""
@@ -183,14 +189,22 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     cls = get_method(method)
     method_opts = resolve_method_options(method, options, method_options)
     data = epoch_data_from_table(table, radius_px=options.radius_px or None, stamp=options.stamp)
+    dropped = {"flagged": int(data.meta.get("n_frames_flagged", 0)),
+               "nonfinite": int(data.meta.get("n_frames_nonfinite", 0)), "settling_aor": 0}
+    if options.settling_aor == "drop":
+        settling = settling_aor(data.time_bmjd, data.aorkey)
+        if settling.any():
+            dropped["settling_aor"] = int(settling.sum())
+            data = data.subset(~settling)
     system = resolve_system(system)
     t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source)
     epoch_number = _epoch_number(table, epoch)
     systematics = cls.build(data, method_opts, seed=seed, epoch=epoch_number or 0,
                             resources=resources)
+    dropped.update({k: int(v) for k, v in systematics.dropped_frames().items()})
     return PreparedEpoch(table=table, systematics=systematics, system=system,
                          epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
-                         source=source, n_frames=len(data))
+                         source=source, n_frames_dropped=dropped)
 
 
 # --------------------------------------------------------------------------- one epoch
@@ -223,6 +237,7 @@ class EpochResult:
     rms_ppm: float
     beta_red: float
     n_frames: int
+    n_frames_dropped: dict[str, int]
     n_points: int
     phase: str
     ramp: str
@@ -255,7 +270,8 @@ class EpochResult:
             "bic": self.bic, "aic": self.aic, "k": self.k,
             "log_likelihood": self.log_likelihood, "chi2_red": self.chi2_red,
             "rms_ppm": self.rms_ppm, "beta_red": self.beta_red,
-            "n_frames": self.n_frames, "n_points": self.n_points,
+            "n_frames": self.n_frames, "n_frames_dropped": dict(self.n_frames_dropped),
+            "n_points": self.n_points,
             "phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
             "sampler": self.sampler, "converged": self.converged,
             "system": self.system, "seed": self.seed,
@@ -442,7 +458,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         t_ecl_predicted_bmjd=prep.t_ecl_predicted_bmjd,
         bic=fit.bic, aic=fit.aic, k=fit.k, log_likelihood=fit.log_likelihood,
         chi2_red=fit.chi2_red, rms_ppm=fit.rms_ppm, beta_red=fit.beta_red,
-        n_frames=prep.n_frames,
+        n_frames=prep.n_frames, n_frames_dropped=dict(prep.n_frames_dropped),
         n_points=len(systematics.data.time_bmjd),
         phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
         sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
