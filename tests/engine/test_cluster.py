@@ -137,6 +137,8 @@ def _run(out: Path, *execution: str) -> int:
     return main(args)
 
 
+@pytest.mark.slow  # ~40 s: two tiny runs and a cluster's start-up
+@pytest.mark.timeout(240)  # the signal interrupts a hung run; the cluster is still torn down
 @pytest.mark.skipif(not DASK.is_file(), reason="no dask command beside this Python")
 def test_scheduler_gives_the_same_summary_bytes_as_one_process(tmp_path, capsys):
     assert _run(tmp_path / "one", "--workers", "1") == 0
