@@ -251,33 +251,13 @@ def _poly_doc(order: int) -> str:
             f"coefficients (Bell et al. 2021; options :class:`PolyOptions`).")
 
 
-@register
-class Poly2(_Polynomial):
-    __doc__ = _poly_doc(2)
-    name: ClassVar[str] = "poly2"
-    order: ClassVar[int] = 2
-    description: ClassVar[str] = "2-D polynomial of degree 2 in the centroid (SPCA)"
+def _polynomial_method(order: int) -> type[_Polynomial]:
+    """The registered class ``poly<order>`` (one class per order, as SPCA names its models)."""
+    cls = type(f"Poly{order}", (_Polynomial,), {
+        "__doc__": _poly_doc(order), "__module__": __name__, "name": f"poly{order}",
+        "order": order,
+        "description": f"2-D polynomial of degree {order} in the centroid (SPCA)"})
+    return register(cls)
 
 
-@register
-class Poly3(_Polynomial):
-    __doc__ = _poly_doc(3)
-    name: ClassVar[str] = "poly3"
-    order: ClassVar[int] = 3
-    description: ClassVar[str] = "2-D polynomial of degree 3 in the centroid (SPCA)"
-
-
-@register
-class Poly4(_Polynomial):
-    __doc__ = _poly_doc(4)
-    name: ClassVar[str] = "poly4"
-    order: ClassVar[int] = 4
-    description: ClassVar[str] = "2-D polynomial of degree 4 in the centroid (SPCA)"
-
-
-@register
-class Poly5(_Polynomial):
-    __doc__ = _poly_doc(5)
-    name: ClassVar[str] = "poly5"
-    order: ClassVar[int] = 5
-    description: ClassVar[str] = "2-D polynomial of degree 5 in the centroid (SPCA)"
+Poly2, Poly3, Poly4, Poly5 = (_polynomial_method(order) for order in range(2, 6))

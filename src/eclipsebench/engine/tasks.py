@@ -44,6 +44,7 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numba
 from threadpoolctl import threadpool_limits
@@ -363,6 +364,23 @@ def _finish(task: Task, by_key: dict[str, Task], hashes: _Hashes) -> None:
     _write_stamp(task, by_key, hashes)
 
 
+def _settle(key: str, outcome: Callable[[], Any], by_key, done, bars, report, hashes,
+            failures: dict[str, BaseException]) -> bool:
+    """Record a task's outcome (its timing, its stamp) or its failure; True if it succeeded."""
+    task = by_key[key]
+    try:
+        report.record(key, outcome())
+        _finish(task, by_key, hashes)
+    except Exception as exc:  # collected and re-raised after the others ran
+        failures[key] = exc
+        log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
+        return False
+    done.add(key)
+    report.ran.append(key)
+    bars.update(task.stage)
+    return True
+
+
 def _run_sync(by_key, todo, done, bars, report, keep_going,
               hashes) -> dict[str, BaseException]:
     failures: dict[str, BaseException] = {}
@@ -370,18 +388,9 @@ def _run_sync(by_key, todo, done, bars, report, keep_going,
         task = by_key[key]
         if _blocked(task, set(failures)) or not all(d in done for d in task.deps):
             continue  # a dependency failed: not run
-        try:
-            report.record(key, _call(task.func, task.args))
-            _finish(task, by_key, hashes)
-        except Exception as exc:  # collected and re-raised after the others ran
-            failures[key] = exc
-            log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
-            if not keep_going:
-                break
-            continue
-        done.add(key)
-        report.ran.append(key)
-        bars.update(task.stage)
+        if not _settle(key, lambda t=task: _call(t.func, t.args), by_key, done, bars, report,
+                       hashes, failures) and not keep_going:
+            break
     return failures
 
 
@@ -445,19 +454,9 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, hashes, *, workers,
         submit_ready()
         for fut in ac:
             key = futures.pop(fut.key)
-            task = by_key[key]
-            try:
-                report.record(key, fut.result())
-                _finish(task, by_key, hashes)
-            except Exception as exc:  # collected and re-raised after the others ran
-                failures[key] = exc
-                log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
-                if not keep_going:
-                    break
-            else:
-                done.add(key)
-                report.ran.append(key)
-                bars.update(task.stage)
+            if not _settle(key, fut.result, by_key, done, bars, report, hashes,
+                           failures) and not keep_going:
+                break
             submit_ready()
     finally:
         client.close()

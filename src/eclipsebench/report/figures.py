@@ -27,6 +27,19 @@ __all__ = ["save_figure", "bin_mean", "centroid_clouds", "photometry_vs_phase",
            "fit_inverse", "fit_line"]
 
 
+
+def _finish_grid(fig: Figure, axes, n_used: int, title: str, xlabel: str | None = None,
+                 ylabel: str | None = None) -> Figure:
+    """Hide the unused panels of a grid, label the shared axes, set the title."""
+    for ax in axes[n_used:]:
+        ax.set_visible(False)
+    if xlabel:
+        fig.supxlabel(xlabel, fontsize=8)
+    if ylabel:
+        fig.supylabel(ylabel, fontsize=8)
+    fig.suptitle(title)
+    return fig
+
 def _figure(width: float, height: float) -> Figure:
     fig = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(fig)
@@ -259,10 +272,7 @@ def visit_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], summa
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("mean depth (ppm)", fontsize=7)
         ax.set_ylabel("D1 - D2 (ppm)", fontsize=7)
-    for ax in axes[len(groups):]:
-        ax.set_visible(False)
-    fig.suptitle(title)
-    return fig
+    return _finish_grid(fig, axes, len(groups), title)
 
 
 def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttest_p: Mapping, *,
@@ -299,12 +309,7 @@ def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttes
                     color="tab:red" if p < 0.05 else "k")
         ax.set_title(f"{a} - {b}", fontsize=8)
         ax.tick_params(labelsize=6)
-    for ax in axes[len(pairs):]:
-        ax.set_visible(False)
-    fig.supxlabel("mean depth (ppm)", fontsize=8)
-    fig.supylabel("difference (ppm)", fontsize=8)
-    fig.suptitle(title)
-    return fig
+    return _finish_grid(fig, axes, len(pairs), title, "mean depth (ppm)", "difference (ppm)")
 
 
 def _method_points(summary: Mapping, keys: Sequence[str]):
@@ -458,9 +463,4 @@ def normalised_residual_histograms(residuals: Mapping[str, np.ndarray], *, limit
                 va="top")
         ax.set_title(name, fontsize=9)
         ax.tick_params(labelsize=7)
-    for ax in axes[len(panels):]:
-        ax.set_visible(False)
-    fig.supxlabel("(D - truth) / sigma", fontsize=8)
-    fig.supylabel("density", fontsize=8)
-    fig.suptitle(title)
-    return fig
+    return _finish_grid(fig, axes, len(panels), title, "(D - truth) / sigma", "density")
