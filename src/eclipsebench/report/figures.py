@@ -40,6 +40,10 @@ def _finish_grid(fig: Figure, axes, n_used: int, title: str, xlabel: str | None 
     fig.suptitle(title)
     return fig
 
+#: Epochs named in legends and labels; a Monte Carlo's hundreds would hide the data.
+MAX_LEGEND_EPOCHS = 20
+
+
 def _figure(width: float, height: float) -> Figure:
     fig = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(fig)
@@ -116,7 +120,8 @@ def centroid_clouds(centroids: Mapping[object, tuple[np.ndarray, np.ndarray]], *
     ax.set_ylabel("y (pixel, 0-based)")
     ax.set_title(title)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(title="epoch", fontsize=6, markerscale=8, loc="upper right", ncols=2)
+    if len(centroids) <= MAX_LEGEND_EPOCHS:
+        ax.legend(title="epoch", fontsize=6, markerscale=8, loc="upper right", ncols=2)
     return fig
 
 
@@ -151,7 +156,8 @@ def photometry_vs_phase(epochs: Mapping[object, Mapping[str, np.ndarray]], *, bi
         ax.set_ylabel(label, fontsize=8)
     axes[-1].set_xlabel("orbital phase (since transit)")
     axes[0].set_title(title)
-    axes[0].legend(title="epoch", fontsize=6, ncols=5, markerscale=3)
+    if len(epochs) <= MAX_LEGEND_EPOCHS:
+        axes[0].legend(title="epoch", fontsize=6, ncols=5, markerscale=3)
     return fig
 
 
@@ -295,8 +301,9 @@ def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttes
         mean = (da[ia] + db[ib]) / 2.0
         diff = da[ia].astype(float) - db[ib]
         ax.plot(mean, diff, ".", ms=4)
-        for x, y, e in zip(mean, diff, common, strict=True):
-            ax.annotate(str(e), (x, y), fontsize=5)
+        if common.size <= MAX_LEGEND_EPOCHS:
+            for x, y, e in zip(mean, diff, common, strict=True):
+                ax.annotate(str(e), (x, y), fontsize=5)
         ax.axhline(0.0, color="0.6", lw=0.8)
         if diff.size >= 2:
             m, s = float(diff.mean()), float(diff.std(ddof=1))
