@@ -23,6 +23,9 @@ from .tables import display_rows, write_tables
 
 __all__ = ["build_report", "render_index"]
 
+#: Centroids drawn over all epochs (4000 per epoch for ten; a PDF of 400,000 is 8 MB).
+CENTROID_POINTS = 40_000
+
 
 def _rel(path: Path, root: Path) -> str:
     return path.relative_to(root).as_posix()
@@ -80,7 +83,8 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
         add("centroids", "Centroid positions per epoch (center of light)"
             + (" over the intra-pixel gain map." if gain_map is not None else "."),
             F.centroid_clouds({e: (p["x"], p["y"]) for e, p in photometry.items()},
-                              gain_map=gain_map))
+                              gain_map=gain_map,
+                              max_points=max(400, CENTROID_POINTS // len(photometry))))
         add("photometry_phase", "x and y centroids, noise pixels, background and aperture flux "
             "(normalised to the mean of all epochs) against orbital phase, binned 63 frames.",
             F.photometry_vs_phase(photometry))
