@@ -17,7 +17,9 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+import dask
 import pytest
+from distributed import Client
 
 from eclipsebench.cli import main
 
@@ -36,6 +38,7 @@ distributed:
   nanny:
     pre-spawn-environ:
       MALLOC_TRIM_THRESHOLD_: null
+      NUMBA_NUM_THREADS: 1
   worker:
     profile:
       enabled: false
@@ -85,7 +88,7 @@ def dask_cluster(folder: Path, n_workers: int = 2):
     config_dir = folder / "dask-config"
     config_dir.mkdir()
     (config_dir / "eclipsebench.yaml").write_text(WORKER_CONFIG)
-    env = {**os.environ, "DASK_CONFIG": str(config_dir), "NUMBA_NUM_THREADS": "1"}
+    env = {**os.environ, "DASK_CONFIG": str(config_dir)}
     scheduler_file = folder / "scheduler.json"
     procs: list[subprocess.Popen] = []
     logs: list[Path] = []
@@ -120,8 +123,6 @@ def dask_cluster(folder: Path, n_workers: int = 2):
                                  "--host", "127.0.0.1", "--nthreads", "1", "--nworkers", "1",
                                  "--no-dashboard", "--name", f"w{i}",
                                  "--local-directory", str(folder / f"worker{i}")])
-        from distributed import Client  # heavy; only this test needs it here
-
         with Client(address, timeout="20s") as client:
             client.wait_for_workers(n_workers, timeout=STARTUP_S)
             assert len(client.scheduler_info(n_workers=-1)["workers"]) == n_workers
@@ -144,6 +145,11 @@ def test_scheduler_gives_the_same_summary_bytes_as_one_process(tmp_path, capsys)
     assert _run(tmp_path / "one", "--workers", "1") == 0
     with dask_cluster(tmp_path) as (address, procs):
         assert address.startswith("tcp://127.0.0.1:")
+        with Client(address, timeout="20s") as client:  # the documented worker configuration
+            assert set(client.run(os.getenv, "MALLOC_TRIM_THRESHOLD_").values()) == {None}
+            assert set(client.run(os.getenv, "NUMBA_NUM_THREADS").values()) == {"1"}
+            assert set(client.run(dask.config.get, "distributed.worker.profile.enabled")
+                       .values()) == {False}
         assert _run(tmp_path / "cluster", "--scheduler", address) == 0
         timings = (tmp_path / "cluster" / "timings.ecsv").read_text()
         assert f"dask scheduler {address}" in timings
