@@ -139,13 +139,17 @@ def measure(input_dir: str | os.PathLike, out: str | os.PathLike | None = None, 
 def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
            seed: int = 0, options: Mapping[str, Any] | MethodOptions | None = None,
            config: Config | str | os.PathLike | None = None, epoch: int | None = None,
-           resources: Mapping[str, Any] | None = None, **reduce_options: Any) -> EpochResult:
+           resources: Mapping[str, Any] | None = None,
+           columns: Mapping[str, str] | None = None, time_column: str | None = None,
+           time_format: str | None = None, **reduce_options: Any) -> EpochResult:
     """Fit one epoch with one method and the shared eclipse + phase-curve model.
 
     Parameters
     ----------
     table : astropy.table.Table or path
-        One epoch's photometry table (from :func:`measure` or a file).
+        One epoch's photometry table (from :func:`measure`, or a FITS, ECSV or
+        CSV file, also from another pipeline: ``docs/photometry.md``, "Photometry
+        from other pipelines").
     method : str
         A name from :func:`methods`.
     system : str or PlanetSystem, optional
@@ -161,6 +165,13 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     resources : mapping, optional
         What a method needs besides the table, e.g. ``{"pmap": path}`` for
         ``kr-pmap`` (simulated tables find their calibration set themselves).
+    columns : mapping, optional
+        The package's column name -> the table's, e.g. ``{"flux": "FLUX"}``.
+    time_column : str, optional
+        The table's time column (default ``time_bmjd``).
+    time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
+        Its format (default ``"bmjd"``); all are read as BJD_TDB (no time-scale
+        or barycentric conversion is made).
     **reduce_options
         ``[reduce]`` values to change, e.g. ``phase="linear"``, ``sampler="mcmc"``.
 
@@ -178,7 +189,8 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     if system is None:
         system = cfg.system.name
     return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
-                        method_options=options, resources=resources)
+                        method_options=options, resources=resources, columns=columns,
+                        time_column=time_column, time_format=time_format)
 
 
 def simulate(out: str | os.PathLike, *, config: Config | str | os.PathLike | None = None,

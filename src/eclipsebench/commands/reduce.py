@@ -12,6 +12,7 @@ from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
 from ..fit.astro_model import ECLIPSE_SHAPES, PHASE_MODELS, RAMP_MODELS
+from ..fit.data import TIME_FORMATS
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
 from .options import check_output_path, positive_float, positive_int
@@ -22,7 +23,9 @@ HELP = ("Fit one epoch's photometry table with one decorrelation method and the 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("table", metavar="TABLE", help="photometry table of one epoch (FITS or ECSV)")
+    p.add_argument("table", metavar="TABLE",
+                   help="photometry table of one epoch (FITS, ECSV or CSV; another pipeline's "
+                        "table needs time_bmjd, flux, flux_err, x, y: docs/photometry.md)")
     p.add_argument("--method", required=True, metavar="NAME",
                    help="decorrelation method: bliss, gp, ica, kr-data, kr-pmap, pld, segpoly")
     p.add_argument("--phase", choices=PHASE_MODELS, default=None,
@@ -41,6 +44,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="MCMC step cap (default 2000)")
     p.add_argument("--radius", type=positive_float(), default=None, metavar="PX",
                    help="aperture radius whose flux column is fitted (default: the table's flux)")
+    p.add_argument("--columns", dest="columns", action="append", default=[],
+                   metavar="NEW=OLD,...",
+                   help="map the table's column names to the package's, e.g. "
+                        "--columns flux=FLUX,flux_err=FLUX_ERR (repeatable)")
+    p.add_argument("--time-column", metavar="NAME", default=None,
+                   help="the table's time column (default: time_bmjd)")
+    p.add_argument("--time-format", choices=tuple(TIME_FORMATS), default=None,
+                   help="format of the time column, read as BJD_TDB without conversion of "
+                        "time scale (default: bmjd = BJD_TDB - 2400000.5)")
     p.add_argument("--pmap", metavar="PATH", default=None,
                    help="calibration set for kr-pmap (a calibration-star table or the SSC pmap); "
                         "simulated tables find theirs through SIMDIR")
@@ -75,6 +87,26 @@ def _method_options(items: list[str]) -> dict:
             raise InputError(f"--option {item!r}: expected KEY=VALUE")
         out[path[0]] = value
     return out
+
+
+def _column_map(items: list[str]) -> dict[str, str]:
+    """``--columns NEW=OLD,...`` (repeatable) as ``{NEW: OLD}``."""
+    out: dict[str, str] = {}
+    for item in items:
+        for pair in item.split(","):
+            new, sep, old = (part.strip() for part in pair.partition("="))
+            if not sep or not new or not old:
+                raise InputError(f"--columns {pair.strip()!r}: expected NEW=OLD (the package's "
+                                 "name = the table's)")
+            if out.get(new, old) != old:
+                raise InputError(f"--columns: {new} is mapped twice ({out[new]}, {old})")
+            out[new] = old
+    return out
+
+
+#: How errors about the table's names and time format name the options.
+_TABLE_LABELS = {"columns": "--columns", "time_column": "--time-column",
+                 "time_format": "--time-format"}
 
 
 def _options(args: argparse.Namespace):
@@ -117,7 +149,9 @@ def lightcurve_path(result_path: str | Path) -> Path:
 def run(args: argparse.Namespace) -> dict:
     # The fitter pulls in every method (numba, scikit-learn): imported when the command
     # runs, not for `eclipsebench --help`.
+    from ..fit.data import standardise_table
     from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
+    from ..photometry.table import read_table
 
     table_path = Path(args.table)
     if not table_path.is_file():
@@ -132,7 +166,12 @@ def run(args: argparse.Namespace) -> dict:
     options, system = _options(args)
     check_method_options(options)
     method_options = _method_options(args.method_options)
-    result = reduce_epoch(str(table_path), args.method, options=options, system=system,
+    table = read_table(table_path)
+    table.meta.setdefault("FILENAME", str(table_path))
+    table = standardise_table(table, columns=_column_map(args.columns),
+                              time_column=args.time_column, time_format=args.time_format,
+                              labels=_TABLE_LABELS)
+    result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
                           method_options=method_options)
     error = result.depth_err_ppm
@@ -142,7 +181,7 @@ def run(args: argparse.Namespace) -> dict:
                          "is not a result (constant flux or a degenerate fit); nothing written")
     summary = result.to_dict()
     if args.compare_phases:
-        sel = select_phase_model(str(table_path), args.method, options=options, system=system,
+        sel = select_phase_model(table, args.method, options=options, system=system,
                                  seed=args.seed, epoch=args.epoch, pmap=args.pmap,
                                  method_options=method_options)
         summary["phase_models"] = sel.to_dict()

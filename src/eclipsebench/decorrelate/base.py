@@ -77,7 +77,12 @@ class EpochData:
     aorkey : ndarray, shape (n,)
         AOR of each frame.
     meta : dict
-        Provenance (input files, simulation folder, options).
+        Provenance (input files, simulation folder, options); ``meta["table_columns"]``
+        may name the photometry-table column behind an attribute (``{"pixels":
+        "stamp3 (or p0..p8)"}``), for messages (:meth:`table_column`).
+    width_x, width_y : ndarray, shape (n,) or None
+        PSF widths (px) when the table has them (SPCA's PSF-width term). Not
+        checked for finite values here: a method that uses them checks them.
     """
 
     time_bmjd: np.ndarray
@@ -89,10 +94,13 @@ class EpochData:
     pixels: np.ndarray | None = None
     aorkey: np.ndarray | None = None
     meta: Mapping[str, Any] = field(default_factory=dict)
+    width_x: np.ndarray | None = None
+    width_y: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.time_bmjd)
-        for name in ("flux", "flux_err", "x", "y", "noise_pixels", "aorkey"):
+        for name in ("flux", "flux_err", "x", "y", "noise_pixels", "aorkey", "width_x",
+                     "width_y"):
             arr = getattr(self, name)
             if arr is not None and len(arr) != n:
                 raise InputError(f"column '{name}': expected {n} values, got {len(arr)}")
@@ -111,7 +119,21 @@ class EpochData:
         return EpochData(time_bmjd=take(self.time_bmjd), flux=take(self.flux),
                          flux_err=take(self.flux_err), x=take(self.x), y=take(self.y),
                          noise_pixels=take(self.noise_pixels), pixels=take(self.pixels),
-                         aorkey=take(self.aorkey), meta=dict(self.meta))
+                         aorkey=take(self.aorkey), meta=dict(self.meta),
+                         width_x=take(self.width_x), width_y=take(self.width_y))
+
+    def table_column(self, name: str) -> str:
+        """The photometry-table column behind the attribute ``name``, for messages.
+
+        Examples
+        --------
+        >>> d = EpochData(time_bmjd=np.zeros(1), flux=np.ones(1), flux_err=np.ones(1),
+        ...               x=np.zeros(1), y=np.zeros(1))
+        >>> d.table_column("pixels"), d.table_column("noise_pixels")
+        ('stamp3 (or p0..p8)', 'noise_pixels')
+        """
+        labels = {"pixels": "stamp3 (or p0..p8)", **dict(self.meta.get("table_columns") or {})}
+        return str(labels.get(name, name))
 
 
 @dataclass(frozen=True)
@@ -318,7 +340,7 @@ class Systematics(ABC):
             base = parse_method_options(type(self), options).to_dict()
             options = {**base, **kwargs}
         self.options = parse_method_options(type(self), options)
-        missing = [c for c in self.requires if getattr(data, c, None) is None]
+        missing = [data.table_column(c) for c in self.requires if getattr(data, c, None) is None]
         if missing:
             raise InputError(f"method '{self.name}' needs the column(s) {', '.join(missing)} "
                              "in the photometry table")

@@ -4,21 +4,44 @@ Only good frames are kept (``flag == 0`` and finite time, flux, error and
 centroid); frames are put in time order. The aperture is the table's default
 ``flux``/``flux_err`` pair (r = 2.25 px) unless ``radius_px`` picks one of the
 ``flux_r<R>`` columns (``flux_r2p50`` for 2.5 px).
+
+Photometry from other pipelines (``docs/photometry.md``) needs only
+``time_bmjd, flux, flux_err, x, y``; :func:`standardise_table` maps another
+table's column names (``columns``), its time column and time format, and its
+pixel columns ``p0..p8`` (or ``p0..p24``) to the names used here.
 """
 
 from __future__ import annotations
 
+import re
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+from astropy.table import Table
+from astropy.time import Time
 
 from ..decorrelate.base import EpochData
 from ..errors import InputError
+from ..photometry.table import COLUMN_UNITS
+from ..photometry.table import REQUIRED_COLUMNS as CONTRACT_COLUMNS
 
-__all__ = ["epoch_data_from_table", "aperture_column", "REQUIRED_COLUMNS"]
+__all__ = ["epoch_data_from_table", "aperture_column", "standardise_table", "median_cadence_s",
+           "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "TIME_FORMATS"]
 
 #: Columns every method needs.
-REQUIRED_COLUMNS = ("time_bmjd", "flux", "flux_err", "x", "y", "flag")
+REQUIRED_COLUMNS = ("time_bmjd", "flux", "flux_err", "x", "y")
+#: Columns some methods or rules use; a table may lack them (``flag`` absent: every frame good).
+OPTIONAL_COLUMNS = ("noise_pixels", "flag", "aorkey", "background", "width_x", "width_y",
+                    "stamp3", "stamp5")
+#: ``time_format`` -> the offset (days) subtracted to give BMJD. Every format is read as
+#: a BJD_TDB-based count: no time-scale or barycentric conversion is made.
+TIME_FORMATS = {"bmjd": 0.0, "mjd": 0.0, "bjd": 2400000.5, "jd": 2400000.5}
+#: Values below this are modified (MJD-like) dates, above it full Julian dates.
+_JD_THRESHOLD_D = 1.0e6
+_PIXEL_COLUMN = re.compile(r"^p(\d+)$")
+_APERTURE_COLUMN = re.compile(r"^flux(_err)?_r\d+p\d\d$")
+_ARGUMENTS = {"columns": "columns", "time_column": "time_column", "time_format": "time_format"}
 
 
 def aperture_column(radius_px: float) -> str:
@@ -32,6 +55,196 @@ def aperture_column(radius_px: float) -> str:
     'flux_r3p00'
     """
     return "flux_r" + f"{float(radius_px):.2f}".replace(".", "p")
+
+
+def median_cadence_s(time_bmjd: np.ndarray) -> float:
+    """The median time step between consecutive rows in time order (s), to the microsecond.
+
+    Non-finite times are ignored; NaN below two rows. A table of 2 s frames
+    gives 2; one row per 64-frame cube of 2 s frames about 128 plus the gap
+    between cubes.
+
+    Examples
+    --------
+    >>> median_cadence_s(57000.0 + np.arange(5) * 128.0 / 86400.0)
+    128.0
+    """
+    t = np.asarray(getattr(time_bmjd, "value", time_bmjd), dtype=float)
+    t = np.sort(t[np.isfinite(t)])
+    if len(t) < 2:
+        return float("nan")
+    return float(np.round(np.median(np.diff(t)) * 86400.0, 6))
+
+
+def _known_name(name: str) -> bool:
+    return (name in REQUIRED_COLUMNS or name in OPTIONAL_COLUMNS or name in CONTRACT_COLUMNS
+            or name in COLUMN_UNITS or bool(_PIXEL_COLUMN.match(name))
+            or bool(_APERTURE_COLUMN.match(name)))
+
+
+def _names_list(table) -> str:
+    names = list(table.colnames)
+    return ", ".join(names[:25]) + (f", ... ({len(names)} columns)" if len(names) > 25 else "")
+
+
+def _time_values(col, label: str, fmt: str, fmt_label: str) -> np.ndarray:
+    """BMJD (days) from a time column in ``fmt``; an astropy Time must be in TDB."""
+    if isinstance(col, Time):
+        if col.scale != "tdb":
+            raise InputError(f"{label}: a Time column in scale {col.scale!r}; give BJD_TDB "
+                             "(no time-scale or barycentric conversion is made here)")
+        return np.asarray(col.mjd, dtype=float)
+    try:
+        values = np.asarray(getattr(col, "value", col), dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: not numeric") from None
+    finite = values[np.isfinite(values)]
+    if finite.size:
+        typical = float(np.median(finite))
+        is_jd = typical > _JD_THRESHOLD_D
+        if is_jd and fmt in ("bmjd", "mjd"):
+            raise InputError(f"{fmt_label} {fmt!r}: the times ({typical:.5f}) look like full "
+                             "Julian dates; use 'bjd' (or 'jd')")
+        if not is_jd and fmt in ("bjd", "jd"):
+            raise InputError(f"{fmt_label} {fmt!r}: the times ({typical:.5f}) are not full "
+                             "Julian dates; use 'bmjd' (or 'mjd')")
+    return values - TIME_FORMATS[fmt]
+
+
+def _stamp_from_pixel_columns(table, labels: Mapping[str, str]) -> dict[str, np.ndarray]:
+    """``stamp3`` (and ``stamp5``) from flat pixel columns ``p0..p8`` (or ``p0..p24``).
+
+    Row-major: ``p<3 * row + col>`` with the row along y. A 5 x 5 stamp also
+    gives its central 3 x 3 as ``stamp3`` (the package's stamps are co-centred).
+    """
+    found = {int(m.group(1)): name for name in table.colnames
+             if (m := _PIXEL_COLUMN.match(name))}
+    if not found:
+        return {}
+    out = {}
+    for size in (5, 3):
+        if set(found) == set(range(size * size)):
+            cube = np.column_stack([np.asarray(getattr(table[found[k]], "value", table[found[k]]),
+                                               dtype=float) for k in range(size * size)])
+            out[f"stamp{size}"] = cube.reshape(len(table), size, size)
+            if size == 5:
+                out["stamp3"] = out["stamp5"][:, 1:4, 1:4].copy()
+            return out
+    raise InputError(f"{labels['columns']}: pixel columns must be p0..p8 (3 x 3) or p0..p24 "
+                     f"(5 x 5); the table has {', '.join(found[k] for k in sorted(found))}")
+
+
+def _checked_stamp(col, name: str, size: int, n: int) -> np.ndarray:
+    cube = np.asarray(getattr(col, "value", col), dtype=float)
+    if cube.size != n * size * size:
+        raise InputError(f"column '{name}': expected {size} x {size} pixels per row, got "
+                         f"shape {cube.shape}")
+    return cube.reshape(n, size, size)
+
+
+def standardise_table(table, *, columns: Mapping[str, str] | None = None,
+                      time_column: str | None = None, time_format: str | None = None,
+                      labels: Mapping[str, str] | None = None) -> Table:
+    """A table with the package's column names, time in BMJD_TDB and stamps as cubes.
+
+    Parameters
+    ----------
+    table : astropy.table.Table
+        Any photometry table: this package's, or another pipeline's.
+    columns : Mapping, optional
+        The package's column name -> the table's (``{"flux": "FLUX"}``). Names
+        are those of ``docs/photometry.md``; an unknown name is refused.
+    time_column : str, optional
+        The table's time column (default ``time_bmjd``, or ``columns["time_bmjd"]``).
+    time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
+        The time column's format (default ``"bmjd"``). All four are taken as
+        counts of BJD_TDB: "jd"/"bjd" have 2400000.5 subtracted, "mjd"/"bmjd"
+        are used as they are; no time-scale or light-travel-time conversion is
+        made. Times whose size does not fit the format (a JD given as "bmjd")
+        are refused.
+    labels : Mapping, optional
+        How errors name ``columns``, ``time_column`` and ``time_format`` (the
+        command line passes ``--columns`` ...).
+
+    Returns
+    -------
+    astropy.table.Table
+        A new table (the input is not changed); the default arguments on a
+        table of this package give the same columns.
+
+    Raises
+    ------
+    InputError
+        An unknown name, a column the table lacks, a time format that does
+        not fit the times, an incomplete set of pixel columns.
+
+    Examples
+    --------
+    >>> t = Table({"BJD": [2457000.5, 2457000.6], "F": [1.0, 1.1]})
+    >>> s = standardise_table(t, columns={"flux": "F"}, time_column="BJD", time_format="bjd")
+    >>> s["time_bmjd"].tolist(), s["flux"].tolist()
+    ([57000.0, 57000.1], [1.0, 1.1])
+    """
+    labels = {**_ARGUMENTS, **dict(labels or {})}
+    mapping = dict(columns or {})
+    for new, old in mapping.items():
+        if not isinstance(new, str) or not isinstance(old, str) or not new or not old:
+            raise InputError(f"{labels['columns']}: expected names NEW=OLD, got {new!r}={old!r}")
+        if not _known_name(new):
+            raise InputError(f"{labels['columns']}: unknown column name {new!r} (known: "
+                             f"{', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)}, flux_r<R>, "
+                             "p0..p24)")
+        if old not in table.colnames:
+            raise InputError(f"{labels['columns']}: {new}={old}: the table has no column "
+                             f"{old!r} (it has {_names_list(table)})")
+    if time_column is not None:
+        if not isinstance(time_column, str) or not time_column:
+            raise InputError(f"{labels['time_column']}: expected a column name")
+        if mapping.get("time_bmjd", time_column) != time_column:
+            raise InputError(f"{labels['time_column']} {time_column!r} and "
+                             f"{labels['columns']} time_bmjd={mapping['time_bmjd']} disagree")
+        if time_column not in table.colnames:
+            raise InputError(f"{labels['time_column']}: the table has no column "
+                             f"{time_column!r} (it has {_names_list(table)})")
+        mapping["time_bmjd"] = time_column
+    fmt = "bmjd" if time_format is None else time_format
+    if fmt not in TIME_FORMATS:
+        raise InputError(f"{labels['time_format']}: {fmt!r} is not one of "
+                         f"{', '.join(TIME_FORMATS)}")
+
+    out = table.copy(copy_data=False)
+    out.meta = dict(table.meta or {})
+    for new, old in mapping.items():
+        if new != old:
+            col = table[old].copy()
+            if new in out.colnames:
+                out.replace_column(new, col)
+            else:
+                out[new] = col
+    n = len(out)
+    if "time_bmjd" in out.colnames:
+        source = mapping.get("time_bmjd", "time_bmjd")
+        col = out["time_bmjd"]
+        values = _time_values(col, f"time column {source!r}", fmt, labels["time_format"])
+        needs = isinstance(col, Time) or fmt != "bmjd" or col.dtype.kind != "f"
+        if needs:
+            out.replace_column("time_bmjd", values)
+        if needs or source != "time_bmjd":
+            out.meta["TIMESRC"] = f"{source} ({fmt}, BJD_TDB assumed)"
+    elif time_format is not None:
+        raise InputError(f"{labels['time_format']}: the table has no time column "
+                         f"'time_bmjd' (give {labels['time_column']})")
+    for name, size in (("stamp3", 3), ("stamp5", 5)):
+        if name in out.colnames:
+            out.replace_column(name, _checked_stamp(out[name], name, size, n))
+    if "stamp3" not in out.colnames:
+        stamps = _stamp_from_pixel_columns(out, labels)
+        if "stamp5" in out.colnames and not stamps:
+            stamps = {"stamp3": np.asarray(out["stamp5"])[:, 1:4, 1:4].copy()}
+        for name, cube in stamps.items():
+            if name not in out.colnames:
+                out[name] = cube
+    return out
 
 
 def _column(table, name: str) -> np.ndarray:
@@ -51,8 +264,10 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
     Parameters
     ----------
     table : astropy.table.Table
-        One epoch (columns of ``docs/contracts.md``: ``time_bmjd, aorkey, x, y,
-        noise_pixels, flux, flux_err, flag, stamp3, stamp5, ...``).
+        One epoch with the package's column names (:func:`standardise_table`):
+        ``time_bmjd, flux, flux_err, x, y`` and, optionally, ``flag`` (absent:
+        every frame is good), ``noise_pixels``, ``aorkey``, ``width_x``,
+        ``width_y``, ``stamp3``, ``stamp5``, ``flux_r<R>``.
     radius_px : float or None
         Aperture radius; None uses the table's default ``flux``/``flux_err``.
         Another radius uses ``flux_r<R>``; its error is ``flux_err_r<R>`` when
@@ -67,7 +282,11 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
     -------
     EpochData
         Time-ordered good frames; ``meta`` holds the table metadata plus
-        ``n_frames_table``, ``n_frames_flagged`` and ``n_frames_nonfinite``.
+        ``n_frames_table``, ``n_frames_flagged``, ``n_frames_nonfinite``,
+        ``cadence_s`` (median time step of the kept rows) and
+        ``table_columns`` (the table column behind each array, for messages).
+        ``width_x``/``width_y`` are not part of the finite-value cut: a method
+        that uses them checks them.
 
     Raises
     ------
@@ -92,7 +311,7 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
         raise InputError(f"stamp {stamp!r}: expected 'stamp3', 'stamp5' or 'none'")
 
     n_table = len(table)
-    flag = _column(table, "flag")
+    flag = _column(table, "flag") if "flag" in names else np.zeros(n_table, dtype=np.int32)
     good = flag == 0
     n_flagged = int(np.count_nonzero(~good))
     if not np.any(good):
@@ -133,13 +352,20 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
 
     noise_pixels = _column(table, "noise_pixels").astype(float) if "noise_pixels" in names else None
     aorkey = _column(table, "aorkey") if "aorkey" in names else None
+    width_x = _column(table, "width_x").astype(float) if "width_x" in names else None
+    width_y = _column(table, "width_y").astype(float) if "width_y" in names else None
 
     meta: dict[str, Any] = {str(k): v for k, v in (getattr(table, "meta", {}) or {}).items()}
+    pixel_source = (f"{stamp} (or {'p0..p8' if stamp == 'stamp3' else 'p0..p24'})"
+                    if stamp != "none" else "stamp3 or stamp5 ([reduce] stamp is 'none')")
     meta.update(n_frames_table=n_table, n_frames_flagged=n_flagged,
-                n_frames_nonfinite=n_nonfinite, flux_column=flux_name)
+                n_frames_nonfinite=n_nonfinite, flux_column=flux_name,
+                cadence_s=median_cadence_s(time[index]),
+                table_columns={"pixels": pixel_source, "flux": flux_name})
     return EpochData(time_bmjd=pick(time), flux=pick(flux), flux_err=pick(flux_err),
                      x=pick(x), y=pick(y), noise_pixels=pick(noise_pixels), pixels=pick(pixels),
-                     aorkey=pick(aorkey), meta=meta)
+                     aorkey=pick(aorkey), meta=meta, width_x=pick(width_x),
+                     width_y=pick(width_y))
 
 
 def _scatter_ratio(flux_other: np.ndarray, flux_default: np.ndarray) -> float:

@@ -30,10 +30,10 @@ from ..config.system import SystemSection
 from ..decorrelate import available_methods, get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
 from ..errors import ConfigError, InputError
-from ..photometry.table import read_photometry
+from ..photometry.table import read_table
 from ..seeding import rng
 from .astro_model import PHASE_MODELS, AstroModel
-from .data import epoch_data_from_table
+from .data import epoch_data_from_table, median_cadence_s, standardise_table
 from .frames import settling_aor
 from .leastsq import (
     FitResult,
@@ -56,18 +56,24 @@ _DEFAULT_OPTIONS = ReduceSection()
 
 
 # --------------------------------------------------------------------------- inputs
-def _as_table(table):
-    """An astropy Table from a Table or a path (read with the photometry reader)."""
+def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: str | None = None,
+              time_format: str | None = None):
+    """An astropy Table with the package's column names from a Table or a path.
+
+    A path is read as FITS, ECSV or CSV (:func:`read_table`); ``columns``,
+    ``time_column`` and ``time_format`` map another pipeline's names and time
+    format (:func:`~eclipsebench.fit.data.standardise_table`).
+    """
     if isinstance(table, (str, os.PathLike)):
         path = os.fspath(table)
         if not os.path.exists(path):
             raise InputError(f"{path}: no such photometry table")
-        t = read_photometry(path)
-        t.meta.setdefault("FILENAME", path)
-        return t
-    if not isinstance(table, Table):
+        table = read_table(path)
+        table.meta.setdefault("FILENAME", path)
+    elif not isinstance(table, Table):
         raise InputError("table: expected an astropy Table or the path of a photometry table")
-    return table
+    return standardise_table(table, columns=columns, time_column=time_column,
+                             time_format=time_format)
 
 
 def resolve_system(system: Any):
@@ -176,7 +182,9 @@ def check_method_options(options: ReduceSection) -> None:
 
 def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
                   epoch=None, seed: int = 0, method_options=None,
-                  resources: Mapping[str, Any] | None = None) -> PreparedEpoch:
+                  resources: Mapping[str, Any] | None = None,
+                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
+                  time_format: str | None = None) -> PreparedEpoch:
     """Read the table, keep the good frames, build the method and predict the eclipse time.
 
     The method gets its options (:func:`resolve_method_options`) and a
@@ -184,7 +192,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     the epoch and the resources it declares, loaded by its ``load_resources``
     from ``resources`` (paths or loaded objects).
     """
-    table = _as_table(table)
+    table = _as_table(table, columns=columns, time_column=time_column, time_format=time_format)
     source = str((table.meta or {}).get("FILENAME", "the photometry table"))
     cls = get_method(method)
     method_opts = resolve_method_options(method, options, method_options)
@@ -236,6 +244,7 @@ class EpochResult:
     chi2_red: float
     rms_ppm: float
     beta_red: float
+    cadence_s: float
     n_frames: int
     n_frames_dropped: dict[str, int]
     n_points: int
@@ -269,7 +278,7 @@ class EpochResult:
             "t_ecl_predicted_bmjd": self.t_ecl_predicted_bmjd,
             "bic": self.bic, "aic": self.aic, "k": self.k,
             "log_likelihood": self.log_likelihood, "chi2_red": self.chi2_red,
-            "rms_ppm": self.rms_ppm, "beta_red": self.beta_red,
+            "rms_ppm": self.rms_ppm, "beta_red": self.beta_red, "cadence_s": self.cadence_s,
             "n_frames": self.n_frames, "n_frames_dropped": dict(self.n_frames_dropped),
             "n_points": self.n_points,
             "phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
@@ -334,7 +343,9 @@ def _extra_depth_variance(systematics: Systematics, astro: np.ndarray,
 
 def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
                  seed: int = 0, epoch: int | None = None, method_options=None,
-                 resources: Mapping[str, Any] | None = None, pmap=None) -> EpochResult:
+                 resources: Mapping[str, Any] | None = None, pmap=None,
+                 columns: Mapping[str, str] | None = None, time_column: str | None = None,
+                 time_format: str | None = None) -> EpochResult:
     """Fit one epoch with one method and estimate the depth and its uncertainty.
 
     Parameters
@@ -360,6 +371,14 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         loaded map}`` for ``kr-pmap``), loaded by the method's ``load_resources``.
     pmap : path, CalibrationSet or GriddedPmap, optional
         Shorthand for ``resources={"pmap": pmap}``.
+    columns : Mapping, optional
+        The package's column name -> the table's, for photometry from another
+        pipeline (``{"flux": "FLUX", "noise_pixels": "NPIX"}``; docs/photometry.md).
+    time_column : str, optional
+        The table's time column (default ``time_bmjd``).
+    time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
+        Its format (default ``"bmjd"``); every format is taken as BJD_TDB-based
+        (no time-scale or barycentric conversion is made).
 
     Returns
     -------
@@ -372,7 +391,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         an unknown method or option.
     """
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
-                         method_options=method_options, resources=_resources(resources, pmap))
+                         method_options=method_options, resources=_resources(resources, pmap),
+                         columns=columns, time_column=time_column, time_format=time_format)
     return fit_prepared(prep, method, options=options, seed=seed)
 
 
@@ -458,6 +478,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         t_ecl_predicted_bmjd=prep.t_ecl_predicted_bmjd,
         bic=fit.bic, aic=fit.aic, k=fit.k, log_likelihood=fit.log_likelihood,
         chi2_red=fit.chi2_red, rms_ppm=fit.rms_ppm, beta_red=fit.beta_red,
+        cadence_s=median_cadence_s(prep.table["time_bmjd"]),
         n_frames=prep.n_frames, n_frames_dropped=dict(prep.n_frames_dropped),
         n_points=len(systematics.data.time_bmjd),
         phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
@@ -507,7 +528,9 @@ class PhaseSelection:
 def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS,
                        system=None, seed: int = 0, epoch: int | None = None, method_options=None,
                        resources: Mapping[str, Any] | None = None, pmap=None,
-                       phases: tuple[str, ...] = PHASE_MODELS) -> PhaseSelection:
+                       phases: tuple[str, ...] = PHASE_MODELS,
+                       columns: Mapping[str, str] | None = None, time_column: str | None = None,
+                       time_format: str | None = None) -> PhaseSelection:
     """Fit each phase model by least squares and report BIC and AIC for each.
 
     The method is built once and reused; each model's depth error is the
@@ -515,7 +538,8 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
     the comparison fast).
     """
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
-                         method_options=method_options, resources=_resources(resources, pmap))
+                         method_options=method_options, resources=_resources(resources, pmap),
+                         columns=columns, time_column=time_column, time_format=time_format)
     rows = []
     for phase in phases:
         res = fit_prepared(prep, method, options=options, seed=seed, phase=phase, errors=False)
@@ -607,7 +631,9 @@ class _JointProblem:
 
 def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
                  seed: int = 0, epochs=None, method_options=None,
-                 resources: Mapping[str, Any] | None = None, pmap=None) -> JointResult:
+                 resources: Mapping[str, Any] | None = None, pmap=None,
+                 columns: Mapping[str, str] | None = None, time_column: str | None = None,
+                 time_format: str | None = None) -> JointResult:
     """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
 
     Each epoch is first fitted alone (its solution starts the joint fit), then
@@ -625,7 +651,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     for table, ep in zip(tables, epochs, strict=True):
         prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, seed=seed,
                              method_options=method_options,
-                             resources=_resources(resources, pmap))
+                             resources=_resources(resources, pmap), columns=columns,
+                             time_column=time_column, time_format=time_format)
         astro_model = prep.astro_model(options)
         theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
         fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,

@@ -10,6 +10,10 @@ FITS header values must be printable ASCII, but provenance paths (``INROOT``,
 printable ASCII is stored JSON-escaped (``"/data/\u00fc"``, quotes included)
 and its key listed in the JSON list ``ESCAPED``; :func:`read_photometry`
 decodes it back.
+
+:func:`read_table` reads any table the reducer accepts: this package's FITS
+tables, and FITS, ECSV or CSV tables from other pipelines (no column is
+required at read time; ``docs/photometry.md``, "Photometry from other pipelines").
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ from ..errors import DataError
 from ..io.atomic import atomic_path
 
 __all__ = ["REQUIRED_COLUMNS", "COLUMN_UNITS", "JSON_KEYS", "make_table", "write_photometry",
-           "read_photometry"]
+           "read_photometry", "read_table", "table_format"]
 
 REQUIRED_COLUMNS = ("time_bmjd", "aorkey", "expid", "frame", "x", "y", "x_gauss", "y_gauss",
                     "noise_pixels", "width_x", "width_y", "background", "flux", "flux_err",
@@ -152,9 +156,89 @@ def read_photometry(path: str | os.PathLike) -> Table:
     path = Path(path)
     if not path.is_file():
         raise DataError(path, "no such photometry table")
+    table = _read_fits(path)
+    missing = [c for c in REQUIRED_COLUMNS if c not in table.colnames]
+    if missing:
+        raise DataError(path, f"photometry table lacks columns {missing}")
+    return table
+
+
+_FITS_SUFFIXES = (".fits", ".fit", ".fts", ".fits.gz", ".fit.gz", ".fts.gz")
+
+
+def table_format(path: str | os.PathLike) -> str:
+    """``"fits"``, ``"ecsv"`` or ``"csv"``: how :func:`read_table` reads ``path``.
+
+    FITS by its first card (``SIMPLE``) or a FITS suffix (also gzipped); ECSV
+    by its ``# %ECSV`` first line; anything else is read as CSV.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> with open(os.path.join(d, "a.txt"), "w") as f:
+    ...     _ = f.write("time_bmjd,flux\n57000.0,1.0\n")
+    >>> table_format(os.path.join(d, "a.txt"))
+    'csv'
+    """
+    path = Path(path)
+    with open(path, "rb") as fh:
+        head = fh.read(16)
+    if head.startswith(b"SIMPLE") or path.name.lower().endswith(_FITS_SUFFIXES):
+        return "fits"
+    if head.lstrip().startswith(b"# %ECSV") or path.suffix.lower() == ".ecsv":
+        return "ecsv"
+    return "csv"
+
+
+def read_table(path: str | os.PathLike) -> Table:
+    """Read a photometry table in FITS, ECSV or CSV, requiring no particular column.
+
+    The reducer reads its input with this: a table written by
+    :func:`write_photometry` comes back as :func:`read_photometry` gives it; a
+    table from another pipeline keeps its own column names (the reducer maps
+    them, :func:`eclipsebench.fit.data.standardise_table`). A FITS table is
+    the ``PHOTOMETRY`` extension, else the first extension.
+
+    Raises
+    ------
+    DataError
+        Naming the file if it does not exist, cannot be read, or has no rows.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> path = os.path.join(tempfile.mkdtemp(), "lc.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("time_bmjd,flux,flux_err,x,y\n57000.0,1.0,0.01,15.0,15.1\n")
+    >>> read_table(path).colnames
+    ['time_bmjd', 'flux', 'flux_err', 'x', 'y']
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(path, "no such photometry table")
+    kind = table_format(path)
+    if kind == "fits":
+        table = _read_fits(path)
+    else:
+        try:
+            table = Table.read(path, format=f"ascii.{kind}")
+        except Exception as exc:
+            raise DataError(path, f"not a readable {kind.upper()} photometry table "
+                            f"({type(exc).__name__}: {exc})") from None
+        table.meta = {str(k): v for k, v in table.meta.items() if k != "comments"}
+    if len(table) == 0:
+        raise DataError(path, "the photometry table has no rows")
+    return table
+
+
+def _read_fits(path: Path) -> Table:
+    """The FITS table of ``path`` with units and decoded metadata (no column checks)."""
     try:
         with fits.open(path, memmap=False) as hdul:
             hdu = hdul["PHOTOMETRY"] if "PHOTOMETRY" in hdul else hdul[1]
+            if not isinstance(hdu, (fits.BinTableHDU, fits.TableHDU)):
+                raise TypeError(f"extension {hdu.name or 1} is not a table")
             header = hdu.header
             units = {header[f"TTYPE{k}"]: header[f"TUNIT{k}"]
                      for k in range(1, int(header.get("TFIELDS", 0)) + 1)
@@ -162,18 +246,13 @@ def read_photometry(path: str | os.PathLike) -> Table:
             # a plain structured array: astropy would warn about the non-FITS unit 'electron'
             table = Table(np.array(hdu.data))
             for name, unit in units.items():
-                table[name].unit = u.Unit(unit, format="generic")
+                table[name].unit = u.Unit(unit, format="generic", parse_strict="silent")
             for key, value in header.items():
                 if not _STRUCTURAL.match(key):
                     table.meta[key] = value
-    except DataError:
-        raise
     except Exception as exc:
         raise DataError(path, f"not a readable photometry table ({type(exc).__name__}: {exc})") \
             from None
-    missing = [c for c in REQUIRED_COLUMNS if c not in table.colnames]
-    if missing:
-        raise DataError(path, f"photometry table lacks columns {missing}")
     escaped = table.meta.pop(ESCAPED_KEY, None)
     try:
         escaped = set(json.loads(escaped)) if isinstance(escaped, str) else set()
