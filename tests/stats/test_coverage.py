@@ -92,14 +92,16 @@ def test_an_epoch_exactly_at_one_sigma_counts_as_covered():
 
 def test_honest_gaussian_errors_cover_68_and_95_percent():
     # 20,000 epochs with known unit-normal residuals: the coverages are the Gaussian
-    # probabilities within their (narrow) intervals, and z_rms is 1
+    # probabilities within their (narrow, +-0.003) intervals, and the RMS of z is 1
     rng = np.random.default_rng(11)
     e = rng.uniform(50.0, 150.0, 20_000)
     d = TRUTH + e * rng.standard_normal(e.size)
-    s = method_statistics(d, e, truth_ppm=TRUTH, n_bootstrap=0)
-    assert s["coverage_lo"] - 0.01 < GAUSS_1SIGMA < s["coverage_hi"] + 0.01
-    assert s["coverage_2sigma_lo"] - 0.005 < GAUSS_2SIGMA < s["coverage_2sigma_hi"] + 0.005
-    assert s["z_rms"] == pytest.approx(1.0, abs=0.02)
+    f1, lo1, hi1 = coverage(d, e, TRUTH)
+    f2, lo2, hi2 = coverage(d, e, TRUTH, n_sigma=2.0)
+    assert lo1 - 0.01 < GAUSS_1SIGMA < hi1 + 0.01 and hi1 - lo1 < 0.01
+    assert lo2 - 0.005 < GAUSS_2SIGMA < hi2 + 0.005 and hi2 - lo2 < 0.005
+    z = normalised_residuals(d, e, TRUTH)
+    assert math.sqrt(np.mean(z**2)) == pytest.approx(1.0, abs=0.02)
 
 
 def test_without_truth_every_coverage_key_is_none():
