@@ -79,7 +79,7 @@ def test_pixel_methods_refuse_in_one_line(csv_path, capsys, tmp_path):
         with pytest.raises(InputError) as exc:
             reduce_epoch(str(csv_path), method, options=FAST, system="XO-3b")
         msg = str(exc.value)
-        assert msg == f"method '{method}' needs the column(s) stamp3 (or p0..p8) in the " \
+        assert msg == f"method '{method}' needs the column(s) stamp3 pixels (or p0..p8) in the " \
                       "photometry table"
     with pytest.raises(InputError, match="kr-pmap.*needs a pmap"):
         reduce_epoch(str(csv_path), "kr-pmap", options=FAST, system="XO-3b")
@@ -87,7 +87,7 @@ def test_pixel_methods_refuse_in_one_line(csv_path, capsys, tmp_path):
                  "--out", str(tmp_path / "r.json")])
     err = capsys.readouterr().err
     assert code == 2
-    assert err.count("\n") == 1 and "'pld'" in err and "stamp3 (or p0..p8)" in err
+    assert err.count("\n") == 1 and "'pld'" in err and "stamp3 pixels (or p0..p8)" in err
     assert not (tmp_path / "r.json").exists()
 
 

@@ -79,7 +79,7 @@ class EpochData:
     meta : dict
         Provenance (input files, simulation folder, options); ``meta["table_columns"]``
         may name the photometry-table column behind an attribute (``{"pixels":
-        "stamp3 (or p0..p8)"}``), for messages (:meth:`table_column`).
+        "stamp3 pixels (or p0..p8)"}``), for messages (:meth:`table_column`).
     width_x, width_y : ndarray, shape (n,) or None
         PSF widths (px) when the table has them (SPCA's PSF-width term). Not
         checked for finite values here: a method that uses them checks them.
@@ -130,9 +130,9 @@ class EpochData:
         >>> d = EpochData(time_bmjd=np.zeros(1), flux=np.ones(1), flux_err=np.ones(1),
         ...               x=np.zeros(1), y=np.zeros(1))
         >>> d.table_column("pixels"), d.table_column("noise_pixels")
-        ('stamp3 (or p0..p8)', 'noise_pixels')
+        ('stamp3 pixels (or p0..p8)', 'noise_pixels')
         """
-        labels = {"pixels": "stamp3 (or p0..p8)", **dict(self.meta.get("table_columns") or {})}
+        labels = {"pixels": "stamp3 pixels (or p0..p8)", **dict(self.meta.get("table_columns") or {})}
         return str(labels.get(name, name))
 
 

@@ -180,10 +180,10 @@ def standardise_table(table, *, columns: Mapping[str, str] | None = None,
 
     Examples
     --------
-    >>> t = Table({"BJD": [2457000.5, 2457000.6], "F": [1.0, 1.1]})
+    >>> t = Table({"BJD": [2457000.5, 2457000.75], "F": [1.0, 1.1]})
     >>> s = standardise_table(t, columns={"flux": "F"}, time_column="BJD", time_format="bjd")
     >>> s["time_bmjd"].tolist(), s["flux"].tolist()
-    ([57000.0, 57000.1], [1.0, 1.1])
+    ([57000.0, 57000.25], [1.0, 1.1])
     """
     labels = {**_ARGUMENTS, **dict(labels or {})}
     mapping = dict(columns or {})
@@ -356,8 +356,8 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
     width_y = _column(table, "width_y").astype(float) if "width_y" in names else None
 
     meta: dict[str, Any] = {str(k): v for k, v in (getattr(table, "meta", {}) or {}).items()}
-    pixel_source = (f"{stamp} (or {'p0..p8' if stamp == 'stamp3' else 'p0..p24'})"
-                    if stamp != "none" else "stamp3 or stamp5 ([reduce] stamp is 'none')")
+    pixel_source = (f"{stamp} pixels (or {'p0..p8' if stamp == 'stamp3' else 'p0..p24'})"
+                    if stamp != "none" else "stamp3 or stamp5 pixels ([reduce] stamp is 'none')")
     meta.update(n_frames_table=n_table, n_frames_flagged=n_flagged,
                 n_frames_nonfinite=n_nonfinite, flux_column=flux_name,
                 cadence_s=median_cadence_s(time[index]),

@@ -167,7 +167,7 @@ _FITS_SUFFIXES = (".fits", ".fit", ".fts", ".fits.gz", ".fit.gz", ".fts.gz")
 
 
 def table_format(path: str | os.PathLike) -> str:
-    """``"fits"``, ``"ecsv"`` or ``"csv"``: how :func:`read_table` reads ``path``.
+    r"""``"fits"``, ``"ecsv"`` or ``"csv"``: how :func:`read_table` reads ``path``.
 
     FITS by its first card (``SIMPLE``) or a FITS suffix (also gzipped); ECSV
     by its ``# %ECSV`` first line; anything else is read as CSV.
@@ -192,7 +192,7 @@ def table_format(path: str | os.PathLike) -> str:
 
 
 def read_table(path: str | os.PathLike) -> Table:
-    """Read a photometry table in FITS, ECSV or CSV, requiring no particular column.
+    r"""Read a photometry table in FITS, ECSV or CSV, requiring no particular column.
 
     The reducer reads its input with this: a table written by
     :func:`write_photometry` comes back as :func:`read_photometry` gives it; a
