@@ -94,7 +94,7 @@ def test_a_folder_of_another_run_is_refused(tiny_run):
 def test_graph_with_twins_and_report():
     cfg = load_config(None, [*TINY[:-2], "run.photon_limit_method=pld"])
     keys = [t.key for t in build_tasks(cfg, "/nonexistent")]
-    assert "simulation/calibration" in keys and "simulate_flat/truth" in keys
+    assert "simulate/calibration" in keys and "simulate_flat/truth" in keys
     assert "reduce_flat/pld/epoch_02" in keys and "reduce_flat/bliss/epoch_02" not in keys
     assert keys[-2:] == ["stats", "report"]
 
