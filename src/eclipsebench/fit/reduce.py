@@ -31,7 +31,6 @@ from ..decorrelate import available_methods, get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
 from ..errors import ConfigError, InputError
 from ..photometry.table import read_table
-from ..seeding import rng
 from .astro_model import PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table, median_cadence_s, standardise_table
 from .frames import settling_aor
@@ -424,7 +423,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     mc: McmcResult | None = None
     mcmc_info = None
     if errors and options.sampler == "mcmc":
-        stream = rng(seed, "reduce", prep.epoch if prep.epoch is not None else 0, method, "mcmc")
+        stream = systematics.context.stream("mcmc")   # rng(seed, "reduce", epoch, method, "mcmc")
         mc = run_mcmc(systematics, astro_model, fit.theta, fit.errors, names=fit.names,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
                       block_steps=options.mcmc_block_steps, tau_factor=options.mcmc_tau_factor,
