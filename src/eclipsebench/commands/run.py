@@ -77,11 +77,12 @@ def format_text(result: dict) -> str:
         lines.append(f"photon limit (empirical, {e['method']} on no-motion twins): "
                      f"{e['sigma_phot_ppm']:.1f} ppm (68%: {e['sigma_phot_lo_ppm']:.1f}-"
                      f"{e['sigma_phot_hi_ppm']:.1f})")
-    cover = {m: s.get("coverage") for m, s in result["methods"].items()
-             if s.get("coverage") is not None}
-    if cover:
-        lines.append("1-sigma coverage of the truth: "
-                     + ", ".join(f"{m} {c:.2f}" for m, c in cover.items()))
+    for n_sigma, key in ((1, "coverage"), (2, "coverage_2sigma")):
+        cover = {m: s for m, s in result["methods"].items() if s.get(key) is not None}
+        if cover:
+            lines.append(f"{n_sigma}-sigma coverage of the truth (68% interval): " + ", ".join(
+                f"{m} {s[key]:.2f} ({s[key + '_lo']:.2f}-{s[key + '_hi']:.2f})"
+                for m, s in cover.items()))
     for f in result.get("failures", []):
         lines.append(f"not scored: {f['method']} epoch {f['epoch']}: {f['error']}")
     if result.get("methods_excluded"):
