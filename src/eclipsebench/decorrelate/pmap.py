@@ -45,6 +45,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from astropy.io import fits
+from astropy.utils.exceptions import AstropyUserWarning
 from scipy.spatial import cKDTree
 
 from ..errors import DataError, InputError
@@ -120,8 +122,6 @@ def _read_fits_quietly(path: Path):
     astropy reports as an ``AstropyUserWarning``; only that category is
     suppressed, and only here.
     """
-    from astropy.io import fits
-    from astropy.utils.exceptions import AstropyUserWarning
 
     try:
         with warnings.catch_warnings():
