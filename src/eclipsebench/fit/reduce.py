@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -205,6 +205,9 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
             data = data.subset(~settling)
     system = resolve_system(system)
     t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source)
+    # What the ephemeris predicts (never the truth): a method may use it to find the
+    # eclipse's signature in its own decomposition (ICA's eclipse component).
+    data = replace(data, meta={**data.meta, "t_ecl_predicted_bmjd": t_pred})
     epoch_number = _epoch_number(table, epoch)
     systematics = cls.build(data, method_opts, seed=seed, epoch=epoch_number or 0,
                             resources=resources)
