@@ -27,7 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="photometry table of one epoch (FITS, ECSV or CSV; another pipeline's "
                         "table needs time_bmjd, flux, flux_err, x, y: docs/photometry.md)")
     p.add_argument("--method", required=True, metavar="NAME",
-                   help="decorrelation method: bliss, gp, ica, kr-data, kr-pmap, pld, segpoly")
+                   help="decorrelation method: the paper's bliss, gp, ica, kr-data, kr-pmap, pld, "
+                        "segpoly; SPCA's poly2-poly5, pld-aper; or a plugin's (eb.methods())")
     p.add_argument("--phase", choices=PHASE_MODELS, default=None,
                    help="phase-curve model (default: [reduce] phase, quadratic)")
     p.add_argument("--ramp", choices=RAMP_MODELS, default=None,
