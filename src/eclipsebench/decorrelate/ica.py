@@ -33,7 +33,9 @@ Steps (``docs/methods.md``, "ICA", says which are the authors' and which ours):
    (:func:`fastica_isr`) or, with ``n_restarts >= 2``, from bootstrap
    restarts (:func:`bootstrap_isr`); the contamination it implies in the
    fitted model, ``sigma_ICA^2 = sum_j o_j^2 sum_k ISR_jk``, is propagated to
-   the depth (:meth:`IndependentComponents.extra_depth_variance`).
+   the depth (:meth:`IndependentComponents.extra_depth_variance`), plus the
+   depth the kept components take because they carry part of the eclipse
+   (:func:`eclipse_leak`, ours), in quadrature.
 """
 
 from __future__ import annotations
