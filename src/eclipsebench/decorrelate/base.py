@@ -35,6 +35,7 @@ value = ``module:Class``), loaded the first time the registry is read.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import warnings
 from abc import ABC, abstractmethod
@@ -431,12 +432,25 @@ class Systematics(ABC):
         fluxes are not transformed twice; the contract tests check that the
         result equals a fresh build.
         """
-        flux = np.asarray(flux, dtype=float)
-        if flux.shape != self.data.flux.shape:
-            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, "
-                             f"got {flux.shape}")
+        flux = self._checked_flux(flux)
         return type(self)(dataclasses.replace(self.data, flux=flux), self.options,
                           context=self.context)
+
+    def _checked_flux(self, flux: np.ndarray) -> np.ndarray:
+        """``flux`` as floats, one per point of ``self.data``; InputError otherwise."""
+        flux = np.asarray(flux, dtype=float)
+        if flux.shape != self.data.flux.shape:
+            raise InputError(f"method '{self.name}' with_flux: expected "
+                             f"{self.data.flux.shape[0]} fluxes, got {flux.shape}")
+        return flux
+
+    def _copy_with_flux(self, flux: np.ndarray) -> Systematics:
+        """A shallow copy whose ``data.flux`` is ``flux`` (checked), for ``with_flux``
+        overrides that reuse the flux-independent work and redo only what the flux enters."""
+        flux = self._checked_flux(flux)
+        new = copy.copy(self)
+        new.data = dataclasses.replace(self.data, flux=flux)
+        return new
 
     def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:
         """Re-set parameters that the method fixes by maximum likelihood for a given ``astro``.

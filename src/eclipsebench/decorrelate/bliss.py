@@ -26,8 +26,6 @@ once in :func:`bliss_setup`; :func:`bliss_gain` is the cheap evaluation.
 
 from __future__ import annotations
 
-import copy
-import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -238,12 +236,8 @@ def _with_flux(model: Systematics, flux: np.ndarray) -> Systematics:
 
     Also used by the kernel-regression methods (:mod:`.kernel`).
     """
-    flux = np.asarray(flux, dtype=float)
-    if flux.shape != model.data.flux.shape:
-        raise InputError(f"with_flux: expected {model.data.flux.shape[0]} fluxes, got {flux.shape}")
-    new = copy.copy(model)
-    new.data = dataclasses.replace(model.data, flux=flux)
-    new._flux = flux
+    new = model._copy_with_flux(flux)
+    new._flux = new.data.flux
     return new
 
 

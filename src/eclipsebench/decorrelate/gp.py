@@ -51,8 +51,7 @@ sampler) while least squares, which cannot set them, keeps the ML kernel.
 
 from __future__ import annotations
 
-import copy
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -456,12 +455,8 @@ class GaussianProcess(Systematics):
         For the prayer bead; ``flux`` has one value per bin. The covariance
         does not depend on the flux, so nothing is refactorised.
         """
-        flux = np.asarray(flux, dtype=float)
-        if len(flux) != len(self.data):
-            raise InputError(f"gp: with_flux needs {len(self.data)} binned fluxes, got {len(flux)}")
-        new = copy.copy(self)
-        new.data = replace(self.data, flux=flux)
-        new.flux_rel = flux / self.norm
+        new = self._copy_with_flux(flux)   # one flux per bin
+        new.flux_rel = new.data.flux / self.norm
         return new
 
     def correct(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:

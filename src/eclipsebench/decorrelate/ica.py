@@ -41,7 +41,7 @@ Steps (``docs/methods.md``, "ICA", says which are the authors' and which ours):
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -621,13 +621,7 @@ class IndependentComponents(Systematics):
         does not shift, and its seed is the same, so FastICA is not rerun;
         the ranking, selection and projection are redone for the new fluxes.
         """
-        flux = np.asarray(flux, dtype=float)
-        if flux.shape != self.data.flux.shape:
-            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, "
-                             f"got {flux.shape}")
-        new = object.__new__(type(self))
-        new.__dict__.update(self.__dict__)
-        new.data = replace(self.data, flux=flux)
+        new = self._copy_with_flux(flux)
         new._diagnostics = dict(self._diagnostics)
         new._select()
         return new

@@ -39,7 +39,6 @@ rms is the depth error the PLD team reported
 from __future__ import annotations
 
 import copy
-import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
@@ -490,12 +489,8 @@ class PixelLevelDecorrelation(Systematics):
 
     def with_flux(self, flux: np.ndarray) -> PixelLevelDecorrelation:
         """The same designs (and the bin size in use) on new fluxes."""
-        flux = np.asarray(flux, dtype=float)
-        if flux.shape != self.data.flux.shape:
-            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, got {flux.shape}")
-        new = copy.copy(self)
-        new.data = dataclasses.replace(self.data, flux=flux)
-        new.designs = {b: d.with_flux(flux) for b, d in self.designs.items()}
+        new = self._copy_with_flux(flux)
+        new.designs = {b: d.with_flux(new.data.flux) for b, d in self.designs.items()}
         new.bin_scores = dict(self.bin_scores)
         return new
 

@@ -37,8 +37,7 @@ fit is the fit of the binned model), then applied to every frame, as
 
 from __future__ import annotations
 
-import copy
-import dataclasses
+from abc import abstractmethod
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -174,9 +173,9 @@ class LinearDetectorModel(Systematics):
         self.design = PldDesign(basis, data.flux, data.flux_err, bin_frames,
                                 time=data.time_bmjd)
 
+    @abstractmethod
     def regressors(self, data: EpochData) -> np.ndarray:
         """The regressors ``R`` of the model, shape (n, k)."""
-        raise NotImplementedError
 
     def _gain_astro(self, astro: np.ndarray, theta: np.ndarray | None) -> np.ndarray:
         astro = np.asarray(astro, float)
@@ -192,13 +191,8 @@ class LinearDetectorModel(Systematics):
 
     def with_flux(self, flux: np.ndarray) -> LinearDetectorModel:
         """The same design on new fluxes (equal to a fresh build)."""
-        flux = np.asarray(flux, dtype=float)
-        if flux.shape != self.data.flux.shape:
-            raise InputError(f"with_flux: expected {self.data.flux.shape[0]} fluxes, "
-                             f"got {flux.shape}")
-        new = copy.copy(self)
-        new.data = dataclasses.replace(self.data, flux=flux)
-        new.design = self.design.with_flux(flux)
+        new = self._copy_with_flux(flux)
+        new.design = self.design.with_flux(new.data.flux)
         return new
 
     def n_effective_params(self) -> int:

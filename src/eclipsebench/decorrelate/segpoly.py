@@ -53,8 +53,7 @@ solved linearly; the team fitted a box eclipse, so
 
 from __future__ import annotations
 
-import copy
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
@@ -582,9 +581,7 @@ class SegmentedPolynomial(Systematics):
         team reported formal fit errors), so the shifted series are fitted
         with the trend of the original data instead of being detrended again.
         """
-        new = copy.copy(self)
-        new.data = replace(self.data, flux=np.asarray(flux, dtype=float))
-        return new
+        return self._copy_with_flux(flux)
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``F0 * astro * trend``, with ``F0`` the weighted least-squares normalisation."""
