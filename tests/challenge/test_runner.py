@@ -36,7 +36,7 @@ def test_every_stage_ran_and_the_summary_is_complete(tiny_run):
     cfg, root, summary, report = tiny_run
     lay = Layout(root)
     stages = {k.split("/")[0] for k in report.ran}
-    assert stages == {"simulate", "photometry", "reduce", "stats"}
+    assert stages == {"simulate", "photometry", "reduce", "reduce_paper", "stats"}
     assert (root / "simulation" / "truth.ecsv").is_file()
     for e in (1, 2):
         assert lay.photometry(e).is_file()
@@ -55,6 +55,33 @@ def test_every_stage_ran_and_the_summary_is_complete(tiny_run):
     d = [r["depth_ppm"] for r in depths if r["method"] == "pld"]
     assert pld["SD"] == pytest.approx(abs(d[0] - d[1]) / 2**0.5)
     assert json.loads(lay.summary.read_text()) == summary
+
+
+def test_both_profiles_are_scored_side_by_side(tiny_run):
+    """Issue 15: the paper profile beside the controlled one, each with the same structure."""
+    cfg, root, summary, _ = tiny_run
+    lay = Layout(root)
+    assert cfg.run.profiles == ("controlled", "paper")
+    assert set(summary["profiles"]) == {"controlled", "paper"}
+    assert summary["profile"] == "controlled"
+    assert summary["profiles"]["controlled"]["methods"] == summary["methods"]
+    paper = summary["profiles"]["paper"]
+    assert set(paper) >= {"methods", "average", "ttest", "anova", "method_names"}
+    for e in (1, 2):
+        pld = json.loads(lay.result("pld", e, profile="paper").read_text())
+        bliss = json.loads(lay.result("bliss", e, profile="paper").read_text())
+        assert pld["profile"] == "paper" and pld["phase"] == "quadratic"
+        assert pld["depth_err_method"] == "time_averaging"
+        assert pld["depth_err_ppm"] == pytest.approx(pld["depth_err_time_averaging_ppm"])
+        assert bliss["sampler"] == "mcmc" and bliss["depth_err_method"] == "mcmc"
+        assert len(bliss["profile_detail"]["bic"]) == 8  # 4 phases x 2 ramps, least BIC kept
+        best = min(bliss["profile_detail"]["bic"], key=bliss["profile_detail"]["bic"].get)
+        assert best == f"{bliss['phase']}/{bliss['ramp']}"
+        ctrl = json.loads(lay.result("pld", e).read_text())
+        assert ctrl["profile"] == "controlled"
+    paper_depths = Table.read(lay.depths_of("paper"), format="ascii.ecsv")
+    assert len(paper_depths) == 4
+    assert paper["methods"]["pld"]["D_mean"] != summary["methods"]["pld"]["D_mean"]
 
 
 def test_resume_redoes_only_what_is_missing(tiny_run):
@@ -80,7 +107,7 @@ def test_two_workers_give_the_same_summary(tiny_run, tmp_path):
     shutil.copy(root / "run_config.toml", tmp_path / "run_config.toml")
     _, report = run_challenge(cfg, tmp_path, workers=2)
     assert "LocalCluster (2 processes)" in report.executor
-    assert sorted(k.split("/")[0] for k in report.ran) == ["reduce"] * 4 + ["stats"]
+    assert sorted(k.split("/")[0] for k in report.ran) == ["reduce"] * 4 + ["reduce_paper"] * 4 + ["stats"]
     assert (tmp_path / "summary.json").read_bytes() == (root / "summary.json").read_bytes()
 
 
@@ -124,7 +151,7 @@ def test_cli_unknown_method_exits_2(tmp_path, capsys):
 
 def test_a_method_refusing_an_epoch_is_recorded_not_fatal(tiny_run, tmp_path, monkeypatch):
     cfg, root, _, _ = tiny_run
-    for name in ("simulation", "photometry", "results"):
+    for name in ("simulation", "photometry", "results", "results_paper"):
         shutil.copytree(root / name, tmp_path / name)
     shutil.copy(root / "run_config.toml", tmp_path / "run_config.toml")
     lay = Layout(tmp_path)
@@ -182,7 +209,9 @@ def test_a_result_edited_or_made_from_other_inputs_is_redone(tiny_run, tmp_path)
     lay.photometry(1).unlink()
     _, report = run_challenge(cfg, lay.root, workers=1)
     assert sorted(report.ran) == ["photometry/epoch_01", "reduce/bliss/epoch_01",
-                                  "reduce/bliss/epoch_02", "reduce/pld/epoch_01", "stats"]
+                                  "reduce/bliss/epoch_02", "reduce/pld/epoch_01",
+                                  "reduce_paper/bliss/epoch_01", "reduce_paper/pld/epoch_01",
+                                  "stats"]
     assert lay.summary.read_bytes() == (root / "summary.json").read_bytes()
 
 

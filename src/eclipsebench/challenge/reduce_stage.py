@@ -2,7 +2,7 @@
 
 :func:`plan_reduce_tasks` turns the configuration, the run folder
 (:class:`eclipsebench.engine.layout.Layout`), the epochs and the methods into engine tasks
-``reduce[_flat]/<method>/epoch_NN``; :func:`reduce_task` is the one place
+``reduce[_flat|_paper]/<method>/epoch_NN``; :func:`reduce_task` is the one place
 that calls the fitting package (:func:`eclipsebench.fit.reduce.reduce_epoch`)
 for a run. Keep it small: the method seam's context (seeded generator,
 loaded calibration set) is threaded here.
@@ -29,13 +29,14 @@ __all__ = ["reduce_key", "reduce_task", "plan_reduce_tasks", "result_ok"]
 log = get_logger("challenge")
 
 
-def reduce_key(method: str, epoch: int, flat: bool = False) -> str:
-    """The task key of one method on one epoch."""
-    return f"reduce{'_flat' if flat else ''}/{method}/epoch_{epoch:02d}"
+def reduce_key(method: str, epoch: int, flat: bool = False, profile: str = "controlled") -> str:
+    """The task key of one method on one epoch (``reduce_paper/...`` in the paper profile)."""
+    suffix = ("_flat" if flat else "") + ("" if profile == "controlled" else f"_{profile}")
+    return f"reduce{suffix}/{method}/epoch_{epoch:02d}"
 
 
 def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int,
-                out_path: str) -> None:
+                out_path: str, profile: str = "controlled") -> None:
     """Reduce one epoch with one method; write the light curve, then the result JSON.
 
     A method that refuses the epoch's data (an :class:`InputError`, e.g.
@@ -48,11 +49,11 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int
     system = get_system(cfg.system.name, cfg.system.catalogue or None)
     try:
         result = fit_reduce.reduce_epoch(table_path, method, options=cfg.reduce, system=system,
-                                         seed=seed, epoch=epoch)
+                                         seed=seed, epoch=epoch, profile=profile)
     except InputError as exc:
         log.warning("%s epoch %d: %s", method, epoch, exc)
         write_json(out, {"method": method, "epoch": epoch, "failed": True, "error": str(exc),
-                         "depth_ppm": None, "depth_err_ppm": None})
+                         "depth_ppm": None, "depth_err_ppm": None, "profile": profile})
         return
     with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
         result.lightcurve_table().write(tmp, format="ascii.ecsv")
@@ -81,20 +82,23 @@ def result_ok(method: str, epoch: int, path: Path) -> bool:
 
 
 def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: list[str], *,
-                      flat: bool = False) -> list[Task]:
-    """One task per (method, epoch), each after its epoch's photometry task.
+                      flat: bool = False, profile: str = "controlled") -> list[Task]:
+    """One task per (method, epoch) in one profile, each after its epoch's photometry task.
 
     ``[reduce.options.<method>]`` is checked first: a bad key stops the run
     before any work, naming it.
     """
     fit_reduce.check_method_options(cfg.reduce)
+    if profile != "controlled":
+        for m in methods:
+            fit_reduce.resolve_profile(m, cfg.reduce, profile)  # every method has an entry
     seed = cfg.challenge.seed
     tasks = []
     for e in epochs:
         table = layout.photometry(e, flat)
         for m in methods:
-            out = layout.result(m, e, flat)
-            tasks.append(Task(reduce_key(m, e, flat), "reduce", reduce_task,
-                              (cfg, str(table), m, e, seed, str(out)), (out,),
+            out = layout.result(m, e, flat, profile)
+            tasks.append(Task(reduce_key(m, e, flat, profile), "reduce", reduce_task,
+                              (cfg, str(table), m, e, seed, str(out), profile), (out,),
                               (photometry_key(e, flat),), check=partial(result_ok, m, e)))
     return tasks

@@ -10,7 +10,7 @@ stage       planner                                       task keys
 simulate    :func:`eclipsebench.simulation.challenge.plan_simulate_tasks`
                                                           ``simulate[_flat]/...``
 photometry  :func:`.photometry_stage.plan_photometry_tasks` ``photometry[_flat]/epoch_NN``
-reduce      :func:`.reduce_stage.plan_reduce_tasks`        ``reduce[_flat]/<m>/epoch_NN``
+reduce      :func:`.reduce_stage.plan_reduce_tasks`        ``reduce[_flat|_paper]/<m>/epoch_NN``
 stats       :func:`eclipsebench.stats.challenge.plan_stats_tasks`    ``stats``
 report      :func:`eclipsebench.report.challenge.plan_report_tasks`  ``report``
 =========== ============================================ ===========================
@@ -112,16 +112,21 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
         tasks += sim_tasks
         tasks += plan_photometry_tasks(vcfg, layout, plans, flat=flat,
                                        after=(sim_tasks[-1].key,))
-        tasks += plan_reduce_tasks(vcfg, layout, epochs, [plm] if flat else methods, flat=flat)
-    reads = ([reduce_key(m, e) for e in epochs for m in methods]
-             + ([reduce_key(plm, e, True) for e in epochs] if plm is not None else [])
+        if flat:
+            tasks += plan_reduce_tasks(vcfg, layout, epochs, [plm], flat=True)
+        else:
+            for profile in cfg.run.profiles:
+                tasks += plan_reduce_tasks(vcfg, layout, epochs, methods, profile=profile)
+    results = [reduce_key(m, e, profile=p) for p in cfg.run.profiles for e in epochs
+               for m in methods]
+    reads = (results + ([reduce_key(plm, e, True) for e in epochs] if plm is not None else [])
              + [photometry_key(e) for e in epochs] + ["simulate/truth"])
     tasks += plan_stats_tasks(cfg, layout, methods, epochs, plm, summary_config(cfg),
                               after=tuple(reads))
     if cfg.run.report:
         tasks += plan_report_tasks(cfg, layout, methods, epochs,
                                    after=("stats", *(photometry_key(e) for e in epochs),
-                                          *(reduce_key(m, e) for e in epochs for m in methods)))
+                                          *results))
     return tasks
 
 

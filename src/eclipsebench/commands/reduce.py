@@ -35,6 +35,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="detector ramp (default: [reduce] ramp, none)")
     p.add_argument("--eclipse-shape", choices=("auto",) + ECLIPSE_SHAPES, default=None,
                    help="eclipse shape; auto = the method's default (box for segpoly)")
+    p.add_argument("--profile", choices=("controlled", "paper"), default=None,
+                   help="controlled: the shared [reduce] settings (default); paper: the "
+                        "method's team's centroid, phase model, sampler and reported error "
+                        "(docs/methods.md, 'The paper profile')")
     p.add_argument("--sampler", choices=("leastsq", "mcmc"), default=None,
                    help="least squares only, or least squares then emcee (default: leastsq)")
     p.add_argument("--prayer-bead", type=positive_int(minimum=0), default=None, metavar="N",
@@ -58,7 +62,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="calibration set for kr-pmap (a calibration-star table or the SSC pmap); "
                         "simulated tables find theirs through SIMDIR")
     p.add_argument("--system", metavar="NAME", default=None,
-                   help="planet (default: [system] name, XO-3b)")
+                   help="planet (default: [system] name, the 2015 challenge's "
+                        "'XO-3b (2015 challenge)'; give XO-3b for real data: Wong et al. 2014)")
     p.add_argument("--epoch", type=positive_int(minimum=0), default=None, metavar="N",
                    help="epoch number (default: the table's EPOCH)")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
@@ -114,7 +119,8 @@ def _options(args: argparse.Namespace):
     cfg = load_config(args.config, args.overrides)
     changes = {"phase": args.phase, "ramp": args.ramp, "eclipse_shape": args.eclipse_shape,
                "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
-               "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius}
+               "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius,
+               "profile": args.profile}
     options = replace(cfg.reduce, **{k: v for k, v in changes.items() if v is not None})
     try:
         options.validate()
@@ -205,7 +211,7 @@ def run(args: argparse.Namespace) -> dict:
 
 def format_text(result: dict) -> str:
     lines = [f"method        {result['method']} (epoch {result['epoch']}, phase {result['phase']}, "
-             f"{result['sampler']})",
+             f"{result['sampler']}, {result.get('profile', 'controlled')} profile)",
              f"depth         {result['depth_ppm']:.1f} +- {result['depth_err_ppm']:.1f} ppm "
              f"(error from {result['depth_err_method']})",
              f"t_ecl         {result['t_ecl_bmjd']:.5f} +- {result['t_ecl_err_d'] * 86400:.0f} s "

@@ -26,11 +26,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="number of simulated epochs (challenge.epochs); e.g. 200 for Monte Carlo")
     p.add_argument("--methods", type=method_list, metavar="A,B,...",
                    help="methods to run (run.methods; default: every registered method)")
+    p.add_argument("--profiles", type=_profile_list, metavar="P[,P]",
+                   help="controlled, paper or both (run.profiles; default both)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=positive_int(), metavar="N",
                    help="Dask worker processes of a local cluster; 1 runs in this process")
     g.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of an existing Dask scheduler, e.g. tcp://host:8786")
+
+
+def _profile_list(text: str) -> list[str]:
+    items = [p.strip() for p in text.split(",") if p.strip()]
+    bad = [p for p in items if p not in ("controlled", "paper")]
+    if not items or bad or len(set(items)) != len(items):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected controlled, paper or "
+                                         "controlled,paper")
+    return items
 
 
 def _overrides(args: argparse.Namespace) -> list[str]:
@@ -41,6 +52,8 @@ def _overrides(args: argparse.Namespace) -> list[str]:
         extra.append(f"challenge.epochs={args.epochs}")
     if args.methods is not None:
         extra.append("run.methods=[" + ", ".join(f'"{m}"' for m in args.methods) + "]")
+    if args.profiles is not None:
+        extra.append("run.profiles=[" + ", ".join(f'"{p}"' for p in args.profiles) + "]")
     if args.workers is not None:
         extra.append(f"run.workers={args.workers}")
     if args.scheduler is not None:
@@ -67,7 +80,16 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def format_text(result: dict) -> str:
-    lines = [format_text_table(result)]
+    profiles = result.get("profiles") or {result.get("profile", "controlled"): result}
+    lines = []
+    for name, stats in profiles.items():
+        lines += [f"{name} profile:", format_text_table(stats)]
+        lines += _coverage_lines(stats)
+        for f in stats.get("failures", []):
+            lines.append(f"not scored ({name}): {f['method']} epoch {f['epoch']}: {f['error']}")
+        if stats.get("methods_excluded"):
+            lines.append(f"methods left out of the {name} profile (fewer than 2 usable "
+                         "epochs): " + ", ".join(stats["methods_excluded"]))
     pl = result.get("photon_limit", {})
     a, e = pl.get("analytic"), pl.get("empirical")
     if a:
@@ -77,17 +99,6 @@ def format_text(result: dict) -> str:
         lines.append(f"photon limit (empirical, {e['method']} on no-motion twins): "
                      f"{e['sigma_phot_ppm']:.1f} ppm (68%: {e['sigma_phot_lo_ppm']:.1f}-"
                      f"{e['sigma_phot_hi_ppm']:.1f})")
-    for n_sigma, key in ((1, "coverage"), (2, "coverage_2sigma")):
-        cover = {m: s for m, s in result["methods"].items() if s.get(key) is not None}
-        if cover:
-            lines.append(f"{n_sigma}-sigma coverage of the truth (68% interval): " + ", ".join(
-                f"{m} {s[key]:.2f} ({s[key + '_lo']:.2f}-{s[key + '_hi']:.2f})"
-                for m, s in cover.items()))
-    for f in result.get("failures", []):
-        lines.append(f"not scored: {f['method']} epoch {f['epoch']}: {f['error']}")
-    if result.get("methods_excluded"):
-        lines.append("methods left out (fewer than 2 usable epochs): "
-                     + ", ".join(result["methods_excluded"]))
     run = result.get("_run")
     if run:
         where = f"summary in {run['summary']}"
@@ -96,3 +107,14 @@ def format_text(result: dict) -> str:
         lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "
                      f"{run['wall_s']:.1f} s ({run['executor']}); {where}")
     return "\n".join(lines)
+
+
+def _coverage_lines(stats: dict) -> list[str]:
+    lines = []
+    for n_sigma, key in ((1, "coverage"), (2, "coverage_2sigma")):
+        cover = {m: s for m, s in stats["methods"].items() if s.get(key) is not None}
+        if cover:
+            lines.append(f"{n_sigma}-sigma coverage of the truth (68% interval): " + ", ".join(
+                f"{m} {s[key]:.2f} ({s[key + '_lo']:.2f}-{s[key + '_hi']:.2f})"
+                for m, s in cover.items()))
+    return lines

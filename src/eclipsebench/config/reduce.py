@@ -45,6 +45,12 @@ class ReduceSection:
         Leave out of the fit the frames of an epoch's first AOR when it is short
         beside the others (the 30-minute Pre AOR that lets the pointing settle;
         :mod:`eclipsebench.fit.frames`), or fit every frame.
+    profile : {"controlled", "paper"}
+        ``controlled``: these settings for every method. ``paper``: each
+        method's team's centroid, phase and ramp models, eclipse shape,
+        sampler, options and reported error (``eclipsebench.fit.profiles``;
+        ``docs/methods.md``, "The paper profile"), which override ``phase``,
+        ``ramp``, ``eclipse_shape``, ``sampler`` and ``error_rule``.
     error_rule : {"largest", "method"}
         The reported depth error: the largest of the Jacobian error times
         ``max(1, beta_red)``, the prayer bead and the MCMC width, for every
@@ -71,6 +77,7 @@ class ReduceSection:
     max_nfev: int = 200
     settling_aor: Literal["drop", "keep"] = "drop"
     error_rule: Literal["largest", "method"] = "largest"
+    profile: Literal["controlled", "paper"] = "controlled"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def validate(self) -> None:

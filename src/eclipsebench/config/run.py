@@ -48,6 +48,10 @@ class RunSection:
     lightcurve_epoch : int
         Epoch whose decorrelated light curves the report shows (the paper's
         5th; the last epoch when there are fewer).
+    profiles : list of str
+        The comparisons to run: ``controlled`` (every method with the shared
+        ``[reduce]`` settings) and/or ``paper`` (each method as its team ran
+        it; ``eclipsebench.fit.profiles``). The first is the summary's top level.
     """
 
     methods: tuple[str, ...] = ()  # empty: every registered method
@@ -59,8 +63,12 @@ class RunSection:
     bootstrap: int = 2000
     report: bool = True
     lightcurve_epoch: int = 5
+    profiles: tuple[str, ...] = ("controlled", "paper")
 
     def validate(self) -> None:
+        check(len(self.profiles) >= 1 and len(set(self.profiles)) == len(self.profiles)
+              and all(p in ("controlled", "paper") for p in self.profiles), "profiles",
+              'one or both of "controlled" and "paper", each once')
         check(self.workers >= 1, "workers", "at least 1 worker")
         check(0.0 <= self.f_in < 1.0, "f_in", "0 (from the eclipse geometry) or a fraction in (0, 1)")
         check(self.bootstrap >= 0, "bootstrap", "a non-negative number of resamples")

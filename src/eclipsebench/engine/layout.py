@@ -8,7 +8,10 @@
     DIR/simulation_flat/                   its systematics-free twin (empirical photon limit)
     DIR/photometry[_flat]/epoch_NN.fits    one photometry table per epoch
     DIR/results[_flat]/<method>/epoch_NN.json (+ .lc.ecsv)   one reduction per epoch x method
-    DIR/depths.ecsv                        method, epoch, depth_ppm, error_ppm
+                                           (the controlled profile)
+    DIR/results_paper/<method>/epoch_NN.json (+ .lc.ecsv)    the same in the paper profile
+    DIR/depths.ecsv                        method, epoch, depth_ppm, error_ppm (controlled)
+    DIR/depths_paper.ecsv                  the same in the paper profile
     DIR/summary.json                       statistics + photon limits + truth + seed + config
     DIR/report/index.html                  figures and tables
     DIR/timings.ecsv                       when, where and how long each task of the
@@ -38,13 +41,17 @@ class Layout:
     def photometry(self, epoch: int, flat: bool = False) -> Path:
         return self.root / ("photometry_flat" if flat else "photometry") / f"epoch_{epoch:02d}.fits"
 
-    def result(self, method: str, epoch: int, flat: bool = False) -> Path:
-        return (self.root / ("results_flat" if flat else "results") / method
-                / f"epoch_{epoch:02d}.json")
+    def result(self, method: str, epoch: int, flat: bool = False,
+               profile: str = "controlled") -> Path:
+        folder = "results_flat" if flat else "results"
+        if profile != "controlled":
+            folder += f"_{profile}"
+        return self.root / folder / method / f"epoch_{epoch:02d}.json"
 
-    def result_lightcurve(self, method: str, epoch: int, flat: bool = False) -> Path:
+    def result_lightcurve(self, method: str, epoch: int, flat: bool = False,
+                          profile: str = "controlled") -> Path:
         """The decorrelated light curve written beside a result."""
-        return self.result(method, epoch, flat).with_suffix(".lc.ecsv")
+        return self.result(method, epoch, flat, profile).with_suffix(".lc.ecsv")
 
     def truth(self, flat: bool = False) -> Path:
         return self.sim(flat) / "truth.ecsv"
@@ -57,7 +64,11 @@ class Layout:
 
     @property
     def depths(self) -> Path:
-        return self.root / "depths.ecsv"
+        return self.depths_of("controlled")
+
+    def depths_of(self, profile: str) -> Path:
+        """The depth table of one profile (``depths.ecsv`` for the controlled one)."""
+        return self.root / ("depths.ecsv" if profile == "controlled" else f"depths_{profile}.ecsv")
 
     @property
     def summary(self) -> Path:

@@ -44,11 +44,12 @@ from .leastsq import (
     prayer_bead,
 )
 from .mcmc import McmcResult, run_mcmc
+from .profiles import PROFILES, PaperProfile, centroid_columns, paper_profile
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
            "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options",
-           "check_method_options"]
+           "check_method_options", "resolve_profile"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
 _DEFAULT_OPTIONS = ReduceSection()
@@ -117,6 +118,8 @@ class PreparedEpoch:
     t_ecl_predicted_bmjd: float
     source: str
     n_frames_dropped: dict[str, int]
+    #: The centroid columns the method regresses on when a profile chose them ("" otherwise).
+    centroid: str = ""
 
     @property
     def n_frames(self) -> int:
@@ -183,16 +186,26 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                   epoch=None, seed: int = 0, method_options=None,
                   resources: Mapping[str, Any] | None = None,
                   columns: Mapping[str, str] | None = None, time_column: str | None = None,
-                  time_format: str | None = None) -> PreparedEpoch:
+                  time_format: str | None = None,
+                  centroid: str | None = None) -> PreparedEpoch:
     """Read the table, keep the good frames, build the method and predict the eclipse time.
 
     The method gets its options (:func:`resolve_method_options`) and a
     :class:`~eclipsebench.decorrelate.base.MethodContext` with the run seed,
     the epoch and the resources it declares, loaded by its ``load_resources``
-    from ``resources`` (paths or loaded objects).
+    from ``resources`` (paths or loaded objects). ``centroid`` ("col",
+    "gauss", "gauss-fixed") makes those columns the method's ``x``/``y``
+    (the paper profile); None keeps the table's ``x``/``y``.
     """
     table = _as_table(table, columns=columns, time_column=time_column, time_format=time_format)
     source = str((table.meta or {}).get("FILENAME", "the photometry table"))
+    centroid_note = ""
+    if centroid is not None:
+        (cx, cy), centroid_note = centroid_columns(table.colnames, centroid)
+        if (cx, cy) != ("x", "y"):
+            table = table.copy(copy_data=False)
+            table["x"], table["y"] = table[cx], table[cy]
+        centroid_note = f"{cx}/{cy}" + (f" ({centroid_note})" if centroid_note else "")
     cls = get_method(method)
     method_opts = resolve_method_options(method, options, method_options)
     data = epoch_data_from_table(table, radius_px=options.radius_px or None, stamp=options.stamp)
@@ -214,7 +227,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     dropped.update({k: int(v) for k, v in systematics.dropped_frames().items()})
     return PreparedEpoch(table=table, systematics=systematics, system=system,
                          epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
-                         source=source, n_frames_dropped=dropped)
+                         source=source, n_frames_dropped=dropped, centroid=centroid_note)
 
 
 # --------------------------------------------------------------------------- one epoch
@@ -264,6 +277,10 @@ class EpochResult:
     diagnostics: dict[str, Any]
     depth_err_own_ppm: dict[str, float]
     lightcurve: dict[str, np.ndarray] = field(repr=False, compare=False)
+    #: "controlled" or "paper" (:mod:`eclipsebench.fit.profiles`).
+    profile: str = "controlled"
+    #: The paper profile's choices: team, centroid columns, BIC of each phase/ramp tried.
+    profile_detail: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """A flat, JSON-able dict (no arrays): the contract keys and the diagnostics."""
@@ -285,8 +302,10 @@ class EpochResult:
             "n_points": self.n_points,
             "phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
             "sampler": self.sampler, "converged": self.converged,
-            "system": self.system, "seed": self.seed,
+            "system": self.system, "seed": self.seed, "profile": self.profile,
         }
+        if self.profile_detail:
+            out["profile_detail"] = _jsonable(self.profile_detail)
         for name, value in self.params.items():
             if name not in ("depth", "t_ecl_bmjd"):
                 out[name] = value
@@ -347,7 +366,7 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
                  seed: int = 0, epoch: int | None = None, method_options=None,
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
-                 time_format: str | None = None) -> EpochResult:
+                 time_format: str | None = None, profile: str | None = None) -> EpochResult:
     """Fit one epoch with one method and estimate the depth and its uncertainty.
 
     Parameters
@@ -381,6 +400,11 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
         Its format (default ``"bmjd"``); every format is taken as BJD_TDB-based
         (no time-scale or barycentric conversion is made).
+    profile : {"controlled", "paper"}, optional
+        Default ``options.profile``. ``controlled``: the ``[reduce]`` settings
+        for every method. ``paper``: the method's team's centroid, phase and
+        ramp models (by BIC where the team chose by BIC), eclipse shape,
+        sampler, options and reported error (:mod:`eclipsebench.fit.profiles`).
 
     Returns
     -------
@@ -390,12 +414,62 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     ------
     InputError
         Missing columns, all frames flagged, an eclipse outside the time span,
-        an unknown method or option.
+        an unknown method, option or profile.
     """
+    options, team = resolve_profile(method, options, profile)
+    if team is not None and not isinstance(method_options, MethodOptions):
+        method_options = {**team.method_options, **dict(method_options or {})}
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
-                         columns=columns, time_column=time_column, time_format=time_format)
-    return fit_prepared(prep, method, options=options, seed=seed)
+                         columns=columns, time_column=time_column, time_format=time_format,
+                         centroid=None if team is None else team.centroid)
+    if team is None:
+        return replace(fit_prepared(prep, method, options=options, seed=seed),
+                       profile="controlled")
+    return _fit_paper_profile(prep, method, team, options=options, seed=seed)
+
+
+def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
+                    profile: str | None = None) -> tuple[ReduceSection, PaperProfile | None]:
+    """The ``[reduce]`` settings a profile gives ``method``, and its team's entry (paper only).
+
+    Examples
+    --------
+    >>> opts, team = resolve_profile("kr-pmap", profile="paper")
+    >>> opts.phase, opts.sampler, team.reported_error
+    ('flat', 'leastsq', ('jacobian',))
+    >>> resolve_profile("kr-pmap", profile="controlled")[1] is None
+    True
+    """
+    profile = options.profile if profile is None else profile
+    if profile not in PROFILES:
+        raise InputError(f"profile {profile!r}: expected one of {', '.join(PROFILES)}")
+    if profile == "controlled":
+        return options, None
+    team = paper_profile(method)
+    return replace(options, phase=team.phases[0], ramp=team.ramps[0],
+                   eclipse_shape=team.eclipse_shape, sampler=team.sampler,
+                   profile="paper"), team
+
+
+def _fit_paper_profile(prep: PreparedEpoch, method: str, team: PaperProfile, *,
+                       options: ReduceSection, seed: int) -> EpochResult:
+    """The team's fit: its phase and ramp (least BIC among its candidates), its error."""
+    bic: dict[str, float] = {}
+    if len(team.phases) * len(team.ramps) > 1:
+        for ramp in team.ramps:
+            for phase in team.phases:
+                trial = fit_prepared(prep, method, options=replace(options, ramp=ramp),
+                                     seed=seed, phase=phase, errors=False)
+                bic[f"{phase}/{ramp}"] = float(trial.bic)
+        phase, ramp = min(bic, key=bic.get).split("/")
+        options = replace(options, phase=phase, ramp=ramp)
+    result = fit_prepared(prep, method, options=options, seed=seed,
+                          reported=team.reported_error)
+    return replace(result, profile="paper",
+                   profile_detail={"team": team.team, "centroid": prep.centroid,
+                                   "reported_error": list(team.reported_error),
+                                   "bic": bic})
 
 
 def _resources(resources: Mapping[str, Any] | None, pmap) -> dict[str, Any]:
@@ -406,8 +480,13 @@ def _resources(resources: Mapping[str, Any] | None, pmap) -> dict[str, Any]:
 
 
 def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
-                 seed: int = 0, phase: str | None = None, errors: bool = True) -> EpochResult:
-    """Fit a :class:`PreparedEpoch` (used by :func:`reduce_epoch` and the phase comparison)."""
+                 seed: int = 0, phase: str | None = None, errors: bool = True,
+                 reported: tuple[str, ...] | None = None) -> EpochResult:
+    """Fit a :class:`PreparedEpoch` (used by :func:`reduce_epoch` and the phase comparison).
+
+    ``reported`` names the depth errors to report, the largest of them (the
+    paper profile's team rule); None applies ``options.error_rule``.
+    """
     systematics = prep.systematics
     astro_model = prep.astro_model(options, phase=phase)
     theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
@@ -418,7 +497,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     jac_tecl = fit.error("t_ecl_bmjd")
 
     pb_depth = pb_tecl = None
-    if errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True):
+    if (errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True)
+            and (reported is None or "prayer_bead" in reported)):
         beads = prayer_bead(systematics, astro_model, fit, n_shifts=options.prayer_bead_shifts)
         pb_depth = float(np.std(beads[:, 0], ddof=1))
         pb_tecl = float(np.std(beads[:, 1], ddof=1))
@@ -445,12 +525,14 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     ).items()} if errors else {}
     depth_err, err_method = _largest(shared)
     wanted = systematics.reported_error
-    if options.error_rule == "method" and wanted != "largest":
-        value = {**shared, **own}.get(wanted)
-        if value is None or not np.isfinite(value):
-            raise InputError(f"method '{method}': its reported error '{wanted}' was not "
-                             "computed (error_rule = 'method' needs it)")
-        depth_err, err_method = float(value), wanted
+    if reported is None and options.error_rule == "method" and wanted != "largest":
+        reported = (wanted,)
+    if errors and reported is not None:
+        every = {"jacobian": jac_depth, **shared, **own}
+        depth_err, err_method = _largest({k: every.get(k) for k in reported})
+        if not np.isfinite(depth_err):
+            raise InputError(f"method '{method}': its reported error "
+                             f"'{' or '.join(reported)}' was not computed")
     if separation_var > 0:
         depth_err = float(np.hypot(depth_err, np.sqrt(separation_var)))
         err_method += "+separation"

@@ -19,6 +19,7 @@ from ..io.atomic import write_text
 from ..stats.compare import group_by_method
 from ..stats.ensemble import normalised_residuals
 from . import figures as F
+from .paper_tables import COMPARED_KEYS, TABLE4, comparison_rows
 from .tables import display_rows, write_tables
 
 __all__ = ["build_report", "render_index"]
@@ -71,7 +72,10 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
     root = Path(dest)
     root.mkdir(parents=True, exist_ok=True)
     groups = group_by_method(depths, list(summary["methods"]))
-    table_files = write_tables(summary, root, caption=title)
+    table_files = []
+    for name, stats in (summary.get("profiles") or {"controlled": summary}).items():
+        stem = "eclipse_depth_stats" + ("" if name == "controlled" else f"_{name}")
+        table_files += write_tables(stats, root, stem=stem, caption=f"{title} ({name} profile)")
     sigma_phot = summary.get("sigma_phot_ppm")
     items: list[tuple[str, str, list[Path]]] = []
     skipped: list[str] = []
@@ -157,6 +161,22 @@ def _plain(obj):
     return obj
 
 
+_PROFILE_WORDS = {
+    "controlled": "Every method with the same astrophysical model, centroid, aperture and error "
+                  "rule: the differences are the methods' own.",
+    "paper": "Each method as its team ran it for the 2015 challenge (paper, Appendix B): its "
+             "centroid, phase model, sampler and reported error (docs/methods.md).",
+}
+
+
+def _html_table(rows: list[list[str]]) -> str:
+    esc = html.escape
+    thead = "".join(f"<th>{esc(str(c))}</th>" for c in rows[0])
+    tbody = "\n".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in r) + "</tr>"
+                      for r in rows[1:])
+    return f"<table><thead><tr>{thead}</tr></thead><tbody>\n{tbody}\n</tbody></table>"
+
+
 def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, list[Path]]],
                  tables: list[Path], skipped: list[str], root: Path,
                  notes: Mapping[str, object]) -> str:
@@ -166,10 +186,6 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
     offline; no scripts, no external resources.
     """
     esc = html.escape
-    rows = display_rows(summary, pm=" ± ", minus="−", interval="{f} +{up}/−{down}")
-    thead = "".join(f"<th>{esc(c)}</th>" for c in rows[0])
-    tbody = "\n".join("<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>"
-                      for r in rows[1:])
     parts = [
         "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
         f"<title>{esc(title)}</title>",
@@ -182,14 +198,24 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
     if notes:
         parts.append("<ul>" + "".join(f"<li><b>{esc(str(k))}</b>: {esc(str(v))}</li>"
                                       for k, v in notes.items()) + "</ul>")
-    parts += ["<h2>Eclipse depth statistics</h2>",
-              f"<table><thead><tr>{thead}</tr></thead><tbody>\n{tbody}\n</tbody></table>"]
-    anova = summary.get("anova", {})
-    for label, key in (("all methods", "all"), ("t-test-consistent methods", "consistent")):
-        res = anova.get(key)
-        if res and res.get("F") is not None:
-            parts.append(f"<p>ANOVA ({esc(label)}: {esc(', '.join(res['methods']))}): "
-                         f"F = {res['F']:.2f}, p = {res['p']:.3f}</p>")
+    profiles = summary.get("profiles") or {summary.get("profile", "controlled"): summary}
+    for name, stats in profiles.items():
+        parts += [f"<h2>Eclipse depth statistics: {esc(name)} profile</h2>",
+                  f"<p>{esc(_PROFILE_WORDS.get(name, ''))}</p>",
+                  _html_table(display_rows(stats, pm=" ± ", minus="−",
+                                           interval="{f} +{up}/−{down}"))]
+        anova = stats.get("anova", {})
+        for label, key in (("all methods", "all"), ("t-test-consistent methods", "consistent")):
+            res = anova.get(key)
+            if res and res.get("F") is not None:
+                parts.append(f"<p>ANOVA ({esc(label)}: {esc(', '.join(res['methods']))}): "
+                             f"F = {res['F']:.2f}, p = {res['p']:.3f}</p>")
+        if summary.get("truth_ppm") is not None:
+            rows = comparison_rows(stats, TABLE4)
+            head = ["method", "paper"] + [f"{k} {w}" for k in COMPARED_KEYS
+                                          for w in ("ours", "Table 4")]
+            parts += [f"<p>The {esc(name)} profile beside the paper's Table 4 (the simulated "
+                      "2015 challenge; for comparison only).</p>", _html_table([head, *rows])]
     parts.append("<p>Tables: " + ", ".join(f'<a href="{esc(_rel(p, root))}">{esc(p.name)}</a>'
                                             for p in tables) + "</p>")
     parts.append("<h2>Figures</h2>")

@@ -2,7 +2,7 @@
 
 Pure functions (:func:`collect_depths`, :func:`in_eclipse_fraction_of`,
 :func:`readout_of`, :func:`json_safe`), the task function :func:`stats_task`
-(writes ``depths.ecsv``, then ``summary.json`` last) and the planner
+(writes ``depths.ecsv`` and ``depths_paper.ecsv``, then ``summary.json`` last) and the planner
 :func:`plan_stats_tasks`.
 """
 
@@ -42,12 +42,13 @@ def good_frames(table) -> np.ndarray:
     return np.ones(len(table), dtype=bool)
 
 
-def collect_depths(layout: Layout, methods: list[str], epochs: list[int], flat: bool = False):
+def collect_depths(layout: Layout, methods: list[str], epochs: list[int], flat: bool = False,
+                   profile: str = "controlled"):
     """The depth table of the usable results, and the failures (method, epoch, error)."""
     rows, failures = [], []
     for m in methods:
         for e in epochs:
-            res = json.loads(layout.result(m, e, flat).read_text())
+            res = json.loads(layout.result(m, e, flat, profile).read_text())
             depth, err = res.get("depth_ppm"), res.get("depth_err_ppm")
             if res.get("failed") or depth is None or err is None or not (
                     np.isfinite(depth) and np.isfinite(err) and err > 0):
@@ -113,15 +114,19 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
     the summary (without execution-only keys).
     """
     layout = Layout(Path(root))
-    depths, failures = collect_depths(layout, methods, epochs)
-    counts = {m: int(np.sum(depths["method"] == m)) for m in methods}
-    scored = [m for m in methods if counts[m] >= MIN_EPOCHS]
-    if not scored:
-        raise DataError(layout.root / "results", "no method has usable depths in 2 or more "
-                                                 "epochs; see the 'error' of the result files")
-    excluded = [m for m in methods if m not in scored]
-    with atomic_path(layout.depths) as tmp:
-        depths.write(tmp, format="ascii.ecsv")
+    collected = {}
+    for profile in cfg.run.profiles:
+        depths, failures = collect_depths(layout, methods, epochs, profile=profile)
+        counts = {m: int(np.sum(depths["method"] == m)) for m in methods}
+        scored = [m for m in methods if counts[m] >= MIN_EPOCHS]
+        if not scored:
+            raise DataError(layout.result(methods[0], epochs[0], profile=profile).parent.parent,
+                            f"no method has usable depths in 2 or more epochs ({profile} "
+                            "profile); see the 'error' of the result files")
+        collected[profile] = (depths, failures, scored)
+    for profile, (depths, _, _) in collected.items():
+        with atomic_path(layout.depths_of(profile)) as tmp:
+            depths.write(tmp, format="ascii.ecsv")
     truth = _truth_rows(layout.truth())
     truth_ppm = None
     truth_varies = False
@@ -130,7 +135,8 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
         truth_ppm = float(np.mean(values))
         truth_varies = bool(np.ptp(values) > 1e-9)
     tables = {e: read_photometry(layout.photometry(e)) for e in epochs}
-    depth_for_noise = truth_ppm if truth_ppm is not None else float(np.mean(depths["depth_ppm"]))
+    first = collected[cfg.run.profiles[0]][0]
+    depth_for_noise = truth_ppm if truth_ppm is not None else float(np.mean(first["depth_ppm"]))
     analytic = analytic_photon_limit(
         [np.asarray(t["flux"], float)[good_frames(t)] for t in tables.values()],
         [np.asarray(t["background"], float)[good_frames(t)] for t in tables.values()],
@@ -144,15 +150,21 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
         empirical["method"] = plm
         empirical["failures"] = flat_failures
     sigma = analytic["sigma_phot_ppm"]
-    summary = summarize(depths, sigma_phot_ppm=sigma, truth_ppm=truth_ppm, methods=scored,
-                        seed=cfg.challenge.seed, n_bootstrap=cfg.run.bootstrap)
+    profiles = {}
+    for profile, (depths, failures, scored) in collected.items():
+        profiles[profile] = summarize(depths, sigma_phot_ppm=sigma, truth_ppm=truth_ppm,
+                                      methods=scored, seed=cfg.challenge.seed,
+                                      n_bootstrap=cfg.run.bootstrap)
+        profiles[profile].update({"method_names": scored, "failures": failures,
+                                  "methods_excluded": [m for m in methods if m not in scored]})
+    # The top level is the first profile's (the layout every earlier summary had).
+    summary = dict(profiles[cfg.run.profiles[0]])
     summary.update({
+        "profile": cfg.run.profiles[0],
+        "profiles": profiles,
         "challenge": cfg.challenge.name,
         "seed": cfg.challenge.seed,
         "epochs": epochs,
-        "method_names": scored,
-        "failures": failures,
-        "methods_excluded": excluded,
         "sigma_phot_ppm_analytic": sigma,
         "sigma_phot_ppm_empirical": None if empirical is None else empirical["sigma_phot_ppm"],
         "photon_limit": {"used": "analytic", "analytic": analytic, "empirical": empirical},
@@ -163,18 +175,25 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
     write_json(layout.summary, json_safe(summary))
 
 
-def summary_ok(depths: Path, summary: Path) -> bool:
-    """Resume check: ``summary.json`` parses and has its statistics; ``depths.ecsv`` reads."""
+def summary_ok(*paths: Path) -> bool:
+    """Resume check: ``summary.json`` (the last path) parses and has every profile's
+    statistics; each depth table (the other paths) reads."""
+    *depth_tables, summary = paths
     data = json.loads(Path(summary).read_text())
-    table = Table.read(depths, format="ascii.ecsv")
+    profiles = data.get("profiles") if isinstance(data, dict) else None
     return (isinstance(data, dict) and isinstance(data.get("methods"), dict)
-            and "photon_limit" in data and "method" in table.colnames)
+            and "photon_limit" in data and isinstance(profiles, dict)
+            and all(isinstance(p, dict) and isinstance(p.get("methods"), dict)
+                    for p in profiles.values())
+            and all("method" in Table.read(d, format="ascii.ecsv").colnames
+                    for d in depth_tables))
 
 
 def plan_stats_tasks(cfg: Config, layout: Layout, methods: list[str], epochs: list[int],
                      plm: str | None, config_mapping: dict, *,
                      after: tuple[str, ...]) -> list[Task]:
     """The one ``stats`` task, after every reduction (and the photometry and truth it reads)."""
+    depth_tables = tuple(layout.depths_of(p) for p in cfg.run.profiles)
     return [Task("stats", "stats", stats_task,
                  (cfg, str(layout.root), methods, epochs, plm, config_mapping),
-                 (layout.depths, layout.summary), tuple(after), check=summary_ok)]
+                 (*depth_tables, layout.summary), tuple(after), check=summary_ok)]

@@ -1,0 +1,73 @@
+"""The paper profile (issue 15): every method has its team's entry, and reduce applies it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import eclipsebench as eb
+from eclipsebench.config.reduce import ReduceSection
+from eclipsebench.decorrelate.base import _PAPER_ORDER
+from eclipsebench.errors import InputError
+from eclipsebench.fit import profiles
+from eclipsebench.fit.reduce import reduce_epoch, resolve_profile
+
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "methods.md"
+
+
+@pytest.mark.parametrize("method", eb.methods())
+def test_every_registered_method_has_a_paper_profile(method):
+    entry = profiles.paper_profile(method)
+    assert entry.phases and entry.ramps and entry.reported_error
+    for cell in ("centroid", "phase", "ramp", "fit", "error"):
+        assert entry.why.get(cell), f"{method}: no justification for the {cell} cell"
+
+
+def test_the_paper_seven_cite_appendix_b():
+    for method in _PAPER_ORDER:
+        why = profiles.paper_profile(method).why
+        assert any("App. B" in v for v in why.values()), method
+
+
+def test_docs_hold_the_generated_table():
+    assert profiles.profile_markdown() in DOCS.read_text(encoding="utf-8")
+
+
+def test_a_method_without_an_entry_is_one_line(polygain):
+    with pytest.raises(InputError, match="test-polygain.*no paper profile"):
+        resolve_profile(polygain.name, profile="paper")
+    with pytest.raises(InputError, match="profile 'team'"):
+        resolve_profile("pld", profile="team")
+
+
+def test_centroid_columns_and_the_fixed_width_fallback():
+    cols = ["x", "y", "x_col", "y_col", "x_gauss", "y_gauss", "x_gfix", "y_gfix"]
+    assert profiles.centroid_columns(cols, "gauss-fixed") == (("x_gfix", "y_gfix"), "")
+    assert profiles.centroid_columns(cols[:6], "gauss-fixed")[0] == ("x_gauss", "y_gauss")
+    with pytest.raises(InputError, match="gauss centroid columns"):
+        profiles.centroid_columns(["x", "y"], "gauss")
+
+
+def test_paper_profile_takes_the_team_choices(polygain, xo3_epoch, monkeypatch):
+    """Phase and ramp by BIC among the team's candidates, its centroid, its error rule."""
+    monkeypatch.setitem(profiles._PROFILES, polygain.name, profiles.PaperProfile(
+        team="test", centroid="gauss", phases=("flat", "quadratic"), ramps=("none",),
+        eclipse_shape="physical", sampler="leastsq", reported_error=("jacobian",),
+        fit="least squares"))
+    table = xo3_epoch["table"](noise=3e-4)
+    # the Gaussian centroid differs from x/y: the paper profile must regress on it
+    table["x_gauss"] = table["x"] + 1e-3
+    res = reduce_epoch(table, polygain.name, profile="paper")
+    assert res.profile == "paper" and res.phase == "quadratic"   # the truth is curved
+    assert set(res.profile_detail["bic"]) == {"flat/none", "quadratic/none"}
+    assert res.profile_detail["bic"]["quadratic/none"] < res.profile_detail["bic"]["flat/none"]
+    assert res.profile_detail["centroid"] == "x_gauss/y_gauss"
+    assert res.depth_err_method == "jacobian"
+    assert res.depth_err_ppm == pytest.approx(res.depth_err_jacobian_ppm)
+    assert res.depth_err_prayer_bead_ppm is None   # not reported by the team: not computed
+    ctrl = reduce_epoch(table, polygain.name, options=ReduceSection(phase="flat"))
+    assert ctrl.profile == "controlled" and ctrl.phase == "flat"
+    assert ctrl.depth_err_method in ("jacobian_beta", "prayer_bead")
+    assert np.isfinite(res.to_dict()["profile_detail"]["bic"]["flat/none"])
