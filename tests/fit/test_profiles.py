@@ -71,3 +71,23 @@ def test_paper_profile_takes_the_team_choices(polygain, xo3_epoch, monkeypatch):
     assert ctrl.profile == "controlled" and ctrl.phase == "flat"
     assert ctrl.depth_err_method in ("jacobian_beta", "prayer_bead")
     assert np.isfinite(res.to_dict()["profile_detail"]["bic"]["flat/none"])
+
+
+def test_prayer_bead_all_cycles_every_stride(kit, polygain, xo3_epoch):
+    """Issue 15 point 2: every cyclic shift (in steps of the stride), each refitted fully."""
+    from eclipsebench.fit.leastsq import fit_leastsq, prayer_bead
+    from eclipsebench.fit.reduce import prepare_epoch
+
+    prep = prepare_epoch(xo3_epoch["table"](noise=3e-4), polygain.name)
+    model = prep.astro_model(ReduceSection(phase="flat"))
+    fit = fit_leastsq(prep.systematics, model,
+                      model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd))
+    n = prep.n_frames
+    beads = prayer_bead(prep.systematics, model, fit, n_shifts=None, stride=n // 10,
+                        max_nfev=None)
+    assert beads.shape == (n // (n // 10), len(fit.theta))     # the fit and 9 shifts
+    assert np.all(np.isfinite(beads)) and np.ptp(beads[:, 0]) > 0
+    res = reduce_epoch(xo3_epoch["table"](noise=3e-4), polygain.name,
+                       options=ReduceSection(phase="flat", prayer_bead_mode="all",
+                                             prayer_bead_stride=n // 5))
+    assert res.depth_err_prayer_bead_ppm > 0

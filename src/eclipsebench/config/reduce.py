@@ -31,7 +31,17 @@ class ReduceSection:
         Ensemble size, step cap, steps between autocorrelation checks, and the
         chain length (in autocorrelation times) that counts as converged.
     prayer_bead_shifts : int
-        Cyclic residual shifts refitted for the prayer-bead error (0: none).
+        Cyclic residual shifts refitted for the prayer-bead error (0: none),
+        spread evenly over the series, each refit capped at 50 evaluations
+        (``prayer_bead_mode = "spread"``).
+    prayer_bead_mode : {"spread", "all"}
+        ``spread``: ``prayer_bead_shifts`` shifts (a quick estimate).
+        ``all``: every cyclic shift in steps of ``prayer_bead_stride`` points,
+        each refitted to convergence (Wong et al. 2014; the paper profile's
+        choice for the teams that reported a prayer bead).
+    prayer_bead_stride : int
+        Step of the full cycle in fitted points (64: one subarray cube of
+        frames, so that each cube's correlated residuals move together).
     beta_bin_minutes : [float, float]
         Range of bin widths over which the red-noise factor is averaged.
     radius_px : float
@@ -71,6 +81,8 @@ class ReduceSection:
     mcmc_block_steps: int = 250
     mcmc_tau_factor: float = 50.0
     prayer_bead_shifts: int = 16
+    prayer_bead_mode: Literal["spread", "all"] = "spread"
+    prayer_bead_stride: int = 64
     beta_bin_minutes: tuple[float, ...] = (10.0, 30.0)
     radius_px: float = 0.0
     stamp: Literal["stamp3", "stamp5"] = "stamp3"
@@ -88,6 +100,7 @@ class ReduceSection:
         check(self.mcmc_tau_factor > 0, "mcmc_tau_factor", "a positive number")
         check(0 <= self.prayer_bead_shifts <= 10000, "prayer_bead_shifts",
               "an integer between 0 (no prayer bead) and 10000")
+        check(self.prayer_bead_stride >= 1, "prayer_bead_stride", "at least 1 point")
         check(len(self.beta_bin_minutes) == 2 and 0 < self.beta_bin_minutes[0]
               <= self.beta_bin_minutes[1], "beta_bin_minutes",
               "[shortest, longest] bin width in minutes, 0 < shortest <= longest")

@@ -343,13 +343,25 @@ def _summarise(problem: _Problem, theta: np.ndarray, nfev: int, success: bool, m
 
 
 def prayer_bead(systematics: Systematics, astro_model: AstroModel, fit: FitResult, *,
-                n_shifts: int = 16, max_nfev: int | None = 50) -> np.ndarray:
+                n_shifts: int | None = 16, stride: int = 1,
+                max_nfev: int | None = 50) -> np.ndarray:
     """Refit after cyclic shifts of the residuals (the "prayer bead").
 
-    The residuals ``flux - model`` of ``fit`` are rolled by ``n_shifts`` offsets
-    spread evenly over the series, added back to the best model, and each
-    series is refitted from ``fit.theta`` (the method is rebuilt on the new
-    fluxes with ``Systematics.with_flux``).
+    The residuals ``flux - model`` of ``fit`` are rolled, added back to the best
+    model, and each series is refitted from ``fit.theta`` (the method is rebuilt
+    on the new fluxes with ``Systematics.with_flux``).
+
+    Parameters
+    ----------
+    n_shifts : int or None
+        That many offsets spread evenly over the series; None cycles through
+        every shift in steps of ``stride`` points (Wong et al. 2014; Gillon et
+        al. 2009): ``n // stride - 1`` refits.
+    stride : int
+        Step of the full cycle (points; e.g. the 64 frames of one subarray
+        cube, so that the correlated residuals of a cube move together).
+    max_nfev : int or None
+        Cap on each refit's evaluations (None: refit to convergence).
 
     Returns
     -------
@@ -357,10 +369,13 @@ def prayer_bead(systematics: Systematics, astro_model: AstroModel, fit: FitResul
         The best-fit parameters of the unshifted fit (row 0) and of each shift.
     """
     n = len(systematics.data.flux)
-    if n_shifts < 1:
+    if n_shifts is None:
+        shifts = np.arange(1, n // max(1, int(stride))) * max(1, int(stride))
+    elif n_shifts < 1:
         return fit.theta[None, :]
+    else:
+        shifts = (np.arange(1, n_shifts + 1) * n) // (n_shifts + 1)
     resid = systematics.data.flux - fit.model
-    shifts = (np.arange(1, n_shifts + 1) * n) // (n_shifts + 1)
     rows = [fit.theta]
     for s in shifts:
         shifted = systematics.with_flux(fit.model + np.roll(resid, int(s)))

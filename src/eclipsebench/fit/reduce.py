@@ -449,7 +449,7 @@ def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
     team = paper_profile(method)
     return replace(options, phase=team.phases[0], ramp=team.ramps[0],
                    eclipse_shape=team.eclipse_shape, sampler=team.sampler,
-                   profile="paper"), team
+                   prayer_bead_mode="all", profile="paper"), team
 
 
 def _fit_paper_profile(prep: PreparedEpoch, method: str, team: PaperProfile, *,
@@ -499,7 +499,11 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     pb_depth = pb_tecl = None
     if (errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True)
             and (reported is None or "prayer_bead" in reported)):
-        beads = prayer_bead(systematics, astro_model, fit, n_shifts=options.prayer_bead_shifts)
+        if options.prayer_bead_mode == "all":
+            beads = prayer_bead(systematics, astro_model, fit, n_shifts=None,
+                                stride=options.prayer_bead_stride, max_nfev=options.max_nfev)
+        else:
+            beads = prayer_bead(systematics, astro_model, fit, n_shifts=options.prayer_bead_shifts)
         pb_depth = float(np.std(beads[:, 0], ddof=1))
         pb_tecl = float(np.std(beads[:, 1], ddof=1))
 
