@@ -36,6 +36,30 @@ def test_reduce_writes_result_and_lightcurve(tmp_path, table_file, polygain, cap
     assert (tmp_path / "lc.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_mcmc_writes_the_chain_and_a_corner_plot(tmp_path, table_file, polygain, capsys):
+    """Issue 14 point 3: asymmetric posterior errors, the chain beside the result, a corner plot."""
+    import numpy as np
+    out = tmp_path / "r.json"
+    code = main(["reduce", str(table_file), "--method", polygain.name, "--phase", "flat",
+                 "--sampler", "mcmc", "--walkers", "12", "--steps", "300", "--prayer-bead", "0",
+                 "--out", str(out), "--plot", str(tmp_path / "lc.png")])
+    assert code == 0
+    text = capsys.readouterr().out
+    saved = json.loads(out.read_text())
+    assert "posterior" in text and saved["chain_file"] == str(tmp_path / "r.chain.npz")
+    chain = np.load(tmp_path / "r.chain.npz")
+    assert list(chain["names"][:2]) == ["depth", "t_ecl_bmjd"]
+    depth = chain["samples"][:, 0] * 1e6
+    lo, med, hi = np.percentile(depth, [15.865525393145708, 50, 84.13447460685429])
+    assert saved["mcmc_depth_err_lo_ppm"] == pytest.approx(med - lo)
+    assert saved["mcmc_depth_err_hi_ppm"] == pytest.approx(hi - med)
+    if saved["depth_err_method"] == "mcmc":
+        assert saved["depth_err_lo_ppm"] == pytest.approx(med - lo)
+    else:
+        assert saved["depth_err_lo_ppm"] == saved["depth_err_hi_ppm"] == saved["depth_err_ppm"]
+    assert (tmp_path / "lc.corner.png").read_bytes()[:4] == b"\x89PNG"
+
+
 def test_default_output_beside_the_table_and_text(table_file, polygain, capsys):
     code = main(["reduce", str(table_file), "--method", polygain.name, "--prayer-bead", "0",
                  "--compare-phases", "--phase", "linear"])

@@ -153,6 +153,12 @@ def lightcurve_path(result_path: str | Path) -> Path:
     return p.with_name(stem + ".lc.ecsv")
 
 
+def chain_file(result_path: str | Path) -> Path:
+    """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples)."""
+    return lightcurve_path(result_path).with_name(
+        lightcurve_path(result_path).name.replace(".lc.ecsv", ".chain.npz"))
+
+
 def run(args: argparse.Namespace) -> dict:
     # The fitter pulls in every method (numba, scikit-learn): imported when the command
     # runs, not for `eclipsebench --help`.
@@ -168,6 +174,7 @@ def run(args: argparse.Namespace) -> dict:
     lc_path = lightcurve_path(out)
     check_output_path(out, "--out", "file")
     check_output_path(lc_path, "--out (its light curve)", "file")
+    check_output_path(chain_file(out), "--out (its chain)", "file")
     if args.plot:
         check_plot_path(args.plot, "--plot")
     options, system = _options(args)
@@ -193,17 +200,27 @@ def run(args: argparse.Namespace) -> dict:
                                  method_options=method_options)
         summary["phase_models"] = sel.to_dict()
     summary.update({"table": str(table_path), "lightcurve_file": str(lc_path)})
+    chain_path = chain_file(out) if result.chain is not None else None
     with atomic_path(lc_path) as tmp:
         result.lightcurve_table().write(tmp, format="ascii.ecsv")
-    if args.plot:
-        from ..fit.plot import plot_reduced_lightcurve  # matplotlib, only for --plot
-        plot_reduced_lightcurve(result, args.plot)
-        summary["plot_file"] = str(args.plot)
-    summary = _clean(summary)
     try:
+        if chain_path is not None:
+            result.write_chain(chain_path)
+            summary["chain_file"] = str(chain_path)
+        if args.plot:
+            from ..fit.plot import plot_corner, plot_reduced_lightcurve  # matplotlib: --plot
+            plot_reduced_lightcurve(result, args.plot)
+            summary["plot_file"] = str(args.plot)
+            if result.chain is not None:
+                corner = Path(args.plot).with_suffix(".corner.png")
+                plot_corner(result.chain["names"], result.chain["samples"], corner)
+                summary["corner_file"] = str(corner)
+        summary = _clean(summary)
         write_json(out, summary)
     except BaseException:
-        lc_path.unlink(missing_ok=True)  # no light curve without its result
+        lc_path.unlink(missing_ok=True)  # no light curve or chain without its result
+        if chain_path is not None:
+            chain_path.unlink(missing_ok=True)
         raise
     summary["result_file"] = str(out)
     return summary
@@ -227,5 +244,12 @@ def format_text(result: dict) -> str:
             lines.append(f"  {row['phase']:<10} depth {row['depth_ppm']:7.1f} +- "
                          f"{row['depth_err_ppm']:5.1f} ppm  dBIC {row['delta_bic']:7.1f}  "
                          f"dAIC {row['delta_aic']:7.1f}")
-    lines.append(f"wrote         {result['result_file']} and {result['lightcurve_file']}")
+    if result.get("mcmc_steps"):
+        lines.insert(2, f"posterior     -{result['depth_err_lo_ppm']:.1f} / "
+                        f"+{result['depth_err_hi_ppm']:.1f} ppm ({result['mcmc_move']}, "
+                        f"{result['mcmc_walkers']} walkers x {result['mcmc_steps']} steps, "
+                        f"N/tau {result.get('mcmc_n_over_tau') or float('nan'):.0f})")
+    wrote = [result["result_file"], result["lightcurve_file"]] + [
+        result[k] for k in ("chain_file", "plot_file", "corner_file") if result.get(k)]
+    lines.append("wrote         " + ", ".join(wrote))
     return "\n".join(lines)

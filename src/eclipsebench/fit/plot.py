@@ -1,4 +1,5 @@
-"""A figure of one reduced epoch: the binned decorrelated light curve and the model."""
+"""Figures of one reduced epoch: the binned decorrelated light curve with the model, and
+the corner plot of its posterior."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import numpy as np
 
 from ..io.atomic import atomic_path
 
-__all__ = ["bin_series", "plot_reduced_lightcurve"]
+__all__ = ["bin_series", "plot_reduced_lightcurve", "plot_corner"]
 
 
 def bin_series(time: np.ndarray, values: np.ndarray, width_d: float):
@@ -57,6 +58,70 @@ def plot_reduced_lightcurve(result, path: str | os.PathLike, *, bin_minutes: flo
     axr.axhline(0.0, color="C3", lw=1)
     axr.set_xlabel(f"hours from mid-eclipse ({t0:.5f} BMJD_TDB)")
     axr.set_ylabel("residual (ppm)")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", metadata={"Software": None})
+
+
+def _display(name: str, values: np.ndarray) -> tuple[str, np.ndarray]:
+    """Axis label and values: the depth in ppm, the eclipse time in seconds from its median."""
+    if name == "depth":
+        return "depth (ppm)", values * 1e6
+    if name == "t_ecl_bmjd":
+        return "t_ecl - median (s)", (values - np.median(values)) * 86400.0
+    return name, values
+
+
+def plot_corner(names, samples: np.ndarray, path: str | os.PathLike, *, bins: int = 30) -> None:
+    """Write a PNG corner plot of posterior ``samples`` (n, p): histograms and 2-D densities.
+
+    Each diagonal panel is the marginal histogram with the 16th, 50th and
+    84th percentiles dashed; below it, the 2-D histogram of each pair.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> g = np.random.default_rng(0)
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "corner.png"
+    >>> plot_corner(["depth", "t_ecl_bmjd"], g.normal([1.8e-3, 5e4], [1e-4, 1e-3], (500, 2)), out)
+    >>> out.stat().st_size > 0
+    True
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    samples = np.asarray(samples, dtype=float)
+    names = [str(n) for n in names]
+    if samples.ndim != 2 or samples.shape[1] != len(names) or len(samples) < 2:
+        raise ValueError(f"samples: expected (n >= 2, {len(names)}), got {samples.shape}")
+    shown = [_display(n, samples[:, i]) for i, n in enumerate(names)]
+    p = len(names)
+    fig = Figure(figsize=(1.9 * p + 1, 1.9 * p + 1), dpi=100)
+    axes = np.atleast_2d(fig.subplots(p, p, squeeze=False))
+    for i in range(p):
+        for j in range(p):
+            ax = axes[i, j]
+            if j > i:
+                ax.set_axis_off()
+                continue
+            xi_label, xi = shown[j]
+            if i == j:
+                ax.hist(xi, bins=bins, color="0.4", histtype="step")
+                for q in np.percentile(xi, [15.865525393145708, 50.0, 84.13447460685429]):
+                    ax.axvline(q, color="C3", ls="--", lw=0.8)
+                ax.set_yticks([])
+            else:
+                ax.hist2d(xi, shown[i][1], bins=bins, cmap="Greys")
+            if i == p - 1:
+                ax.set_xlabel(xi_label, fontsize=8)
+            else:
+                ax.set_xticklabels([])
+            if j == 0 and i > 0:
+                ax.set_ylabel(shown[i][0], fontsize=8)
+            elif j > 0:
+                ax.set_yticklabels([])
+            ax.tick_params(labelsize=7)
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", metadata={"Software": None})

@@ -30,6 +30,7 @@ from ..config.system import SystemSection
 from ..decorrelate import available_methods, get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
 from ..errors import ConfigError, InputError
+from ..io.atomic import atomic_path
 from ..photometry.table import read_table
 from .astro_model import PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table, median_cadence_s, standardise_table
@@ -281,6 +282,21 @@ class EpochResult:
     profile: str = "controlled"
     #: The paper profile's choices: team, centroid columns, BIC of each phase/ramp tried.
     profile_detail: dict[str, Any] = field(default_factory=dict)
+    #: The MCMC's flat posterior samples (``{"names", "samples"}``), or None without MCMC.
+    chain: dict[str, np.ndarray] | None = field(default=None, repr=False, compare=False)
+
+    def write_chain(self, path) -> None:
+        """Write the posterior samples as ``.npz`` (``names``, ``samples``; depth as a fraction).
+
+        Raises
+        ------
+        InputError
+            No MCMC was run for this result.
+        """
+        if self.chain is None:
+            raise InputError(f"{path}: no chain to write (the fit ran no MCMC; --sampler mcmc)")
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, names=self.chain["names"], samples=self.chain["samples"])
 
     def to_dict(self) -> dict[str, Any]:
         """A flat, JSON-able dict (no arrays): the contract keys and the diagnostics."""
@@ -310,8 +326,15 @@ class EpochResult:
             if name not in ("depth", "t_ecl_bmjd"):
                 out[name] = value
                 out[f"{name}_err"] = self.param_errors[name]
+        lo = hi = self.depth_err_ppm
         if self.mcmc is not None:
             out.update({f"mcmc_{k}": v for k, v in self.mcmc.items()})
+            if self.depth_err_method.split("+")[0] == "mcmc":
+                lo, hi = self.mcmc["depth_err_lo_ppm"], self.mcmc["depth_err_hi_ppm"]
+                if self.depth_err_method.endswith("+separation"):
+                    extra = self.depth_err_separation_ppm
+                    lo, hi = float(np.hypot(lo, extra)), float(np.hypot(hi, extra))
+        out["depth_err_lo_ppm"], out["depth_err_hi_ppm"] = lo, hi
         out.update({f"depth_err_{k}_ppm": v for k, v in self.depth_err_own_ppm.items()})
         out["options"] = dict(self.options)
         out["diagnostics"] = dict(self.diagnostics)
@@ -335,15 +358,19 @@ def _largest(estimates: dict[str, float | None]) -> tuple[float, str]:
 
 
 def _mcmc_noise_scale(systematics: Systematics, fit: FitResult) -> float:
-    """Flux-error scale of the MCMC likelihood: sqrt(chi2_red), or 1 for own likelihoods.
+    """Flux-error scale of the MCMC likelihood: ``sqrt(chi2_red) max(1, beta_red)``.
 
     With the white-noise likelihood the reported flux errors are rescaled so
     that the residuals have chi2_red = 1 (the Jacobian covariance is scaled the
-    same way). A method with its own likelihood (GP) models its white noise.
+    same way), then multiplied by the red-noise factor as Winn et al. (2008)
+    and Gillon et al. (2010) do in their chains, so that the posterior carries
+    the correlated noise the white-noise likelihood cannot see. A method with
+    its own likelihood (GP) models its noise: 1.
     """
     if has_own_likelihood(systematics):
         return 1.0
-    return float(np.sqrt(max(fit.chi2_red, 1e-12)))
+    beta = fit.beta_red if np.isfinite(fit.beta_red) else 1.0
+    return float(np.sqrt(max(fit.chi2_red, 1e-12)) * max(1.0, beta))
 
 
 def _depth_derivative(astro_model: AstroModel, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
@@ -515,10 +542,15 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
                       block_steps=options.mcmc_block_steps, tau_factor=options.mcmc_tau_factor,
                       noise_scale=_mcmc_noise_scale(systematics, fit))
+        i = fit.names.index("depth")
         mcmc_info = {"move": mc.move, "walkers": mc.n_walkers, "steps": mc.n_steps,
                      "burn_in": mc.burn_in, "tau_max": float(np.max(mc.tau)),
+                     "n_over_tau": float(getattr(mc, "n_over_tau", np.nan)),
                      "acceptance": mc.acceptance, "converged": mc.converged,
-                     "depth_median_ppm": float(mc.median[0] * 1e6)}
+                     "noise_scale": _mcmc_noise_scale(systematics, fit),
+                     "depth_median_ppm": float(mc.median[i] * 1e6),
+                     "depth_err_lo_ppm": float((mc.median[i] - mc.p16[i]) * 1e6),
+                     "depth_err_hi_ppm": float((mc.p84[i] - mc.median[i]) * 1e6)}
 
     astro_fit, dastro = _depth_derivative(astro_model, fit)
     separation_var = _extra_depth_variance(systematics, astro_fit, dastro)
@@ -573,7 +605,9 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
         mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
         options=systematics.options.to_dict(), diagnostics=_jsonable(systematics.diagnostics()),
-        depth_err_own_ppm={k: v * 1e6 for k, v in own.items()}, lightcurve=lightcurve)
+        depth_err_own_ppm={k: v * 1e6 for k, v in own.items()}, lightcurve=lightcurve,
+        chain=None if mc is None else {"names": np.asarray(mc.names),
+                                       "samples": np.asarray(mc.samples)})
 
 
 def _jsonable(obj: Any) -> Any:
