@@ -149,6 +149,15 @@ def test_cli_unknown_method_exits_2(tmp_path, capsys):
     assert "run.methods" in capsys.readouterr().err
 
 
+def test_cli_bad_profiles_exit_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:   # argparse's own exit, one usage line
+        main(["run", "--out", str(tmp_path), "--profiles", "team"])
+    assert stop.value.code == 2 and "--profiles" in capsys.readouterr().err
+    assert main(["run", "--out", str(tmp_path), "--set", 'run.profiles=["paper", "paper"]']) == 2
+    assert "run.profiles" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
 def test_a_method_refusing_an_epoch_is_recorded_not_fatal(tiny_run, tmp_path, monkeypatch):
     cfg, root, _, _ = tiny_run
     for name in ("simulation", "photometry", "results", "results_paper"):
