@@ -153,7 +153,9 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     method : str
         A name from :func:`methods`.
     system : str or PlanetSystem, optional
-        The planet (default: the configuration's, XO-3b).
+        The planet (default: the configuration's, the built-in challenge's
+        ``"XO-3b (2015 challenge)"``; ``"XO-3b"`` has Wong et al. 2014's
+        elements, for real data).
     seed : int
         Run seed: every random stream of the fit and the method derives from it.
     options : mapping or the method's Options, optional

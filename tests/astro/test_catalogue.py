@@ -8,6 +8,7 @@ import pytest
 
 from eclipsebench.astro.catalogue import PlanetSystem, get_system, list_systems
 from eclipsebench.cli import main
+from eclipsebench.config.system import CHALLENGE_SYSTEM, SystemSection
 from eclipsebench.errors import InputError
 
 XO3B = {"period_days": 3.1915239, "t_transit_bjd": 2454449.86816, "ecc": 0.2769,
@@ -22,7 +23,29 @@ def test_xo3b_has_the_issue_values():
     assert set(XO3B) - {"v_mag"} <= set(s.references)
 
 
-@pytest.mark.parametrize("name", ["XO-3b", "HD 189733b", "HD 209458b", "WASP-43b", "WASP-18b"])
+def test_challenge_row_is_xo3b_with_the_2015_elements():
+    """Issue 15: the 2015 challenge's XO-3b differs from XO-3b only in e and omega."""
+    s = get_system(CHALLENGE_SYSTEM)
+    assert s.name == "XO-3b (2015 challenge)" and (s.ecc, s.omega_deg) == (0.2884, 346.0)
+    assert "Winn et al. 2008" in s.references["ecc"]
+    assert "Winn et al. 2008" in s.references["omega_deg"]
+    wong = get_system("XO-3b")
+    assert (wong.ecc, wong.omega_deg) == (0.2769, 347.2)
+    assert {k: v for k, v in s.to_dict().items() if k not in ("name", "references")} == \
+        {k: v for k, v in dict(wong.to_dict(), ecc=0.2884, omega_deg=346.0).items()
+         if k not in ("name", "references")}
+    # the built-in challenge uses it; XO-3b by name keeps Wong et al. 2014
+    assert SystemSection().name == CHALLENGE_SYSTEM
+
+
+@pytest.mark.parametrize("name", ["xo3b-challenge2015", "XO3B_CHALLENGE_2015",
+                                  "xo-3b (2015 challenge)", "XO-3b (2015 Challenge)"])
+def test_challenge_row_aliases(name):
+    assert get_system(name).name == CHALLENGE_SYSTEM
+
+
+@pytest.mark.parametrize("name", ["XO-3b", "XO-3b (2015 challenge)", "HD 189733b", "HD 209458b",
+                                  "WASP-43b", "WASP-18b"])
 def test_every_builtin_system_is_valid_and_referenced(name):
     s = get_system(name)
     assert s.name == name
@@ -34,7 +57,7 @@ def test_every_builtin_system_is_valid_and_referenced(name):
 def test_names_match_loosely():
     assert get_system("xo3b").name == "XO-3b"
     assert get_system("hd_189733 B").name == "HD 189733b"
-    assert len(list_systems()) == 5
+    assert len(list_systems()) == 6
 
 
 def _one_line(exc):
@@ -81,6 +104,20 @@ def test_user_catalogue_adds_systems(tmp_path):
     assert s.r_star_rsun == 1.2 and s.references == {"period_days": "me"}
     assert get_system("XO-3b", path).name == "XO-3b"  # built-in ones still found
     assert list_systems(path) == ["My-1b"]
+
+
+def test_user_catalogue_aliases(tmp_path):
+    body = "\n".join(f"{k} = {v!r}" for k, v in XO3B.items())
+    path = tmp_path / "mine.toml"
+    path.write_text(f'["My-1b"]\naliases = ["mine", "first-planet"]\n{body}\n')
+    assert get_system("First Planet", path).name == "My-1b"
+    # a user's name wins over a built-in alias
+    path.write_text(f'["xo3b-challenge2015"]\n{body}\n')
+    assert get_system("xo3b-challenge2015", path).ecc == 0.2769
+    path.write_text(f'["My-1b"]\naliases = "mine"\n{body}\n')
+    with pytest.raises(InputError) as exc:
+        get_system("mine", path)
+    assert "aliases must be a list of names" in _one_line(exc) and str(path) in str(exc.value)
 
 
 def test_bad_catalogue_files(tmp_path):

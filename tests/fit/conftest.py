@@ -145,8 +145,9 @@ def xo3_epoch():
     from eclipsebench.astro.catalogue import get_system
     from eclipsebench.astro.eclipse import EclipseShape
     from eclipsebench.astro.orbit import eclipse_time_bmjd
+    from eclipsebench.config.system import SystemSection
 
-    system = get_system("XO-3b")
+    system = get_system(SystemSection().name)  # the default planet, which reduce_epoch assumes
     t_pred = eclipse_time_bmjd(system, 57000.0)
     t_true = t_pred + 0.003
     time = t_true + np.arange(-0.2, 0.17, CADENCE_D)

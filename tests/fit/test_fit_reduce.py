@@ -17,7 +17,7 @@ FAST = ReduceSection(prayer_bead_shifts=4)
 
 def test_noiseless_epoch_gives_the_injected_depth_exactly(kit, polygain, xo3_epoch):
     res = reduce_epoch(xo3_epoch["table"](noise=0.0), polygain.name,
-                       options=ReduceSection(prayer_bead_shifts=0), system="XO-3b")
+                       options=ReduceSection(prayer_bead_shifts=0), system=xo3_epoch["system"])
     assert res.depth_ppm == pytest.approx(kit.TRUE_DEPTH * 1e6, abs=0.5)
     assert res.t_ecl_bmjd == pytest.approx(xo3_epoch["t_true"], abs=2e-6)
     assert res.params["c2_per_day2"] == pytest.approx(kit.TRUE_C2, rel=1e-3)

@@ -2,14 +2,19 @@
 
 The built-in catalogue is ``eclipsebench/data/systems.toml`` (one table per
 planet); a user catalogue is a TOML file of the same form, given by path.
-Names match case-insensitively, ignoring spaces, hyphens and underscores
-(``xo3b`` finds ``XO-3b``).
+Names match case-insensitively, ignoring spaces, hyphens, underscores and
+brackets (``xo3b`` finds ``XO-3b``); a table's optional ``aliases = [...]``
+gives more names it is found by (``xo3b-challenge2015`` finds
+``XO-3b (2015 challenge)``, the 2015 data challenge's elements).
 
 Examples
 --------
 >>> s = get_system("XO-3b")
 >>> s.period_days, s.ecc
 (3.1915239, 0.2769)
+>>> c = get_system("xo3b-challenge2015")
+>>> c.name, c.ecc, c.omega_deg
+('XO-3b (2015 challenge)', 0.2884, 346.0)
 """
 
 from __future__ import annotations
@@ -141,11 +146,26 @@ def _normalise(name: str) -> str:
     return "".join(ch for ch in name.lower() if ch.isalnum())
 
 
+def _aliases(name: str, table: dict[str, Any], where: str = "") -> list[str]:
+    """The table's ``aliases`` (a list of names; empty when absent)."""
+    aliases = table.get("aliases", [])
+    if not isinstance(aliases, list) or not all(isinstance(a, str) and a.strip()
+                                                for a in aliases):
+        raise InputError(f"{where}system {name!r}: aliases must be a list of names")
+    return aliases
+
+
 def system_from_mapping(name: str, table: dict[str, Any], *, source: str = "") -> PlanetSystem:
-    """Build a :class:`PlanetSystem` from one catalogue table, with one-line errors."""
+    """Build a :class:`PlanetSystem` from one catalogue table, with one-line errors.
+
+    The table's ``aliases`` (other names to look it up by) are checked and
+    not stored.
+    """
     where = f"{source}: " if source else ""
     if not isinstance(table, dict):
         raise InputError(f"{where}system {name!r}: expected a table of values")
+    _aliases(name, table, where)
+    table = {k: v for k, v in table.items() if k != "aliases"}
     known = {f.name for f in fields(PlanetSystem)} - {"name"}
     unknown = sorted(set(table) - known)
     if unknown:
@@ -203,7 +223,8 @@ def get_system(name: str, catalogue: str | Path | None = None) -> PlanetSystem:
     Parameters
     ----------
     name : str
-        Planet name, e.g. ``"XO-3b"`` (case, spaces and hyphens ignored).
+        Planet name or alias, e.g. ``"XO-3b"`` or ``"xo3b-challenge2015"``
+        (case, spaces, hyphens and brackets ignored).
     catalogue : str or Path, optional
         A user TOML catalogue; searched first, then the built-in one.
 
@@ -221,6 +242,10 @@ def get_system(name: str, catalogue: str | Path | None = None) -> PlanetSystem:
     for source, tables in sources:
         for sys_name, table in tables.items():
             if _normalise(sys_name) == key:
+                return system_from_mapping(sys_name, table, source=source)
+        for sys_name, table in tables.items():
+            where = f"{source}: " if source else ""
+            if key in {_normalise(a) for a in _aliases(sys_name, table, where)}:
                 return system_from_mapping(sys_name, table, source=source)
     known = sorted({n for _, tables in sources for n in tables})
     raise InputError(f"unknown planet {name!r} (known: {', '.join(known)})")

@@ -8,18 +8,24 @@ from typing import Literal
 
 from .base import check
 
+CHALLENGE_SYSTEM = "XO-3b (2015 challenge)"
+"""The built-in challenge's planet: XO-3b with the 2015 challenge's orbital elements."""
+
 
 @dataclass(frozen=True)
 class SystemSection:
     """The planetary system and the thermal phase-curve model.
 
     The defaults are the 2015 data challenge's choices (Section 2.3 of the
-    paper): XO-3b, Bond albedo 0, radiative time 1 day, rotation rate 1 (in
-    units of the orbital angular velocity at periastron), a monochromatic
-    4.5095 um ratio of blackbodies, and the eclipse depth fixed to 1875 ppm.
+    paper): XO-3b with the challenge's orbital elements (the catalogue row
+    ``"XO-3b (2015 challenge)"``: e = 0.2884, omega = 346 deg, Winn et al.
+    2008; the row ``"XO-3b"`` keeps Wong et al. 2014), Bond albedo 0,
+    radiative time 1 day, rotation rate 1 (in units of the orbital angular
+    velocity at periastron), a monochromatic 4.5095 um ratio of blackbodies,
+    and the eclipse depth fixed to 1875 ppm.
     """
 
-    name: str = "XO-3b"
+    name: str = CHALLENGE_SYSTEM
     catalogue: str = ""  # optional TOML file of user systems; empty: the built-in catalogue
     albedo: float = 0.0
     tau_rad_days: float = 1.0

@@ -162,7 +162,9 @@ def _target(cfg: Config) -> tuple[float, float, str]:
     system = get_system(cfg.system.name, cfg.system.catalogue or None)
     ra = getattr(system, "ra_deg", None)
     dec = getattr(system, "dec_deg", None)
-    name = system.name[:-1] if system.name.endswith("b") else system.name
+    # the star: the planet's name without a qualifier ("XO-3b (2015 challenge)") or its letter
+    name = system.name.split("(", 1)[0].strip()
+    name = name[:-1] if name.endswith("b") else name
     if ra is None or dec is None:
         ra, dec = XO3_RA_DEG, XO3_DEC_DEG
     return float(ra), float(dec), name.rstrip()
