@@ -15,16 +15,32 @@ from eclipsebench.astro.catalogue import get_system
 from eclipsebench.astro.lightcurve import light_curve_from_config, light_curve_function
 from eclipsebench.astro.thermal import ThermalModel, planck_lambda
 from eclipsebench.cli import main
-from eclipsebench.config.system import SystemSection
+from eclipsebench.commands.lightcurve import challenge_epoch_times_bmjd
+from eclipsebench.config.system import CHALLENGE_SYSTEM, SystemSection
 from eclipsebench.errors import InputError
 
-XO3B = get_system("XO-3b")
+XO3B = get_system("XO-3b")                   # Wong et al. 2014 elements
+XO3B_2015 = get_system(CHALLENGE_SYSTEM)     # the 2015 challenge's (Winn et al. 2008)
+PAPER_BIAS_PPM = {"flat": -51.0, "linear": -27.0, "quadratic": -2.0}  # Section 4.2
 
 
 @pytest.fixture(scope="module")
 def challenge():
-    """The 2015 challenge's light curve: A=0, tau_rad=1 d, Omega_rot=1, 4.5095 um, 1875 ppm."""
+    """The challenge's settings on XO-3b (Wong et al. 2014 elements): A=0, tau_rad=1 d,
+    Omega_rot=1, 4.5095 um, 1875 ppm."""
     return light_curve_function(XO3B)
+
+
+@pytest.fixture(scope="module")
+def challenge_2015():
+    """The built-in challenge's light curve: the same settings on its own elements."""
+    return light_curve_function(XO3B_2015)
+
+
+@pytest.fixture(scope="module")
+def epoch10_frames():
+    """Mid-frame times of the built-in challenge's epoch 10 (the paper's figure)."""
+    return challenge_epoch_times_bmjd(10)
 
 
 @pytest.fixture(scope="module")
@@ -122,29 +138,57 @@ def test_invalid_options_are_input_errors():
 
 def test_from_config_section():
     lc = light_curve_from_config(SystemSection())
-    assert lc.system.name == "XO-3b" and lc.depth_ppm == pytest.approx(1875.0)
+    assert lc.system.name == CHALLENGE_SYSTEM and lc.depth_ppm == pytest.approx(1875.0)
     assert lc.options["tau_rad_days"] == 1.0 and lc.options["flux_ratio_model"] == "monochromatic"
-    raw = light_curve_from_config(SystemSection(tau_rad_days=0.0, fix_depth_ppm=0.0,
-                                                quadrature="iracsim2015"))
+    raw = light_curve_from_config(SystemSection(name="XO-3b", tau_rad_days=0.0,
+                                                fix_depth_ppm=0.0, quadrature="iracsim2015"))
     assert raw.options["quadrature"] == "iracsim2015"
     assert raw.model_depth_ppm == pytest.approx(1863.1, abs=1.0)
 
 
-def test_section_4_2_linear_and_quadratic_biases(challenge):
-    """Paper Section 4.2: -27 ppm (linear) and -2 ppm (quadratic), each within 15 ppm."""
-    bias = phase_model_bias(challenge, epoch_times(EPOCH10_START_BMJD, 8.8))
-    assert bias["linear"] == pytest.approx(-27.0, abs=15.0)     # measured -25.2
-    assert bias["quadratic"] == pytest.approx(-2.0, abs=15.0)   # measured +1.0
-    assert bias["flat"] < bias["quadratic"] - 15.0              # flat biases low, as in the paper
+def test_challenge_elements_model_depths(challenge_2015):
+    """The challenge row (e = 0.2884, omega = 346 deg): a hotter periastron, deeper model."""
+    assert challenge_2015.model_depth_ppm == pytest.approx(1152.3, abs=1.0)
+    assert challenge_2015.depth_ppm == pytest.approx(1875.0, abs=1e-9)
+    raw = light_curve_function(XO3B_2015, tau_rad_days=0.0, fix_depth_ppm=0.0,
+                               quadrature="iracsim2015")
+    assert raw.model_depth_ppm == pytest.approx(1888.5, abs=1.0)  # +0.7 % from the paper's 1875
 
 
-@pytest.mark.xfail(strict=True, reason="measured -21.4 ppm against the paper's -51: the flat "
-                   "bias tracks where the eclipse sits in the window (about -31 ppm per hour "
-                   "later); the paper's value needs it 1 h later than the catalogue ephemeris "
-                   "puts it (docs/astro.md)")
-def test_section_4_2_flat_bias(challenge):
-    bias = phase_model_bias(challenge, epoch_times(EPOCH10_START_BMJD, 8.8))
-    assert bias["flat"] == pytest.approx(-51.0, abs=15.0)
+def test_epoch10_frames_are_the_simulated_epoch():
+    t = challenge_epoch_times_bmjd(10)
+    assert t.size == (11 + 233) * 64
+    assert t[0] == pytest.approx(EPOCH10_START_BMJD + 1.005 / 86400, abs=1e-9)  # mid-frame
+    gaps = np.diff(t) * 86400
+    assert np.allclose(np.sort(gaps)[:14000], 2.008)
+    assert gaps.max() == pytest.approx(300.0 + 2.008, abs=1e-3)  # the Pre -> Main gap
+    with pytest.raises(InputError, match="1-10"):
+        challenge_epoch_times_bmjd(11)
+
+
+def test_section_4_2_biases_with_the_challenge_elements(challenge_2015, epoch10_frames):
+    """Paper Section 4.2 (-51 / -27 / -2 ppm), each within 15 ppm, with the challenge's own
+    elements on the frames of its epoch 10. Measured -39.5 / -28.8 / -1.8."""
+    bias = phase_model_bias(challenge_2015, epoch10_frames)
+    for name, paper in PAPER_BIAS_PPM.items():
+        assert bias[name] == pytest.approx(paper, abs=15.0), name
+    assert bias["flat"] == pytest.approx(-39.5, abs=0.5)
+    assert bias["linear"] == pytest.approx(-28.8, abs=0.5)
+    assert bias["quadratic"] == pytest.approx(-1.8, abs=0.5)
+
+
+def test_section_4_2_biases_with_wong_elements(challenge, epoch10_frames):
+    """XO-3b's own (Wong et al. 2014) elements put the eclipse 0.47 h earlier in the window:
+    linear and quadratic still within 15 ppm (-25.2, +1.3), flat not (-19.6 against -51)."""
+    bias = phase_model_bias(challenge, epoch10_frames)
+    assert bias["flat"] == pytest.approx(-19.6, abs=0.5)
+    assert bias["linear"] == pytest.approx(-25.2, abs=0.5)
+    assert bias["quadratic"] == pytest.approx(1.3, abs=0.5)
+    assert abs(bias["flat"] - PAPER_BIAS_PPM["flat"]) > 15.0
+    # the lead's even 2.008 s grid over 8.8 h gives nearly the same (docs/astro.md)
+    grid = phase_model_bias(challenge, epoch_times(EPOCH10_START_BMJD, 8.8))
+    assert grid["flat"] == pytest.approx(-21.4, abs=0.5)
+    assert grid["linear"] == pytest.approx(bias["linear"], abs=0.5)
 
 
 def test_phase_curve_design_matrices_match_the_functions():
@@ -172,6 +216,43 @@ def test_cli_json_has_the_challenge_numbers(capsys):
     assert len(out["eclipses_in_window"]) == 1
     assert out["options"]["tau_rad_days"] == 1.0 and out["options"]["albedo"] == 0.0
     assert out["options"]["wavelength_um"] == 4.5095
+
+
+def test_cli_phase_bias_json(capsys):
+    assert main(["lightcurve", "--phase-bias", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["system"] == CHALLENGE_SYSTEM and out["epoch"] == 10
+    assert set(out["phase_bias_ppm"]) == {"flat", "linear", "quadratic"}
+    for name, paper in PAPER_BIAS_PPM.items():
+        assert out["phase_bias_ppm"][name] == pytest.approx(paper, abs=15.0), name
+    assert out["n_frames"] == 15616 and out["depth_ppm"] == pytest.approx(1875.0)
+    assert 4.0 < out["eclipse_after_start_hours"] < 5.5
+    # another epoch, another planet: the same frames, other numbers
+    assert main(["lightcurve", "XO-3b", "--phase-bias", "--epoch", "3", "--json"]) == 0
+    other = json.loads(capsys.readouterr().out)
+    assert other["system"] == "XO-3b" and other["epoch"] == 3
+    assert other["start_bmjd"] == pytest.approx(2212.5079 + 54999.5, abs=1e-4)
+
+
+def test_cli_phase_bias_text_and_bad_input(capsys):
+    assert main(["lightcurve", "--phase-bias"]) == 0
+    text = capsys.readouterr().out
+    assert "challenge epoch 10" in text and "quadratic" in text
+    for argv, words in [(["--epoch", "11"], "1-10"), (["--start", "57234"], "--start"),
+                        (["--out", "x.ecsv"], "--out")]:
+        assert main(["lightcurve", "--phase-bias", *argv]) == 2
+        err = capsys.readouterr().err
+        assert words in err and err.count("\n") == 1, argv
+    for argv, words in [(["--epoch", "0"], ">= 1"), (["--epoch", "x"], "integer")]:
+        with pytest.raises(SystemExit) as exc:  # argparse's one-line usage error
+            main(["lightcurve", "--phase-bias", *argv])
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert words in err and err.count("\n") == 1, argv
+    assert main(["lightcurve", "--epoch", "3"]) == 2
+    assert "only with --phase-bias" in capsys.readouterr().err
+    assert main(["lightcurve", "HD 189733b", "--phase-bias"]) == 2  # no eclipse in epoch 10
+    assert "no eclipse inside challenge epoch 10" in capsys.readouterr().err
 
 
 def test_cli_writes_table_and_plot(tmp_path, capsys):

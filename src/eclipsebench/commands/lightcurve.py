@@ -1,4 +1,9 @@
-"""``eclipsebench lightcurve``: the model light curve L(t) of a planet, written and summarised."""
+"""``eclipsebench lightcurve``: the model light curve L(t) of a planet, written and summarised.
+
+``--phase-bias`` is the paper's Section 4.2 check instead: the depth bias of
+flat, linear and quadratic phase models fitted to the noiseless L(t) of one
+epoch of the built-in challenge (:func:`eclipsebench.astro.bias.phase_model_bias`).
+"""
 
 from __future__ import annotations
 
@@ -7,31 +12,47 @@ import argparse
 import numpy as np
 from astropy.table import Table
 
-from ..astro.bias import EPOCH10_START_BMJD, epoch_times
+from ..astro.bias import EPOCH10_START_BMJD, epoch_times, phase_model_bias
 from ..astro.catalogue import get_system
 from ..astro.lightcurve import light_curve_function
 from ..astro.orbit import BMJD_OFFSET
+from ..config import Config
+from ..config.system import CHALLENGE_SYSTEM
 from ..errors import InputError
 from ..io.atomic import atomic_path
 from ..io.paths import check_plot_path
-from .options import check_output_path, finite_float, nonnegative_float, positive_float
+from ..simulation.plan import epoch_start_times_bmjd, plan_epoch
+from .options import (
+    check_output_path,
+    finite_float,
+    nonnegative_float,
+    positive_float,
+    positive_int,
+)
 
 NAME = "lightcurve"
 HELP = ("Model light curve L(t) of a star and planet (Cowan & Agol thermal phase curve, "
-        "eclipses, transits); defaults are the 2015 challenge's XO-3b settings.")
+        "eclipses, transits), or with --phase-bias the Section 4.2 depth bias of the phase "
+        "models; defaults are the 2015 challenge's XO-3b settings.")
+
+PHASE_BIAS_MODELS = ("flat", "linear", "quadratic")
+PHASE_BIAS_EPOCH = 10  # the epoch of the paper's figure of the predicted light curve
+_WINDOW_DEFAULTS = {"start": EPOCH10_START_BMJD, "hours": 8.8, "cadence_s": 2.008}
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("system", metavar="SYSTEM", nargs="?", default="XO-3b",
-                   help="planet name from the catalogue (e.g. XO-3b, 'HD 189733b')")
+    p.add_argument("system", metavar="SYSTEM", nargs="?", default=CHALLENGE_SYSTEM,
+                   help="planet name or alias from the catalogue (e.g. XO-3b, 'HD 189733b'; "
+                        f"default: the built-in challenge's, {CHALLENGE_SYSTEM!r})")
     p.add_argument("--catalogue", metavar="FILE.toml", default=None,
                    help="a user catalogue of systems (TOML), searched before the built-in one")
-    p.add_argument("--start", type=finite_float(), default=EPOCH10_START_BMJD, metavar="BMJD",
-                   help="first sample, BMJD_TDB (default: the paper's simulated epoch 10)")
-    p.add_argument("--hours", type=positive_float(), default=8.8, metavar="H",
-                   help="length of the light curve in hours")
-    p.add_argument("--cadence-s", type=positive_float(), default=2.008, metavar="S",
-                   help="sampling interval in seconds (IRAC 2 s subarray frames by default)")
+    p.add_argument("--start", type=finite_float(), default=None, metavar="BMJD",
+                   help="first sample, BMJD_TDB (default: the paper's simulated epoch 10, "
+                        f"{EPOCH10_START_BMJD:.4f})")
+    p.add_argument("--hours", type=positive_float(), default=None, metavar="H",
+                   help="length of the light curve in hours (default: 8.8)")
+    p.add_argument("--cadence-s", type=positive_float(), default=None, metavar="S",
+                   help="sampling interval in seconds (default: 2.008, IRAC 2 s subarray frames)")
     p.add_argument("--albedo", type=nonnegative_float(), default=0.0, metavar="A",
                    help="Bond albedo, 0 <= A < 1")
     p.add_argument("--tau-rad", type=nonnegative_float(), default=1.0, metavar="DAYS",
@@ -49,19 +70,103 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="surface sum of the thermal model (iracsim2015 reproduces the challenge's)")
     p.add_argument("--out", metavar="FILE.ecsv", help="write time_bmjd, flux and its components")
     p.add_argument("--plot", metavar="FILE.png", help="plot the light curve")
+    p.add_argument("--phase-bias", action="store_true",
+                   help="instead: the paper's Section 4.2 check, the fitted-minus-true depth "
+                        "(ppm) of flat, linear and quadratic phase models fitted to the "
+                        "noiseless L(t) at the frames of one epoch of the built-in challenge")
+    p.add_argument("--epoch", type=positive_int(), default=None, metavar="N",
+                   help="with --phase-bias: the challenge epoch, 1 to its number of epochs "
+                        f"(default: {PHASE_BIAS_EPOCH}, the epoch of the paper's figure)")
+
+
+def challenge_epoch_times_bmjd(epoch: int, cfg: Config | None = None) -> np.ndarray:
+    """Mid-frame times (BMJD_TDB) of every frame of one epoch of a challenge.
+
+    The frames the simulator renders for that epoch (both AORs, Table 2's
+    start times; :func:`eclipsebench.simulation.plan.plan_epoch`), each at
+    the centre of its Fowler weights, where the simulator evaluates L(t).
+
+    Parameters
+    ----------
+    epoch : int
+        1 to ``cfg.challenge.epochs``.
+    cfg : Config, optional
+        Default: the built-in challenge.
+
+    Examples
+    --------
+    >>> t = challenge_epoch_times_bmjd(10)
+    >>> t.size, round(float(t[0]), 4), round(float(t[-1] - t[0]) * 24, 2)
+    (15616, 57234.3406, 8.85)
+    """
+    cfg = cfg if cfg is not None else Config()
+    if not 1 <= epoch <= cfg.challenge.epochs:
+        raise InputError(f"--epoch: expected an epoch of the challenge, 1-{cfg.challenge.epochs}, "
+                         f"got {epoch}")
+    obs = cfg.observation
+    period = get_system(cfg.system.name, cfg.system.catalogue or None).period_days
+    start = float(epoch_start_times_bmjd(obs.start_times_jd, epoch, period)[epoch - 1])
+    plan = plan_epoch(obs, epoch, start, cfg.challenge.seed)
+    # as simulate_aor: time_bmjd at the centre of the Fowler weights, (2 FN + WT + 1)/2 ticks
+    tick_mid_s = 0.5 * (2 * obs.fowler + obs.wait + 1) * obs.sample_time_s
+    return np.concatenate([plan.to_bmjd(a.frame_starts_s().ravel() + tick_mid_s)
+                           for a in plan.aors])
+
+
+def _light_curve_options(args: argparse.Namespace) -> dict:
+    if not 0.0 <= args.albedo < 1.0:
+        raise InputError(f"--albedo: expected 0 <= A < 1, got {args.albedo}")
+    return dict(albedo=args.albedo, tau_rad_days=args.tau_rad, omega_rot=args.omega_rot,
+                flux_ratio_model=args.flux_ratio_model, wavelength_um=args.wavelength,
+                quadrature=args.quadrature)
+
+
+def _run_phase_bias(args: argparse.Namespace) -> dict:
+    """Section 4.2: the depth bias of each phase model on one challenge epoch's noiseless L(t)."""
+    for name in ("start", "hours", "cadence_s", "out", "plot"):
+        if getattr(args, name) is not None:
+            option = "--" + name.replace("_", "-")
+            raise InputError(f"{option}: not with --phase-bias (the frames are those of the "
+                             "challenge epoch; choose it with --epoch)")
+    epoch = PHASE_BIAS_EPOCH if args.epoch is None else args.epoch
+    time = challenge_epoch_times_bmjd(epoch)
+    system = get_system(args.system, args.catalogue)
+    lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **_light_curve_options(args))
+    t0, t1 = float(time[0]), float(time[-1])
+    inside = lc.eclipse_times_bmjd(t0, t1)
+    if not inside:
+        raise InputError(f"{system.name}: no eclipse inside challenge epoch {epoch} "
+                         f"(BMJD {t0:.4f}-{t1:.4f}); the phase-model bias needs one")
+    t_ecl = min(inside, key=lambda t: abs(t - 0.5 * (t0 + t1)))
+    bias = phase_model_bias(lc, time, PHASE_BIAS_MODELS, t_ecl_bmjd=t_ecl)
+    return {
+        "system": system.name,
+        "epoch": int(epoch),
+        "phase_bias_ppm": bias,
+        "depth_ppm": lc.depth_ppm,
+        "t_eclipse_bmjd": float(t_ecl),
+        "eclipse_after_start_hours": (float(t_ecl) - t0) * 24.0,
+        "start_bmjd": t0,
+        "stop_bmjd": t1,
+        "n_frames": int(time.size),
+        "options": lc.options,
+    }
 
 
 def run(args: argparse.Namespace) -> dict:
+    if args.phase_bias:
+        return _run_phase_bias(args)
+    if args.epoch is not None:
+        raise InputError("--epoch: only with --phase-bias")
+    for name, value in _WINDOW_DEFAULTS.items():
+        if getattr(args, name) is None:
+            setattr(args, name, value)
     if args.out:
         check_output_path(args.out, "--out", "file")
     if args.plot:
         check_plot_path(args.plot, "--plot")
-    if not 0.0 <= args.albedo < 1.0:
-        raise InputError(f"--albedo: expected 0 <= A < 1, got {args.albedo}")
+    options = _light_curve_options(args)
     system = get_system(args.system, args.catalogue)
-    options = dict(albedo=args.albedo, tau_rad_days=args.tau_rad, omega_rot=args.omega_rot,
-                   flux_ratio_model=args.flux_ratio_model, wavelength_um=args.wavelength,
-                   quadrature=args.quadrature)
     lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **options)
     instantaneous = lc if args.tau_rad == 0 else light_curve_function(
         system, fix_depth_ppm=0.0, **{**options, "tau_rad_days": 0.0})
@@ -140,6 +245,8 @@ def _plot(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
 
 
 def format_text(result: dict) -> str:
+    if "phase_bias_ppm" in result:
+        return _format_phase_bias(result)
     lines = [
         f"system                {result['system']}",
         f"eclipse depth         {result['eclipse_depth_ppm']:.1f} ppm"
@@ -155,4 +262,14 @@ def format_text(result: dict) -> str:
         lines.append(f"written               {result['out_file']}")
     if "plot_file" in result:
         lines.append(f"plot                  {result['plot_file']}")
+    return "\n".join(lines)
+
+
+def _format_phase_bias(result: dict) -> str:
+    lines = [f"{result['system']}, challenge epoch {result['epoch']}: {result['n_frames']} frames "
+             f"from BMJD {result['start_bmjd']:.4f}, mid-eclipse "
+             f"{result['eclipse_after_start_hours']:.2f} h after the start, depth "
+             f"{result['depth_ppm']:.1f} ppm",
+             "phase model   depth bias (ppm, fitted - true; Section 4.2)"]
+    lines += [f"{name:<13} {value:+8.1f}" for name, value in result["phase_bias_ppm"].items()]
     return "\n".join(lines)
