@@ -86,3 +86,26 @@ def test_errors_are_one_line_exit_2(tmp_path, table_file, polygain, capsys, xo3_
     assert "outside the time span" in capsys.readouterr().err
     assert main(["reduce", str(table_file), "--method", polygain.name, "--option", "k"]) == 2
     assert "--option" in capsys.readouterr().err
+
+
+def test_several_tables_are_fitted_jointly(tmp_path, xo3_epoch, polygain, capsys):
+    """Issue 17 point 4: one depth over epochs, beside the epochs fitted alone."""
+    folder = tmp_path / "phot"
+    folder.mkdir()
+    for i, seed in enumerate((31, 32, 33), start=1):
+        t = xo3_epoch["table"](seed=seed, noise=5e-4)[::2]
+        t.meta["EPOCH"] = i
+        t.write(folder / f"epoch_{i:02d}.fits")
+    code = main(["reduce", str(folder), "--method", polygain.name, "--phase", "quadratic",
+                 "--prayer-bead", "0", "--json"])
+    assert code == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["joint"] and res["epochs"] == [1, 2, 3] and len(res["per_epoch"]) == 3
+    assert (folder / f"joint.{polygain.name}.json").is_file()
+    alone = [e["depth_alone_err_ppm"] for e in res["per_epoch"]]
+    assert res["depth_combined_err_ppm"] == pytest.approx(sum(a**-2 for a in alone) ** -0.5)
+    # one depth from three epochs: about the combination of the three errors
+    assert 0.7 < res["depth_err_ppm"] / res["depth_combined_err_ppm"] < 1.4
+    assert abs(res["depth_ppm"] - 1875.0) < 3 * res["depth_err_ppm"]
+    assert main(["reduce", str(folder), "--method", polygain.name, "--sampler", "mcmc"]) == 2
+    assert "applies to one table" in capsys.readouterr().err

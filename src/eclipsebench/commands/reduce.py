@@ -23,9 +23,11 @@ HELP = ("Fit one epoch's photometry table with one decorrelation method and the 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("table", metavar="TABLE",
+    p.add_argument("table", metavar="TABLE", nargs="+",
                    help="photometry table of one epoch (FITS, ECSV or CSV; another pipeline's "
-                        "table needs time_bmjd, flux, flux_err, x, y: docs/photometry.md)")
+                        "table needs time_bmjd, flux, flux_err, x, y: docs/photometry.md); "
+                        "several tables, or a folder of them, are fitted jointly with one "
+                        "depth (each epoch's own time, phase and systematics)")
     p.add_argument("--method", required=True, metavar="NAME",
                    help="decorrelation method: the paper's bliss, gp, ica, kr-data, kr-pmap, pld, "
                         "segpoly; SPCA's poly2-poly5, pld-aper; or a plugin's (eb.methods())")
@@ -153,6 +155,60 @@ def lightcurve_path(result_path: str | Path) -> Path:
     return p.with_name(stem + ".lc.ecsv")
 
 
+_TABLE_SUFFIXES = (".fits", ".fit", ".ecsv", ".csv")
+
+
+def _table_paths(items: list[str]) -> list[Path]:
+    """The tables named, a folder's tables (sorted by name), each checked to exist."""
+    paths: list[Path] = []
+    for item in items:
+        p = Path(item)
+        if p.is_dir():
+            found = sorted(q for q in p.iterdir() if q.is_file()
+                           and q.suffix.lower() in _TABLE_SUFFIXES and ".lc." not in q.name)
+            if not found:
+                raise InputError(f"{p}: no photometry tables (.fits, .ecsv, .csv) in this folder")
+            paths += found
+        elif p.is_file():
+            paths.append(p)
+        else:
+            raise InputError(f"{p}: no such photometry table")
+    if len(set(paths)) != len(paths):
+        raise InputError("TABLE: a table is given twice")
+    return paths
+
+
+def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
+    """Several epochs with one depth (issue 17 point 4): ``reduce_joint``, one JSON."""
+    from ..fit.data import standardise_table
+    from ..fit.reduce import check_method_options, reduce_joint
+    from ..photometry.table import read_table
+
+    for flag, value in (("--sampler mcmc", args.sampler == "mcmc"),
+                        ("--profile paper", args.profile == "paper"),
+                        ("--compare-phases", args.compare_phases), ("--plot", args.plot)):
+        if value:
+            raise InputError(f"{flag}: applies to one table; a joint fit of {len(paths)} "
+                             "tables is least squares with the controlled settings")
+    out = Path(args.out) if args.out else paths[0].parent / f"joint.{args.method}.json"
+    check_output_path(out, "--out", "file")
+    options, system = _options(args)
+    check_method_options(options)
+    tables = []
+    for path in paths:
+        table = read_table(path)
+        table.meta.setdefault("FILENAME", str(path))
+        tables.append(standardise_table(table, columns=_column_map(args.columns),
+                                        time_column=args.time_column,
+                                        time_format=args.time_format, labels=_TABLE_LABELS))
+    result = reduce_joint(tables, args.method, options=options, system=system, seed=args.seed,
+                          pmap=args.pmap, method_options=_method_options(args.method_options))
+    summary = _clean({**result.to_dict(), "tables": [str(p) for p in paths]})
+    write_json(out, summary)
+    summary["result_file"] = str(out)
+    return summary
+
+
 def chain_file(result_path: str | Path) -> Path:
     """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples)."""
     return lightcurve_path(result_path).with_name(
@@ -166,9 +222,10 @@ def run(args: argparse.Namespace) -> dict:
     from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
     from ..photometry.table import read_table
 
-    table_path = Path(args.table)
-    if not table_path.is_file():
-        raise InputError(f"{table_path}: no such photometry table")
+    paths = _table_paths(args.table)
+    if len(paths) > 1:
+        return _run_joint(args, paths)
+    table_path = paths[0]
     out = Path(args.out) if args.out else table_path.with_name(
         f"{table_path.stem}.{args.method}.json")
     lc_path = lightcurve_path(out)
@@ -227,6 +284,19 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def format_text(result: dict) -> str:
+    if result.get("joint"):
+        lines = [f"method        {result['method']}, joint fit of {len(result['epochs'])} "
+                 f"epochs ({result['phase']} phase)",
+                 f"depth         {result['depth_ppm']:.1f} +- {result['depth_err_ppm']:.1f} ppm "
+                 "(one depth for every epoch)",
+                 f"combined      {result['depth_combined_ppm']:.1f} +- "
+                 f"{result['depth_combined_err_ppm']:.1f} ppm (the epochs fitted alone, "
+                 "inverse-variance mean)"]
+        for e in result["per_epoch"]:
+            lines.append(f"  epoch {e['epoch']}: alone {e['depth_alone_ppm']:7.1f} +- "
+                         f"{e['depth_alone_err_ppm']:5.1f} ppm, beta_red {e['beta_red']:.2f}")
+        lines.append(f"wrote         {result['result_file']}")
+        return "\n".join(lines)
     lines = [f"method        {result['method']} (epoch {result['epoch']}, phase {result['phase']}, "
              f"{result['sampler']}, {result.get('profile', 'controlled')} profile)",
              f"depth         {result['depth_ppm']:.1f} +- {result['depth_err_ppm']:.1f} ppm "

@@ -704,8 +704,23 @@ class JointResult:
     t_ecl_bmjd: tuple[float, ...]
     per_epoch: tuple[dict[str, Any], ...]
 
+    @property
+    def depth_combined_ppm(self) -> float:
+        """Inverse-variance mean of the epochs' depths fitted alone."""
+        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
+        return float(np.sum(w * [e["depth_alone_ppm"] for e in self.per_epoch]) / np.sum(w))
+
+    @property
+    def depth_combined_err_ppm(self) -> float:
+        """``1 / sqrt(sum 1 / sigma_i^2)`` of the epochs' errors fitted alone."""
+        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
+        return float(1.0 / np.sqrt(np.sum(w)))
+
     def to_dict(self) -> dict[str, Any]:
-        return {"method": self.method, "epochs": list(self.epochs), "depth_ppm": self.depth_ppm,
+        return {"method": self.method, "joint": True, "epochs": list(self.epochs),
+                "depth_ppm": self.depth_ppm,
+                "depth_combined_ppm": self.depth_combined_ppm,
+                "depth_combined_err_ppm": self.depth_combined_err_ppm,
                 "depth_err_ppm": self.depth_err_ppm,
                 "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
                 "beta_red": self.beta_red, "chi2_red": self.chi2_red, "bic": self.bic,
@@ -723,7 +738,6 @@ class _JointProblem:
         self.offsets = np.concatenate([[1], 1 + np.cumsum(self.sizes)]).astype(int)
         self.lower = np.concatenate([[problems[0].lower[0]]] + [p.lower[1:] for p in problems])
         self.upper = np.concatenate([[problems[0].upper[0]]] + [p.upper[1:] for p in problems])
-        self.n_rows = [len(p.sys.data.flux) for p in problems]
 
     def epoch_theta(self, theta: np.ndarray, i: int) -> np.ndarray:
         return np.concatenate([[theta[0]], theta[self.offsets[i]:self.offsets[i + 1]]])
@@ -739,15 +753,19 @@ class _JointProblem:
                                for i, p in enumerate(self.problems)])
 
     def jacobian(self, theta: np.ndarray, *, central: bool = False) -> np.ndarray:
-        """Block-structured finite differences: each epoch's block touches only its rows."""
-        jac = np.zeros((sum(self.n_rows), len(theta)))
+        """Block-structured finite differences: each epoch's block touches only its rows.
+
+        An epoch's rows are its residuals (bins, for a method that fits bins).
+        """
+        blocks = [p.jacobian(self.epoch_theta(theta, i), central=central)
+                  for i, p in enumerate(self.problems)]
+        jac = np.zeros((sum(len(b) for b in blocks), len(theta)))
         row = 0
-        for i, p in enumerate(self.problems):
-            block = p.jacobian(self.epoch_theta(theta, i), central=central)
-            rows = slice(row, row + self.n_rows[i])
+        for i, block in enumerate(blocks):
+            rows = slice(row, row + len(block))
             jac[rows, 0] = block[:, 0]
             jac[rows, self.offsets[i]:self.offsets[i + 1]] = block[:, 1:]
-            row += self.n_rows[i]
+            row += len(block)
         return jac
 
 
@@ -759,9 +777,13 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
 
     Each epoch is first fitted alone (its solution starts the joint fit), then
-    all are fitted together by least squares. The depth error is the Jacobian
-    error times ``max(1, beta_red)``, with ``beta_red`` the mean of the
-    epochs' red-noise factors.
+    all are fitted together by least squares, as the KR/Data and BLISS teams
+    did besides their per-epoch fits (paper, App. B.1, B.4). The depth error is
+    the Jacobian error times ``max(1, beta_red)``, with ``beta_red`` the mean
+    of the epochs' red-noise factors. ``per_epoch`` keeps each epoch's fit
+    alone (``depth_alone_ppm``, ``depth_alone_err_ppm``: Jacobian x
+    max(1, beta_red)), and ``depth_combined_ppm`` / ``depth_combined_err_ppm``
+    their inverse-variance combination, to set beside the joint depth.
     """
     tables = list(tables)
     if not tables:
@@ -804,7 +826,10 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         per_epoch.append({"epoch": prep.epoch, "t_ecl_bmjd": s.value("t_ecl_bmjd"),
                           "rms_ppm": s.rms_ppm, "beta_red": s.beta_red, "chi2_red": s.chi2_red,
                           "n_points": s.n_data,
-                          "depth_alone_ppm": fits[i].value("depth") * 1e6})
+                          "depth_alone_ppm": fits[i].value("depth") * 1e6,
+                          "depth_alone_err_ppm": fits[i].error("depth") * 1e6
+                          * (max(1.0, fits[i].beta_red) if np.isfinite(fits[i].beta_red)
+                             else 1.0)})
     chi2_red = chi2 / (n - k)
     jac = joint.jacobian(theta, central=True)
     cov = _covariance(jac, chi2_red)
