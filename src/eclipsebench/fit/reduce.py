@@ -78,7 +78,8 @@ def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: s
 
 
 def resolve_system(system: Any):
-    """A PlanetSystem from None (the configured default, XO-3b), a name, or a PlanetSystem."""
+    """A PlanetSystem from None (the configured default: the 2015 challenge's XO-3b), a name,
+    or a PlanetSystem."""
     if system is None:
         return get_system(SystemSection().name)
     if isinstance(system, str):
@@ -405,7 +406,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     options : ReduceSection
         Phase and ramp model, sampler, error settings (``[reduce]``).
     system : str, PlanetSystem or None
-        The planet (default: the configured system, XO-3b).
+        The planet (default: the configured system, the 2015 challenge's XO-3b; give
+        "XO-3b" for real data).
     seed : int
         Run seed; every stream of the fit and of the method is
         ``rng(seed, "reduce", epoch, method, ...)`` (the MCMC's ends in ``"mcmc"``).
