@@ -92,9 +92,16 @@ class SimulationSection:
     switches changed draw from the same photon and read-noise streams in the
     same order. ``pointing_ranges`` overrides entries of Table 5
     (``"name=C:value"``, ``"name=U:lo:hi"``, ``"name=G:lo:hi"``).
+
+    ``noise_model``: ``"physical"`` (independent Poisson increments per tick),
+    ``"iracsim2015"`` (the 2015 challenge's frames: IRACSIM's compounding
+    Poisson noise, 16.8 e per read, and the background level of the public
+    2015 cube, ``background_e_per_px`` being the sky it put under its PRFs;
+    see ``docs/simulate.md``) or ``"none"`` (noise-free frames: no photon,
+    read or background noise; pointing, gain and eclipse kept).
     """
 
-    noise_model: Literal["physical", "iracsim2015"] = "physical"
+    noise_model: Literal["physical", "iracsim2015", "none"] = "physical"
     flux_aperture_e: float = 73246.0
     aperture_radius_px: float = 2.25
     background_e_per_px: float = 55.4  # 881 e in the r = 2.25 px aperture (paper Sec. 3.3)

@@ -102,7 +102,9 @@ def calibration_frames(cfg: Config, chunk: int, n_total: int | None = None, *,
     (15, 15); frames scatter about their pointing by 0.01 px. Each frame is a
     stamp of :func:`calibration_stamp_half_px` about the star's nearest pixel
     with ``flux_aperture_e`` electrons in the ``simulation.aperture_radius_px``
-    aperture, the sky, physical Fowler noise and read noise of ``mode``.
+    aperture, the sky, physical Fowler noise and read noise of ``mode`` (none
+    of either with ``simulation.noise_model = "none"``: the noise-free
+    Fowler sum).
     Streams: ``("simulate", "calibration", chunk, "positions"|"photon"|"read")``,
     so the output depends on the seed only, not on how chunks are spread over
     workers.
@@ -129,6 +131,9 @@ def calibration_frames(cfg: Config, chunk: int, n_total: int | None = None, *,
     half = calibration_stamp_half_px(cfg.photometry)
     stamps, x0, y0 = star.prf.render_stamp(x_true, y_true, half=half)
     rate = stamps * (e_per_unit / ticks_exp) + bg_per_tick
+    if sim.noise_model == "none":
+        # sum_i (S_i - P_i) / FN of a constant rate: FN + WT ticks' worth
+        return CalibrationFrames(rate * ticks_exp, x0, y0, x_true, y_true)
     frames = fowler_uniform(rate, mode, rng(seed, "simulate", "calibration", chunk, "photon"))
     frames += rng(seed, "simulate", "calibration", chunk, "read").standard_normal(
         frames.shape) * read_sigma_e
@@ -205,7 +210,8 @@ def write_calibration_table(cfg: Config, data: dict[str, np.ndarray], out_dir: s
                        "ANNULUS": f"{opt.annulus_px[0]:g}-{opt.annulus_px[1]:g} px",
                        "BGEST": opt.background, "CENTROID": opt.centroid,
                        "STAMPPX": 2 * calibration_stamp_half_px(opt) + 1,
-                       "FLUXAPE": CALIBRATION_FLUX_E, "NOISEMOD": "physical",
+                       "FLUXAPE": CALIBRATION_FLUX_E,
+                       "NOISEMOD": "none" if cfg.simulation.noise_model == "none" else "physical",
                        "SIMPRF": prf_label(cfg.simulation.prf), "BUNIT": "electrons per frame",
                        "SIMFLAT": cfg.simulation.flat_gain,
                        "COMMENT": "eclipsebench simulated calibration star for KR/Pmap"})

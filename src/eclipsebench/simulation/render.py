@@ -16,11 +16,14 @@ the sub-sample positions, written as ``XYMEANnn``)::
 so the mean charge of tick ``k`` in pixel ``i`` is
 ``q_ki = r_f [V_i m0_k + Gx_i mx_k + Gy_i my_k + 1/2 Hxx_i mxx_k + Hxy_i mxy_k
 + 1/2 Hyy_i myy_k] + b``, where ``m.._k`` are the tick's mean sub-sample moments
-of ``d`` (``m0 = 1``; 1.1 for the ``iracsim2015`` model, which integrates
-``n + 1`` sub-samples per tick), ``r_f`` the star's electrons per tick times
-``L(t_f)``, and ``b`` the background per tick. The sub-sample spread of the
-fractional Brownian jitter (rms ~0.09 px within a frame) is what the second
-moments carry; higher orders are below 1e-3 of the pixel values.
+of ``d`` (``m0 = 1``), ``r_f`` the star's electrons per tick times ``L(t_f)``,
+and ``b`` the background per tick. The ``iracsim2015`` model averages ``n + 1``
+sub-samples per tick, as IRACSIM's inclusive loop bound did (the boundary
+sub-sample is shared with the next tick); it changes the smear, not the light:
+the 2015 frames show the aperture flux the paper measured on them (see
+``docs/simulate.md``). The sub-sample spread of the fractional Brownian jitter
+(rms ~0.09 px within a frame) is what the second moments carry; higher orders
+are below 1e-3 of the pixel values.
 
 Only a stamp (13 x 13 by default) around the star gets this per-tick
 treatment. Outside it the star's wings change little within a cube: they are
@@ -34,6 +37,9 @@ Noise (physical model)
     Read noise: one Gaussian per pixel, ``sigma_rn sqrt(2 / FN)``, from its
     own stream. ``iracsim2015``: the per-tick charges of every pixel go
     through :func:`eclipsebench.detector.fowler.fowler_sample_iracsim2015`.
+    ``none``: the frames are their noise-free expectation (the physical
+    model's Fowler sum, no photon, read or background noise); nothing is
+    drawn, so every seed gives the same frames for the same pointing.
 """
 
 from __future__ import annotations
@@ -44,12 +50,15 @@ import numpy as np
 
 from ..detector.constants import READ_NOISE_E, ReadoutMode
 from ..detector.fowler import fowler_sample_grouped, fowler_sample_iracsim2015, fowler_weights
+from ..errors import InputError
 
 __all__ = ["FrameModel", "tick_moments", "weight_groups", "read_intervals",
            "star_group_charges", "fowler_uniform",
-           "expected_fowler", "render_frames", "stamp_origin", "N_MOMENTS"]
+           "expected_fowler", "render_frames", "stamp_origin", "N_MOMENTS", "NOISE_MODELS"]
 
 N_MOMENTS = 6  # 1, dx, dy, dx^2, dx dy, dy^2
+#: ``simulation.noise_model`` values the renderer knows
+NOISE_MODELS = ("physical", "iracsim2015", "none")
 SMALL_COUNT = 32  # ramp electrons per pixel up to which each gets its own weight draw
 
 
@@ -61,7 +70,7 @@ class FrameModel:
     ----------
     mode : ReadoutMode
         Fowler sampling (FN, WT, tick time).
-    noise_model : {"physical", "iracsim2015"}
+    noise_model : {"physical", "iracsim2015", "none"}
     read_noise_e : float
         Gaussian read noise per read (electrons).
     subsamples : int
@@ -110,9 +119,9 @@ def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
     x_mean, y_mean : ndarray, shape (n_frames,)
         Fowler-weighted mean offset of each frame (what the frame "sees").
     moments : ndarray, shape (n_frames, n_max, 6)
-        Per tick: ``[m0, <d_x>, <d_y>, <d_x^2>, <d_x d_y>, <d_y^2>]`` summed over
-        the tick's sub-samples and divided by ``n`` (so ``m0`` is 1, or 1.1 with
-        ``n + 1`` sub-samples), with ``d`` relative to the frame mean.
+        Per tick: ``[m0, <d_x>, <d_y>, <d_x^2>, <d_x d_y>, <d_y^2>]``, the means
+        over the tick's sub-samples (``n``, or ``n + 1`` for ``iracsim2015``),
+        so ``m0`` is 1, with ``d`` relative to the frame mean.
     """
     mode, n = model.mode, model.subsamples
     nf = dx.shape[0]
@@ -138,12 +147,14 @@ def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
     mx = x_mean[:, None]
     my = y_mean[:, None]
     moments = np.empty((nf, n_max, N_MOMENTS))
-    moments[:, :, 0] = span / n
-    moments[:, :, 1] = (s1x - span * mx) / n
-    moments[:, :, 2] = (s1y - span * my) / n
-    moments[:, :, 3] = (sxx - 2 * mx * s1x + span * mx * mx) / n
-    moments[:, :, 4] = (sxy - mx * s1y - my * s1x + span * mx * my) / n
-    moments[:, :, 5] = (syy - 2 * my * s1y + span * my * my) / n
+    # means over the tick's sub-samples: IRACSIM's (n + 1)-th sub-sample widens
+    # the smear but adds no light (the 2015 frames show the paper's flux)
+    moments[:, :, 0] = 1.0
+    moments[:, :, 1] = (s1x - span * mx) / span
+    moments[:, :, 2] = (s1y - span * my) / span
+    moments[:, :, 3] = (sxx - 2 * mx * s1x + span * mx * mx) / span
+    moments[:, :, 4] = (sxy - mx * s1y - my * s1x + span * mx * my) / span
+    moments[:, :, 5] = (syy - 2 * my * s1y + span * my * my) / span
     return x_mean, y_mean, moments
 
 
@@ -289,7 +300,7 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     rng_photon, rng_read : numpy.random.Generator
         Streams for photon noise and read noise; draw counts and order do not
         depend on the pointing or the gain map, so systematics-free twins
-        draw from the same streams in the same order.
+        draw from the same streams in the same order (``none`` draws nothing).
 
     Returns
     -------
@@ -299,6 +310,9 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     ny, nx = model.shape
     s = model.stamp_px
     nf = moments.shape[0]
+    if model.noise_model not in NOISE_MODELS:
+        raise InputError(f"noise_model: expected one of {', '.join(NOISE_MODELS)}, "
+                         f"got {model.noise_model!r}")
     if basis.shape != (nf, N_MOMENTS, s * s):
         raise ValueError(f"basis: expected shape {(nf, N_MOMENTS, s * s)}, got {basis.shape}")
     in_stamp = np.zeros((ny, nx), dtype=bool)
@@ -313,15 +327,16 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     expected = np.empty((nf, ny * nx))
     stamp_cols = np.flatnonzero(in_stamp.ravel())
     out_cols = np.flatnonzero(outside)
-    if model.noise_model == "physical":
+    if model.noise_model in ("physical", "none"):
         member = weight_groups(mode)                                     # (n_max, FN)
         gm = np.einsum("ftm,tg->fgm", moments, member)                   # (nf, FN, 6)
         groups = star_group_charges(basis, gm, star_e_per_tick)          # (FN, nf, s*s)
         groups += (gm[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
-        frames[:, stamp_cols] = fowler_sample_grouped(groups, mode, rng_photon, 0.0)
-        frames[:, out_cols] = fowler_uniform(rate_out, mode, rng_photon)
         j = np.arange(1, mode.fowler + 1, dtype=float)
         expected[:, stamp_cols] = np.tensordot(j, groups, axes=(0, 0)) / mode.fowler
+        if model.noise_model == "physical":
+            frames[:, stamp_cols] = fowler_sample_grouped(groups, mode, rng_photon, 0.0)
+            frames[:, out_cols] = fowler_uniform(rate_out, mode, rng_photon)
     else:
         member = read_intervals(mode)                                    # (n_max, 2FN)
         im = np.einsum("ftm,tr->frm", moments, member)                   # (nf, 2FN, 6)
@@ -335,6 +350,9 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
         expected[:, stamp_cols] = (reads[fn:] - reads[:fn]).sum(axis=0) / fn
     w_sum = (fowler_weights(mode)[None, :] * m0).sum(axis=1) / mode.fowler
     expected[:, out_cols] = rate_out * w_sum[:, None]
+    if model.noise_model == "none":
+        frames[:] = expected
+        return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
     # Read noise: 2 FN reads per pixel; their sum in sum_i (S_i - P_i) / FN is one Gaussian.
     frames += rng_read.standard_normal(size=frames.shape) * (model.read_noise_e
                                                              * np.sqrt(2.0 / mode.fowler))

@@ -15,6 +15,14 @@
 The flux scale makes a star at the peak-up target ``(x0_px, y0_px)`` give
 ``flux_aperture_e`` electrons per exposure in the ``aperture_radius_px``
 aperture (paper Appendix A.2: the PRF rescaled to an input aperture flux).
+
+The sky under the star (:meth:`StarImager.sky_e_per_px`) is what makes the
+3-7 px annulus show the configured level. For ``noise_model = "iracsim2015"``
+that level is the 2015 frames' own: the challenge put ``background_e_per_px``
+(the paper's 881 e per aperture, 55.4 e/px) in as a uniform sky *under* the
+star, so its annulus also holds the wings of the PRFs it used
+(:data:`IRACSIM2015_ANNULUS_WING_PER_E` of the aperture flux per pixel,
+55.0 e/px): 110.4 e/px, against 111 e/px measured on the public 2015 cube.
 """
 
 from __future__ import annotations
@@ -29,9 +37,18 @@ from ..instrument.prf import PRF, BuiltinPRF, IrsaPRF
 from ..photometry.estimators import annulus_background, aperture_flux
 from .render import N_MOMENTS
 
-__all__ = ["StarImager", "make_star_imager", "make_prf", "prf_label"]
+__all__ = ["StarImager", "make_star_imager", "make_prf", "prf_label",
+           "IRACSIM2015_ANNULUS_WING_PER_E"]
 
 _PRF_CACHE: dict[tuple, PRF] = {}
+
+#: Mean star light per pixel in the 3-7 px annulus per electron in the
+#: r = 2.25 px aperture, for the PRFs the 2015 challenge used
+#: (``../shared/data/irac/prf/warm_2015_ch2``) with the star at the peak-up
+#: target (15.15, 15.20): 7.51e-4, i.e. 55.0 e/px for 73,173 e (7.51e-4 to
+#: 7.85e-4 within 0.25 px of it; the builtin PRF's wings give 4.30e-4).
+#: Measured by test ``test_iracsim2015_wing_constant_is_the_2015_prfs``.
+IRACSIM2015_ANNULUS_WING_PER_E = 7.51e-4
 def prf_label(name: str) -> str:
     """``simulation.prf`` without folders (headers carry no absolute paths)."""
     name = name.strip()
@@ -80,11 +97,19 @@ class StarImager:
     annulus_px : (float, float)
         The background annulus photometry uses (``[photometry] annulus_px``):
         the star's wings in it set the ``"annulus"`` background reference.
+    annulus_extra_per_e : float
+        Star light per annulus pixel and aperture electron that the
+        ``"annulus"`` level holds on top of the configured background: 0 when
+        the configured value is what photometry measures (physical model),
+        :data:`IRACSIM2015_ANNULUS_WING_PER_E` when it is the sky the 2015
+        simulation put under its PRFs (``iracsim2015``).
     """
 
     def __init__(self, prf: PRF, *, x_ref_px: float, y_ref_px: float, radius_px: float,
-                 annulus_px: tuple[float, float] = (3.0, 7.0)):
+                 annulus_px: tuple[float, float] = (3.0, 7.0),
+                 annulus_extra_per_e: float = 0.0):
         self.prf = prf
+        self.annulus_extra_per_e = float(annulus_extra_per_e)
         im = prf.render(np.array([x_ref_px]), np.array([y_ref_px]), shape=(32, 32))
         self.aperture_per_unit = float(aperture_flux(im, x_ref_px, y_ref_px, radius_px)[0])
         self.annulus_per_unit = float(
@@ -99,13 +124,25 @@ class StarImager:
         """Sky per pixel and exposure giving ``background_e_per_px`` as ``reference`` defines it.
 
         ``"annulus"``: the mean of the 3-7 px annulus around the peak-up target
-        including the star's wings (what photometry measures), floored at 0;
-        ``"sky"``: the value itself.
+        including the star's wings (what photometry measures) is
+        ``background_e_per_px + annulus_extra_per_e * flux_aperture_e``; the
+        sky is that minus this PRF's own wings, floored at 0. ``"sky"``: the
+        value itself.
+
+        Examples
+        --------
+        >>> from eclipsebench.instrument.prf import BuiltinPRF
+        >>> star = StarImager(BuiltinPRF(), x_ref_px=15.15, y_ref_px=15.2, radius_px=2.25)
+        >>> round(star.sky_e_per_px(55.4, 73246.0, "annulus"), 1)
+        23.9
+        >>> star.sky_e_per_px(55.4, 73246.0, "sky")
+        55.4
         """
         if reference == "sky":
             return background_e_per_px
         wing = self.annulus_per_unit * self.electrons_per_unit(flux_aperture_e)
-        return max(background_e_per_px - wing, 0.0)
+        level = background_e_per_px + self.annulus_extra_per_e * flux_aperture_e
+        return max(level - wing, 0.0)
 
     def image(self, x_px: float, y_px: float, shape: tuple[int, int]) -> np.ndarray:
         """The star at ``(x, y)`` over an array of ``shape`` (PRF units)."""
@@ -150,8 +187,14 @@ class StarImager:
 
 
 def make_star_imager(cfg: Config) -> StarImager:
-    """The :class:`StarImager` of a configuration."""
+    """The :class:`StarImager` of a configuration.
+
+    With ``simulation.noise_model = "iracsim2015"`` the ``"annulus"``
+    background level is the 2015 frames' (``background_e_per_px`` of sky plus
+    the wings of the 2015 PRFs, :data:`IRACSIM2015_ANNULUS_WING_PER_E`).
+    """
     prf = make_prf(cfg.simulation.prf.strip(), flat_gain=cfg.simulation.flat_gain)
+    extra = IRACSIM2015_ANNULUS_WING_PER_E if cfg.simulation.noise_model == "iracsim2015" else 0.0
     return StarImager(prf, x_ref_px=cfg.observation.x0_px, y_ref_px=cfg.observation.y0_px,
                       radius_px=cfg.simulation.aperture_radius_px,
-                      annulus_px=tuple(cfg.photometry.annulus_px))
+                      annulus_px=tuple(cfg.photometry.annulus_px), annulus_extra_per_e=extra)
