@@ -77,7 +77,7 @@ def bench_fowler(repeat):
     q = np.full((mode.n_max,) + shape, 2.0)
     groups = F.group_charges(np.full((mode.n_max, 1), 2.0), mode)
     groups = np.broadcast_to(groups.reshape(mode.fowler, 1, 1, 1), (mode.fowler,) + shape).copy()
-    reads = F.read_charges(F.iracsim2015_tick_charges(np.full((mode.n_max, 1), 2.0), mode), mode)
+    reads = F.read_charges(np.full((mode.n_max, 1), 2.0), mode)
     reads = np.broadcast_to(reads.reshape(2 * mode.fowler, 1, 1, 1),
                             (2 * mode.fowler,) + shape).copy()
     rng = np.random.default_rng(4)

@@ -105,14 +105,13 @@ def test_iracsim2015_noise_compounds():
     q_tick, rn = 20.0, 16.8
     fn, wt = 8, 184
     ticks = np.r_[np.arange(1, fn + 1), fn + wt + np.arange(1, fn + 1)]
-    c = 1.1 * q_tick * ticks
+    c = q_tick * ticks
     r = np.arange(1, 2 * fn + 1)
     u = np.array([np.sum((np.arange(1, fn + 1) < rr) & (rr <= np.arange(1, fn + 1) + fn))
                   for rr in r])
     shot = (u**2 * c).sum() / fn**2
-    signal = 1.1 * q_tick * (fn + wt)
-    reads = F.read_charges(F.iracsim2015_tick_charges(np.full((SUB_2S.n_max, 1), q_tick),
-                                                      SUB_2S), SUB_2S)
+    signal = q_tick * (fn + wt)
+    reads = F.read_charges(np.full((SUB_2S.n_max, 1), q_tick), SUB_2S)
     np.testing.assert_allclose(reads[:, 0], c)
     e = F.fowler_sample_iracsim2015(np.repeat(reads, N_PIX, axis=1), SUB_2S,
                                     np.random.default_rng(4), rn)

@@ -22,11 +22,12 @@ Physical model (default)
     ``sum_k w_k^2 q_k / FN^2 + 2 sigma_rn^2 / FN``.
 
 ``iracsim2015`` model
-    What IRACSIM (prf_make_dce.pro, 2014-08-18 change) did: each tick sums
-    ``subsamples + 1`` sub-samples (its inclusive loop bound, about 10% more
-    signal), and at each *read* a Poisson deviate of the *noisy* cumulative
-    charge minus its mean is added to the cumulative charge, so the noise of
-    earlier reads compounds. Its variance is about
+    What IRACSIM (prf_make_dce.pro, 2014-08-18 change) did: at each *read* a
+    Poisson deviate of the *noisy* cumulative charge minus its mean is added
+    to the cumulative charge, so the noise of earlier reads compounds. (Its
+    inclusive sub-sample loop, read from the code as about 10% more signal,
+    does not show in the public 2015 cube, whose level was set by a flux
+    density: the mean charge is the true one; docs/simulate.md.) Its variance is about
     ``(FN+1)(2FN+1)/(6 FN)`` = 3.19 times the signal for FN = 8 to leading
     order (3.31 exactly for WT = 184). Read noise 16.8 e per read.
 """
@@ -40,7 +41,7 @@ from eclipsebench.errors import InputError
 from .constants import READ_NOISE_E, SUB_2S, ReadoutMode
 
 __all__ = ["SHOT_NOISE_FORMS", "fowler_variance", "NOISE_MODELS", "fowler_weights", "group_charges", "read_charges",
-           "iracsim2015_tick_charges", "fowler_sample", "fowler_sample_ticks",
+           "fowler_sample", "fowler_sample_ticks",
            "fowler_sample_grouped", "fowler_sample_iracsim2015", "fowler_variance_exact",
            "electrons_to_dn", "dn_to_electrons", "electrons_to_mjysr", "mjysr_to_electrons",
            "bunc_mjysr"]
@@ -168,20 +169,6 @@ def group_charges(q_ticks, mode: ReadoutMode) -> np.ndarray:
     return out
 
 
-def iracsim2015_tick_charges(q_ticks, mode: ReadoutMode, subsamples: int = 10) -> np.ndarray:
-    """Tick charges as IRACSIM integrated them: ``subsamples + 1`` sub-samples per tick.
-
-    Tick ``k`` also gets the first sub-sample of tick ``k + 1`` (approximated
-    as ``q[k+1] / subsamples``; the last tick repeats its own), i.e. about
-    ``(subsamples + 1) / subsamples`` times the true charge.
-    """
-    q = _ticks(q_ticks, mode)
-    if int(subsamples) != subsamples or subsamples < 1:
-        raise InputError(f"subsamples: expected an integer >= 1, got {subsamples}")
-    nxt = np.concatenate([q[1:], q[-1:]], axis=0)
-    return q + nxt / subsamples
-
-
 def read_charges(q_ticks, mode: ReadoutMode) -> np.ndarray:
     """Mean cumulative charge at each of the 2 FN reads (pedestals first).
 
@@ -240,7 +227,7 @@ def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator
     ----------
     reads : array, shape (2 FN, ...)
         Mean cumulative charge at ``P_1 .. P_FN, S_1 .. S_FN``
-        (:func:`read_charges` of :func:`iracsim2015_tick_charges`).
+        (:func:`read_charges` of the tick charges).
 
     Notes
     -----
@@ -272,7 +259,7 @@ def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator
 
 def fowler_sample(mean_charge, mode: ReadoutMode, rng: np.random.Generator,
                   read_noise_e: float, noise_model: str = "physical", *,
-                  grouped: bool = False, subsamples: int = 10) -> np.ndarray:
+                  grouped: bool = False) -> np.ndarray:
     """Fowler-sample one frame: mean tick charges in, electrons per exposure out.
 
     Parameters
@@ -288,8 +275,6 @@ def fowler_sample(mean_charge, mode: ReadoutMode, rng: np.random.Generator,
     noise_model : {"physical", "iracsim2015"}
     grouped : bool
         Whether ``mean_charge`` is already grouped by Fowler weight.
-    subsamples : int
-        Sub-samples per tick (iracsim2015 adds one more per tick).
 
     Returns
     -------
@@ -312,8 +297,7 @@ def fowler_sample(mean_charge, mode: ReadoutMode, rng: np.random.Generator,
     if grouped:
         raise InputError("fowler_sample: noise_model 'iracsim2015' needs per-tick charges, "
                          "not the grouped form")
-    q = iracsim2015_tick_charges(mean_charge, mode, subsamples)
-    return fowler_sample_iracsim2015(read_charges(q, mode), mode, rng, read_noise_e)
+    return fowler_sample_iracsim2015(read_charges(mean_charge, mode), mode, rng, read_noise_e)
 
 
 def fowler_variance_exact(q_ticks, mode: ReadoutMode, read_noise_e: float) -> np.ndarray:
