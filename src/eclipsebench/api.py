@@ -18,6 +18,7 @@ from typing import Any
 
 from astropy.table import Table
 
+from .astro.catalogue import as_system, system_for
 from .challenge.runner import run_challenge as _run_challenge
 from .config import Config
 from .config import load_config as _load_config
@@ -46,7 +47,9 @@ def load_config(path: str | os.PathLike | None = None, overrides: Sequence[str] 
     overrides : sequence of str
         ``"section.key=value"`` overrides, as ``--set`` on the command line.
     **sections : mapping
-        Whole-section overrides, e.g. ``challenge={"epochs": 2}``.
+        Whole-section overrides, e.g. ``challenge={"epochs": 2}``; a planet in
+        no catalogue is ``system={"name": "test-b", "planet": {"period_days":
+        3.19, ...}}`` (the keys of a catalogue row).
 
     Examples
     --------
@@ -66,6 +69,9 @@ def _toml_literal(value: Any) -> str:
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_literal(v) for v in value) + "]"
+    if isinstance(value, Mapping):  # an inline table, e.g. system={"planet": {...}}
+        return "{" + ", ".join(f"{_toml_literal(str(k))} = {_toml_literal(v)}"
+                               for k, v in value.items() if v is not None) + "}"
     return repr(value)
 
 
@@ -152,10 +158,14 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
         from other pipelines").
     method : str
         A name from :func:`methods`.
-    system : str or PlanetSystem, optional
+    system : str, mapping or PlanetSystem, optional
         The planet (default: the configuration's, the built-in challenge's
         ``"XO-3b (2015 challenge)"``; ``"XO-3b"`` has Wong et al. 2014's
-        elements, for real data).
+        elements, for real data): a name (searched in the configuration's
+        ``[system] catalogue``, then the built-in one), a
+        :class:`~eclipsebench.astro.catalogue.PlanetSystem`, or a mapping of
+        a planet in no catalogue, ``{"name": ..., "period_days": ..., ...}``
+        (the keys of a catalogue row, checked as one).
     seed : int
         Run seed: every random stream of the fit and the method derives from it.
     options : mapping or the method's Options, optional
@@ -188,8 +198,8 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     if reduce_options:
         section = replace(section, **reduce_options)
         section.validate()
-    if system is None:
-        system = cfg.system.name
+    system = system_for(cfg.system) if system is None else as_system(
+        system, cfg.system.catalogue or None)
     return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
                         method_options=options, resources=resources, columns=columns,
                         time_column=time_column, time_format=time_format)

@@ -7,6 +7,11 @@ brackets (``xo3b`` finds ``XO-3b``); a table's optional ``aliases = [...]``
 gives more names it is found by (``xo3b-challenge2015`` finds
 ``XO-3b (2015 challenge)``, the 2015 data challenge's elements).
 
+A planet in no catalogue is given by its values: on the command line as
+``--planet KEY=VALUE`` pairs (:func:`system_from_pairs`), in a configuration
+as a ``[system.planet]`` table (:func:`system_for`), or to the Python API as
+a mapping (:func:`as_system`); each is checked exactly as a catalogue row.
+
 Examples
 --------
 >>> s = get_system("XO-3b")
@@ -21,6 +26,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 from importlib import resources
@@ -30,7 +36,9 @@ from typing import Any
 from ..errors import InputError
 from .orbit import BMJD_OFFSET, OrbitClock
 
-__all__ = ["PlanetSystem", "get_system", "list_systems", "load_catalogue", "system_from_mapping"]
+__all__ = ["PlanetSystem", "get_system", "list_systems", "load_catalogue", "system_from_mapping",
+           "planet_table_from_pairs", "system_from_pairs", "system_for", "as_system",
+           "PLANET_KEYS", "REQUIRED_KEYS"]
 
 _REQUIRED = ("period_days", "t_transit_bjd", "ecc", "omega_deg", "inc_deg", "a_rs", "rp_rs",
              "teff_star_k")
@@ -248,4 +256,152 @@ def get_system(name: str, catalogue: str | Path | None = None) -> PlanetSystem:
             if key in {_normalise(a) for a in _aliases(sys_name, table, where)}:
                 return system_from_mapping(sys_name, table, source=source)
     known = sorted({n for _, tables in sources for n in tables})
-    raise InputError(f"unknown planet {name!r} (known: {', '.join(known)})")
+    searched = " and ".join(["the built-in catalogue"] + [s for s, _ in sources if s])
+    raise InputError(f"unknown planet {name!r} (searched {searched}; known: {', '.join(known)})")
+
+
+# ------------------------------------------------------------------ planets given by value
+#: The keys of a planet given by value (``--planet KEY=VALUE``): its name and
+#: every catalogue field but the references.
+PLANET_KEYS = ("name",) + tuple(f.name for f in fields(PlanetSystem)
+                                if f.name not in ("name", "references"))
+#: The values every planet needs (a catalogue row, ``--planet`` or ``[system.planet]``).
+REQUIRED_KEYS = _REQUIRED
+
+
+def _pair_value(key: str, text: str, item: str) -> Any:
+    """One ``--planet`` value: a number, two numbers for ``ld_quadratic``, text for ``name``."""
+    def number(part: str) -> float:
+        try:
+            value = float(part)
+        except ValueError:
+            raise InputError(f"--planet {item!r}: expected a number for {key}") from None
+        if not math.isfinite(value):
+            raise InputError(f"--planet {item!r}: expected a finite number for {key}")
+        return value
+
+    if key == "name":
+        if not text:
+            raise InputError(f"--planet {item!r}: expected a planet name")
+        return text
+    if key == "ld_quadratic":
+        parts = [p.strip() for p in text.strip("[]() ").split(",")]
+        if len(parts) != 2:
+            raise InputError(f"--planet {item!r}: expected two coefficients, ld_quadratic=U1,U2")
+        return [number(p) for p in parts]
+    return number(text)
+
+
+def planet_table_from_pairs(pairs: Sequence[str]) -> tuple[str, dict[str, Any]]:
+    """The name and the catalogue table of ``--planet KEY=VALUE`` pairs, not yet checked.
+
+    Parameters
+    ----------
+    pairs : sequence of str
+        ``"name=..."`` and one ``"KEY=VALUE"`` per catalogue field
+        (:data:`PLANET_KEYS`); ``ld_quadratic=U1,U2``.
+
+    Returns
+    -------
+    name : str
+    table : dict
+        The values as a catalogue row (``{"period_days": 3.19, ...}``).
+
+    Raises
+    ------
+    InputError
+        One line naming the pair: not KEY=VALUE, an unknown or repeated key,
+        a value that is not a number, or no ``name``.
+
+    Examples
+    --------
+    >>> planet_table_from_pairs(["name=test-b", "period_days=3.2", "ld_quadratic=0.1,0.2"])
+    ('test-b', {'period_days': 3.2, 'ld_quadratic': [0.1, 0.2]})
+    """
+    table: dict[str, Any] = {}
+    for item in pairs:
+        key, sep, text = (part.strip() for part in item.partition("="))
+        if not sep or not key:
+            raise InputError(f"--planet {item!r}: expected KEY=VALUE, e.g. period_days=3.19")
+        if key not in PLANET_KEYS:
+            raise InputError(f"--planet {item!r}: unknown key {key!r} "
+                             f"(known: {', '.join(PLANET_KEYS)})")
+        if key in table:
+            raise InputError(f"--planet: {key} is given twice")
+        table[key] = _pair_value(key, text, item)
+    name = table.pop("name", None)
+    if name is None:
+        raise InputError("--planet: missing name (give name=... with the other values)")
+    return name, table
+
+
+def system_from_pairs(pairs: Sequence[str]) -> PlanetSystem:
+    """A :class:`PlanetSystem` from ``--planet KEY=VALUE`` pairs, checked as a catalogue row.
+
+    Examples
+    --------
+    >>> s = system_from_pairs(["name=test-b", "period_days=3.19", "t_transit_bjd=2454449.868",
+    ...                        "ecc=0.28", "omega_deg=347", "inc_deg=84.2", "a_rs=7.07",
+    ...                        "rp_rs=0.09", "teff_star_k=6429"])
+    >>> s.name, s.period_days, s.references
+    ('test-b', 3.19, {})
+    >>> system_from_pairs(["name=test-b", "period_days=3.19"])
+    Traceback (most recent call last):
+    ...
+    eclipsebench.errors.InputError: --planet: system 'test-b': missing t_transit_bjd, ecc, \
+omega_deg, inc_deg, a_rs, rp_rs, teff_star_k
+    """
+    name, table = planet_table_from_pairs(pairs)
+    return system_from_mapping(name, table, source="--planet")
+
+
+def system_for(section: Any) -> PlanetSystem:
+    """The planet of a ``[system]`` configuration section.
+
+    Its ``planet`` table when one is given (the planet's own values, named
+    ``name``), else ``name`` looked up in ``catalogue`` and the built-in
+    catalogue. ``section`` is a :class:`~eclipsebench.config.system.SystemSection`
+    or anything with ``name``, ``catalogue`` and (optionally) ``planet``.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> system_for(SimpleNamespace(name="XO-3b", catalogue="", planet={})).ecc
+    0.2769
+    """
+    planet = getattr(section, "planet", None)
+    if planet:
+        return system_from_mapping(section.name, dict(planet), source="[system] planet")
+    return get_system(section.name, section.catalogue or None)
+
+
+def as_system(system: Any, catalogue: str | Path | None = None) -> PlanetSystem:
+    """A :class:`PlanetSystem` from a name, a mapping of its values, or itself.
+
+    Parameters
+    ----------
+    system : str, Mapping or PlanetSystem
+        A name (looked up in ``catalogue``, then the built-in catalogue), or
+        a mapping with ``name`` and the catalogue fields (checked as a row).
+    catalogue : str or Path, optional
+
+    Examples
+    --------
+    >>> as_system({"name": "test-b", "period_days": 3.19, "t_transit_bjd": 2454449.868,
+    ...            "ecc": 0.0, "omega_deg": 90.0, "inc_deg": 86.0, "a_rs": 7.0,
+    ...            "rp_rs": 0.1, "teff_star_k": 6000.0}).a_rs
+    7.0
+    """
+    if isinstance(system, PlanetSystem):
+        return system
+    if isinstance(system, str):
+        return get_system(system, catalogue)
+    if isinstance(system, Mapping):
+        table = dict(system)
+        name = table.pop("name", None)
+        if not isinstance(name, str) or not name.strip():
+            raise InputError("system: a mapping of the planet's values needs its name, "
+                             "name = \"...\"")
+        return system_from_mapping(name, table, source="system")
+    raise InputError(f"system: expected a planet name, a mapping of its values or a "
+                     f"PlanetSystem, got {type(system).__name__}")

@@ -34,7 +34,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import InputError
-from .catalogue import PlanetSystem, get_system
+from .catalogue import PlanetSystem, system_for
 from .eclipse import EclipseShape, TransitShape
 from .orbit import eclipse_time_bmjd, geometric_to_observed, transit_time_bmjd
 from .thermal import ThermalModel, band_for
@@ -221,7 +221,7 @@ def light_curve_function(system: PlanetSystem, *, albedo: float = 0.0,
 
 def light_curve_from_config(section, **overrides) -> LightCurve:
     """The light curve described by a ``[system]`` configuration section (``SystemSection``)."""
-    system = get_system(section.name, section.catalogue or None)
+    system = system_for(section)
     kwargs = dict(albedo=section.albedo, tau_rad_days=section.tau_rad_days,
                   omega_rot=section.omega_rot, flux_ratio_model=section.flux_ratio_model,
                   wavelength_um=section.wavelength_um, fix_depth_ppm=section.fix_depth_ppm,

@@ -14,7 +14,7 @@ import json
 from functools import partial
 from pathlib import Path
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..config import Config
 from ..engine.layout import Layout
 from ..engine.tasks import Task
@@ -46,7 +46,7 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int
     (it would fail the same way).
     """
     out = Path(out_path)
-    system = get_system(cfg.system.name, cfg.system.catalogue or None)
+    system = system_for(cfg.system)
     try:
         result = fit_reduce.reduce_epoch(table_path, method, options=cfg.reduce, system=system,
                                          seed=seed, epoch=epoch, profile=profile)

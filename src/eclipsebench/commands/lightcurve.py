@@ -13,7 +13,7 @@ import numpy as np
 from astropy.table import Table
 
 from ..astro.bias import EPOCH10_START_BMJD, epoch_times, phase_model_bias
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..astro.lightcurve import light_curve_function
 from ..astro.orbit import BMJD_OFFSET
 from ..config import Config
@@ -23,9 +23,11 @@ from ..io.atomic import atomic_path
 from ..io.paths import check_plot_path
 from ..simulation.plan import epoch_start_times_bmjd, plan_epoch
 from .options import (
+    add_planet_options,
     check_output_path,
     finite_float,
     nonnegative_float,
+    planet_from_args,
     positive_float,
     positive_int,
 )
@@ -41,11 +43,10 @@ _WINDOW_DEFAULTS = {"start": EPOCH10_START_BMJD, "hours": 8.8, "cadence_s": 2.00
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("system", metavar="SYSTEM", nargs="?", default=CHALLENGE_SYSTEM,
+    p.add_argument("system", metavar="SYSTEM", nargs="?", default=None,
                    help="planet name or alias from the catalogue (e.g. XO-3b, 'HD 189733b'; "
                         f"default: the built-in challenge's, {CHALLENGE_SYSTEM!r})")
-    p.add_argument("--catalogue", metavar="FILE.toml", default=None,
-                   help="a user catalogue of systems (TOML), searched before the built-in one")
+    add_planet_options(p)
     p.add_argument("--start", type=finite_float(), default=None, metavar="BMJD",
                    help="first sample, BMJD_TDB (default: the paper's simulated epoch 10, "
                         f"{EPOCH10_START_BMJD:.4f})")
@@ -104,7 +105,7 @@ def challenge_epoch_times_bmjd(epoch: int, cfg: Config | None = None) -> np.ndar
         raise InputError(f"--epoch: expected an epoch of the challenge, 1-{cfg.challenge.epochs}, "
                          f"got {epoch}")
     obs = cfg.observation
-    period = get_system(cfg.system.name, cfg.system.catalogue or None).period_days
+    period = system_for(cfg.system).period_days
     start = float(epoch_start_times_bmjd(obs.start_times_jd, epoch, period)[epoch - 1])
     plan = plan_epoch(obs, epoch, start, cfg.challenge.seed)
     # as simulate_aor: time_bmjd at the centre of the Fowler weights, (2 FN + WT + 1)/2 ticks
@@ -130,7 +131,7 @@ def _run_phase_bias(args: argparse.Namespace) -> dict:
                              "challenge epoch; choose it with --epoch)")
     epoch = PHASE_BIAS_EPOCH if args.epoch is None else args.epoch
     time = challenge_epoch_times_bmjd(epoch)
-    system = get_system(args.system, args.catalogue)
+    system = planet_from_args(args, args.system)
     lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **_light_curve_options(args))
     t0, t1 = float(time[0]), float(time[-1])
     inside = lc.eclipse_times_bmjd(t0, t1)
@@ -166,7 +167,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.plot:
         check_plot_path(args.plot, "--plot")
     options = _light_curve_options(args)
-    system = get_system(args.system, args.catalogue)
+    system = planet_from_args(args, args.system)
     lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **options)
     instantaneous = lc if args.tau_rad == 0 else light_curve_function(
         system, fix_depth_ppm=0.0, **{**options, "tau_rad_days": 0.0})

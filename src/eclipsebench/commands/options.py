@@ -3,12 +3,25 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
+from typing import Any
 
+from ..astro.catalogue import (
+    PLANET_KEYS,
+    REQUIRED_KEYS,
+    PlanetSystem,
+    planet_table_from_pairs,
+    system_for,
+    system_from_pairs,
+)
+from ..config import load_config
+from ..errors import InputError
 from ..io.paths import check_output_path
 
 __all__ = ["check_output_path", "finite_float", "positive_float", "nonnegative_float",
-           "open_unit_float", "positive_int", "method_list", "add_config_options"]
+           "open_unit_float", "positive_int", "method_list", "add_config_options",
+           "add_planet_options", "planet_overrides", "planet_from_args"]
 
 
 def _number(text: str) -> float:
@@ -86,3 +99,71 @@ def add_config_options(parser: argparse.ArgumentParser, *, config_positional: bo
                         metavar="SECTION.KEY=VALUE",
                         help="override one configuration value (repeatable), e.g. "
                              "--set simulation.noise_model=iracsim2015")
+
+
+# ------------------------------------------------------------------ the planet
+def add_planet_options(parser: argparse.ArgumentParser) -> None:
+    """``--catalogue FILE`` and ``--planet KEY=VALUE``, shared by every command that takes a planet.
+
+    Read back with :func:`planet_overrides` (commands that load a configuration)
+    or :func:`planet_from_args`.
+    """
+    parser.add_argument("--catalogue", metavar="FILE.toml", default=None,
+                        help="a user catalogue of systems (TOML, as the built-in one), searched "
+                             "before the built-in catalogue ([system] catalogue)")
+    parser.add_argument("--planet", action="append", default=[], metavar="KEY=VALUE",
+                        help="a planet in no catalogue, one value per option (repeatable): "
+                             "name=... and " + ", ".join(REQUIRED_KEYS) + " (required), "
+                             + ", ".join(k for k in PLANET_KEYS[1:] if k not in REQUIRED_KEYS)
+                             + " (optional; ld_quadratic=U1,U2); checked as a catalogue row "
+                             "([system.planet])")
+
+
+def _toml(value: Any) -> str:
+    """A TOML literal of a string, a number or a list of numbers (for ``--set``-style overrides)."""
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a valid TOML basic string
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return repr(float(value))
+
+
+def planet_overrides(args: argparse.Namespace, name: str | None = None,
+                     label: str = "--system") -> list[str]:
+    """The ``[system]`` overrides (``section.key=value``) of ``--catalogue``, ``--planet`` and a name.
+
+    ``name`` is the planet a command was given by name (``label`` names that
+    argument in errors); it cannot be given with ``--planet``. ``--planet``
+    pairs are checked here, so that a missing or bad value is one line naming
+    ``--planet``; the configuration then holds them as ``system.planet``.
+    """
+    out = []
+    catalogue = getattr(args, "catalogue", None)
+    pairs = getattr(args, "planet", None) or []
+    if catalogue is not None:
+        if not str(catalogue).strip():
+            raise InputError("--catalogue: expected the path of a TOML catalogue")
+        out.append(f"system.catalogue={_toml(str(catalogue))}")
+    if pairs:
+        if name is not None:
+            raise InputError(f"{label} {name!r} and --planet: give the planet by name or by its "
+                             "values, not both")
+        system_from_pairs(pairs)  # every check, one line naming --planet
+        planet_name, table = planet_table_from_pairs(pairs)
+        inline = ", ".join(f"{key} = {_toml(value)}" for key, value in table.items())
+        out += [f"system.name={_toml(planet_name)}", f"system.planet={{{inline}}}"]
+    elif name is not None:
+        out.append(f"system.name={_toml(name)}")
+    return out
+
+
+def planet_from_args(args: argparse.Namespace, name: str | None = None,
+                     label: str = "SYSTEM") -> PlanetSystem:
+    """The planet of a command that takes no configuration: ``name``, ``--catalogue``, ``--planet``.
+
+    Resolved as ``[system]`` is (the built-in challenge's planet when none is
+    given), so an unknown name is the same one line naming ``system.name``
+    and the catalogues searched.
+    """
+    cfg = load_config(None, planet_overrides(args, name, label))
+    return system_for(cfg.system)

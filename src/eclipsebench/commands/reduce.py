@@ -7,7 +7,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
@@ -15,7 +15,13 @@ from ..fit.astro_model import ECLIPSE_SHAPES, PHASE_MODELS, RAMP_MODELS
 from ..fit.data import TIME_FORMATS
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
-from .options import check_output_path, positive_float, positive_int
+from .options import (
+    add_planet_options,
+    check_output_path,
+    planet_overrides,
+    positive_float,
+    positive_int,
+)
 
 NAME = "reduce"
 HELP = ("Fit one epoch's photometry table with one decorrelation method and the shared "
@@ -66,6 +72,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--system", metavar="NAME", default=None,
                    help="planet (default: [system] name, the 2015 challenge's "
                         "'XO-3b (2015 challenge)'; give XO-3b for real data: Wong et al. 2014)")
+    add_planet_options(p)
     p.add_argument("--epoch", type=positive_int(minimum=0), default=None, metavar="N",
                    help="epoch number (default: the table's EPOCH)")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
@@ -118,7 +125,7 @@ _TABLE_LABELS = {"columns": "--columns", "time_column": "--time-column",
 
 
 def _options(args: argparse.Namespace):
-    cfg = load_config(args.config, args.overrides)
+    cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {"phase": args.phase, "ramp": args.ramp, "eclipse_shape": args.eclipse_shape,
                "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
                "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius,
@@ -128,10 +135,7 @@ def _options(args: argparse.Namespace):
         options.validate()
     except InputError as exc:
         raise InputError(str(exc).replace("config key '", "option '")) from None
-    system = args.system or cfg.system.name
-    if cfg.system.catalogue:
-        system = get_system(system, cfg.system.catalogue)
-    return options, system
+    return options, system_for(cfg.system)
 
 
 def _clean(obj):

@@ -8,7 +8,13 @@ from pathlib import Path
 from ..config import load_config
 from ..io.paths import check_output_path
 from ..report.tables import format_text_table
-from .options import add_config_options, method_list, positive_int
+from .options import (
+    add_config_options,
+    add_planet_options,
+    method_list,
+    planet_overrides,
+    positive_int,
+)
 
 NAME = "run"
 HELP = ("Run the data challenge end to end on Dask: simulate every epoch, photometry, every method "
@@ -17,6 +23,7 @@ HELP = ("Run the data challenge end to end on Dask: simulate every epoch, photom
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_config_options(p)
+    add_planet_options(p)
     p.add_argument("--out", metavar="DIR",
                    help="run folder (default: runs/<challenge>-seed<SEED>-<EPOCHS>ep); rerunning "
                         "the same command resumes it")
@@ -58,7 +65,7 @@ def _overrides(args: argparse.Namespace) -> list[str]:
         extra.append(f"run.workers={args.workers}")
     if args.scheduler is not None:
         extra.append(f'run.scheduler="{args.scheduler}"')
-    return list(args.overrides) + extra
+    return list(args.overrides) + extra + planet_overrides(args)
 
 
 def run(args: argparse.Namespace) -> dict:

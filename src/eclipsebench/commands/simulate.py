@@ -6,7 +6,13 @@ import argparse
 
 from ..config import load_config, replace
 from ..errors import InputError
-from .options import add_config_options, check_output_path, positive_int
+from .options import (
+    add_config_options,
+    add_planet_options,
+    check_output_path,
+    planet_overrides,
+    positive_int,
+)
 
 NAME = "simulate"
 HELP = ("Simulate Spitzer/IRAC channel-2 subarray BCD cubes of an eclipsing planet with known "
@@ -15,6 +21,7 @@ HELP = ("Simulate Spitzer/IRAC channel-2 subarray BCD cubes of an eclipsing plan
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     add_config_options(p)
+    add_planet_options(p)
     p.add_argument("--out", required=True, metavar="DIR",
                    help="challenge folder to write (complete epochs are kept on a rerun)")
     p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
@@ -32,7 +39,7 @@ def run(args: argparse.Namespace) -> dict:
     from ..simulation.challenge import simulate_challenge
 
     check_output_path(args.out, "--out", "folder")
-    cfg = load_config(args.config, args.overrides)
+    cfg = load_config(args.config, args.overrides + planet_overrides(args))
     challenge = cfg.challenge
     if args.seed is not None:
         challenge = replace(challenge, seed=args.seed)

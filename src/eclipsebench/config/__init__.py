@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..errors import ConfigError, InputError
 from .base import (
     apply_overrides,
@@ -66,15 +66,13 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
 
 
 def _check_system(config: Config, path: str | Path | None, overrides: list[str]) -> None:
-    """The planet must be in a catalogue: one line naming ``system.name`` and where it was set."""
+    """The planet must be in a catalogue (or given by value, ``[system.planet]``): one line
+    naming ``system.name``, the catalogues searched and where the name was set."""
     try:
-        get_system(config.system.name, config.system.catalogue or None)
+        system_for(config.system)
     except InputError as exc:
         by_override = any(o.split("=", 1)[0].strip() == "system.name" for o in overrides)
-        searched = "the built-in catalogue" + (
-            f" and {config.system.catalogue}" if config.system.catalogue else "")
-        problem = f"{exc} (searched {searched})"
-        error = ConfigError("system.name", problem)
+        error = ConfigError("system.name", str(exc))
         if path is not None and not by_override:
             raise InputError(f"{path}: {error}") from None
         raise error from None

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, field
+from typing import Any, Literal
 
+from ..astro.catalogue import system_from_mapping
+from ..errors import ConfigError, InputError
 from .base import check
 
 CHALLENGE_SYSTEM = "XO-3b (2015 challenge)"
@@ -23,10 +25,20 @@ class SystemSection:
     radiative time 1 day, rotation rate 1 (in units of the orbital angular
     velocity at periastron), a monochromatic 4.5095 um ratio of blackbodies,
     and the eclipse depth fixed to 1875 ppm.
+
+    The planet is ``name`` looked up in ``catalogue`` (a user TOML file,
+    searched first) and the built-in catalogue, or, when the ``planet``
+    table is given (``[system.planet]``, or ``--planet KEY=VALUE`` on the
+    command line), a planet in no catalogue: ``name`` with these values,
+    checked as a catalogue row (``eclipsebench.astro.catalogue.system_for``).
     """
 
     name: str = CHALLENGE_SYSTEM
     catalogue: str = ""  # optional TOML file of user systems; empty: the built-in catalogue
+    # the planet's own values (the keys of a catalogue row: period_days, t_transit_bjd, ecc,
+    # omega_deg, inc_deg, a_rs, rp_rs, teff_star_k, ...); empty: look `name` up. Not hashed
+    # (a dict), so equal sections differing in it share a hash but not equality.
+    planet: dict[str, Any] = field(default_factory=dict, hash=False)
     albedo: float = 0.0
     tau_rad_days: float = 1.0
     omega_rot: float = 1.0
@@ -41,6 +53,11 @@ class SystemSection:
 
     def validate(self) -> None:
         check(bool(self.name.strip()), "name", "a planet name")
+        if self.planet:
+            try:
+                system_from_mapping(self.name, dict(self.planet))
+            except InputError as exc:
+                raise ConfigError("planet", str(exc)) from None
         check(0.0 <= self.albedo < 1.0, "albedo", "0 <= albedo < 1")
         check(self.tau_rad_days >= 0.0, "tau_rad_days", "a non-negative number of days")
         check(self.wavelength_um > 0.0, "wavelength_um", "a positive wavelength in micron")

@@ -23,7 +23,7 @@ import numpy as np
 from astropy.table import Table
 from scipy.optimize import least_squares
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import as_system, get_system
 from ..astro.orbit import eclipse_time_bmjd
 from ..config.reduce import ReduceSection
 from ..config.system import SystemSection
@@ -79,12 +79,10 @@ def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: s
 
 def resolve_system(system: Any):
     """A PlanetSystem from None (the configured default: the 2015 challenge's XO-3b), a name,
-    or a PlanetSystem."""
+    a mapping of the planet's values (with ``name``), or a PlanetSystem."""
     if system is None:
         return get_system(SystemSection().name)
-    if isinstance(system, str):
-        return get_system(system)
-    return system
+    return as_system(system)
 
 
 def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data") -> float:

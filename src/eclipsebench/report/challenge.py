@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from astropy.table import Table
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..astro.orbit import orbital_phase
 from ..config import Config
 from ..decorrelate.kernel import pmap_gain
@@ -68,7 +68,7 @@ def report_task(cfg: Config, root: str, methods: list[str], epochs: list[int]) -
     layout = Layout(Path(root))
     summary = json.loads(layout.summary.read_text())
     depths = Table.read(layout.depths, format="ascii.ecsv")
-    system = get_system(cfg.system.name, cfg.system.catalogue or None)
+    system = system_for(cfg.system)
     photometry = {}
     for e in epochs:
         t = read_photometry(layout.photometry(e))

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 from astropy.table import Table
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
 from ..config import Config, dump_toml, to_mapping
 from ..detector.constants import ReadoutMode, read_noise_of
@@ -159,7 +159,7 @@ def _header_info(cfg: Config, aor: AORPlan, seed: int, mode: ReadoutMode, ra: fl
 
 def _target(cfg: Config) -> tuple[float, float, str]:
     """RA, Dec (deg) and OBJECT of the target: XO-3's unless the catalogue knows better."""
-    system = get_system(cfg.system.name, cfg.system.catalogue or None)
+    system = system_for(cfg.system)
     ra = getattr(system, "ra_deg", None)
     dec = getattr(system, "dec_deg", None)
     # the star: the planet's name without a qualifier ("XO-3b (2015 challenge)") or its letter
@@ -401,7 +401,7 @@ def _truth_ok(config: Path, truth: Path) -> bool:
 
 def challenge_plans(cfg: Config) -> list[EpochPlan]:
     """The observing plans of every epoch (:func:`.plan.plan_challenge`)."""
-    period = get_system(cfg.system.name, cfg.system.catalogue or None).period_days
+    period = system_for(cfg.system).period_days
     return plan_challenge(cfg.observation, cfg.challenge.epochs, period, cfg.challenge.seed)
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from astropy.table import Table
 
-from ..astro.catalogue import get_system
+from ..astro.catalogue import system_for
 from ..astro.eclipse import EclipseShape
 from ..config import Config
 from ..detector.constants import read_noise_of
@@ -70,7 +70,7 @@ def in_eclipse_fraction_of(cfg: Config, tables: Mapping[int, Table], truth) -> f
     """
     if cfg.run.f_in > 0:
         return float(cfg.run.f_in)
-    system = get_system(cfg.system.name, cfg.system.catalogue or None)
+    system = system_for(cfg.system)
     by_epoch = {int(r["epoch"]): float(r["t_ecl_bmjd"]) for r in truth} if truth is not None else {}
     fractions = []
     for epoch, t in tables.items():
