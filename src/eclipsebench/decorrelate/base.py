@@ -414,6 +414,69 @@ class Systematics(ABC):
         r = (self.data.flux - model) / sigma
         return float(-0.5 * np.dot(r, r) - np.sum(np.log(sigma)) - 0.5 * len(r) * np.log(2 * np.pi))
 
+    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                             noise_scale: float = 1.0) -> np.ndarray:
+        """:meth:`log_likelihood` of ``m`` astrophysical curves at once (the MCMC's call).
+
+        The MCMC evaluates every walker of a step in one call (emcee's
+        ``vectorize=True``). The default loops over :meth:`log_likelihood`, so
+        it is right for any method; a method overrides it where its linear
+        pieces can be solved for all curves together (batched normal
+        equations, one sparse product for all walkers), returning the same
+        values to rounding (the contract test compares the two).
+
+        Parameters
+        ----------
+        astro : ndarray, shape (m, n)
+            One astrophysical curve per row, at ``data.time_bmjd``.
+        theta : ndarray, shape (m, k), or None
+            The method's own parameters of each curve (``param_names``), or None.
+        noise_scale : float
+            As for :meth:`log_likelihood`.
+
+        Returns
+        -------
+        ndarray, shape (m,)
+
+        Examples
+        --------
+        >>> from eclipsebench.decorrelate import get_method
+        >>> n = 200
+        >>> d = EpochData(time_bmjd=np.arange(n) / 1440, flux=np.full(n, 1e5),
+        ...               flux_err=np.full(n, 300.0), x=np.linspace(14.9, 15.1, n),
+        ...               y=np.full(n, 15.0))
+        >>> m = get_method("poly2")(d, bin_frames=1)
+        >>> astro = np.vstack([np.ones(n), np.full(n, 1.001)])
+        >>> batch = m.log_likelihood_batch(astro)
+        >>> bool(np.allclose(batch, [m.log_likelihood(a) for a in astro], rtol=1e-12))
+        True
+        """
+        astro = np.atleast_2d(np.asarray(astro, dtype=float))
+        out = np.empty(len(astro))
+        for i, row in enumerate(astro):
+            out[i] = self.log_likelihood(row, None if theta is None else theta[i],
+                                         noise_scale=noise_scale)
+        return out
+
+    def _batch_is_exact(self, owner: type) -> bool:
+        """Whether ``owner``'s vectorised likelihood describes this instance.
+
+        True unless a class below ``owner`` redefined :meth:`predict`,
+        :meth:`residuals` or :meth:`log_likelihood` (a plugin subclassing a
+        built-in method): its overrides of :meth:`log_likelihood_batch` then
+        fall back to the loop.
+        """
+        cls = type(self)
+        return all(getattr(cls, name) is getattr(owner, name)
+                   for name in ("predict", "residuals", "log_likelihood"))
+
+    def _white_log_likelihood_batch(self, model: np.ndarray, noise_scale: float) -> np.ndarray:
+        """The default white-noise :meth:`log_likelihood` of each row of ``model`` (electrons)."""
+        sigma = self.data.flux_err * noise_scale
+        r = (self.data.flux - model) / sigma
+        return (-0.5 * np.einsum("ij,ij->i", r, r) - np.sum(np.log(sigma))
+                - 0.5 * r.shape[1] * np.log(2 * np.pi))
+
     def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Normalised residuals ``(flux - model) / flux_err`` (for least squares)."""
         return (self.data.flux - self.predict(astro, theta)) / self.data.flux_err

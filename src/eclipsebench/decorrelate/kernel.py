@@ -286,6 +286,16 @@ class KernelRegressionData(Systematics):
         astro = np.asarray(astro, float)
         return astro * (self.smoother @ (self._flux / astro))
 
+    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                             noise_scale: float = 1.0) -> np.ndarray:
+        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)): one sparse
+        product of the smoother with all rows' ``flux / astro``."""
+        if not self._batch_is_exact(KernelRegressionData):
+            return super().log_likelihood_batch(astro, theta, noise_scale)
+        astro = np.atleast_2d(np.asarray(astro, float))
+        smooth = (self.smoother @ (self._flux / astro).T).T
+        return self._white_log_likelihood_batch(astro * smooth, noise_scale)
+
     def with_flux(self, flux: np.ndarray) -> KernelRegressionData:
         """The same neighbours and weights on new fluxes (they depend only on the centroids)."""
         return _with_flux(self, flux)
@@ -539,6 +549,17 @@ class KernelRegressionPmap(Systematics):
         # einsum rather than np.dot: no BLAS threads in the fitter's inner loop.
         wm = self._ivar * m
         return (np.einsum("i,i->", wm, self._flux) / np.einsum("i,i->", wm, m)) * m
+
+    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                             noise_scale: float = 1.0) -> np.ndarray:
+        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)), ``F0`` of each
+        row in closed form as in :meth:`predict`."""
+        if not self._batch_is_exact(KernelRegressionPmap):
+            return super().log_likelihood_batch(astro, theta, noise_scale)
+        m = np.atleast_2d(np.asarray(astro, float)) * self.gain
+        wm = self._ivar * m
+        f0 = np.einsum("ij,j->i", wm, self._flux) / np.einsum("ij,ij->i", wm, m)
+        return self._white_log_likelihood_batch(f0[:, None] * m, noise_scale)
 
     def diagnostics(self) -> dict[str, Any]:
         """The calibration set used and how well it covers the science frames (frames

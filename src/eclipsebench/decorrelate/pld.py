@@ -200,6 +200,76 @@ def pld_binned_residuals(design: PldDesign, astro: np.ndarray, coef: np.ndarray)
     return design.b_target - gw @ coef
 
 
+def _binned_design_batch(design: PldDesign, astro: np.ndarray) -> np.ndarray:
+    """``design._binned(design.design * a[:, None])`` for every row ``a`` of ``astro``.
+
+    Shape (m, n_bins, p). The full bins are one stacked matrix product (bins
+    x rows x frames-in-bin times bins x frames-in-bin x regressors); the
+    last, partial bin (if any) is added on its own.
+    """
+    cache = getattr(design, "_batch_sorted", None)
+    if cache is None:   # (the frames' order if they are not in time order, the sorted design)
+        order = design.order
+        if order is not None and np.array_equal(order, np.arange(len(order))):
+            order = None
+        cache = design._batch_sorted = (order, design.design if order is None
+                                        else design.design[order])
+    order, d = cache
+    a = astro if order is None else astro[:, order]
+    m, n = a.shape
+    size, p = design.bin_frames, d.shape[1]
+    n_full = n // size
+    out = np.empty((m, len(design.starts), p))
+    if n_full:
+        full = np.matmul(a[:, :n_full * size].reshape(m, n_full, size).transpose(1, 0, 2),
+                         d[:n_full * size].reshape(n_full, size, p))
+        out[:, :n_full] = full.transpose(1, 0, 2)
+    if n_full < len(design.starts):
+        out[:, n_full] = a[:, n_full * size:] @ d[n_full * size:]
+    return out / design.counts[None, :, None]
+
+
+def _solve_batch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.solve`` of each (p, p) system, with :func:`pld_solve`'s lstsq fallback."""
+    try:
+        return np.linalg.solve(a, b[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        out = np.empty_like(b)
+        for i in range(len(b)):
+            try:
+                out[i] = np.linalg.solve(a[i], b[i])
+            except np.linalg.LinAlgError:
+                out[i] = np.linalg.lstsq(a[i], b[i], rcond=None)[0]
+        return out
+
+
+def _pld_solve_batch(design: PldDesign, astro: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """:func:`pld_solve` for every row of ``astro`` (m, n): ``(coef (m, p), gw)``.
+
+    ``gw`` is the weighted binned design of each row (m, n_bins, p) when the
+    fit is binned, else None. Returns None where no batched form is kept
+    (unbinned without the per-frame products): the caller then loops.
+    """
+    astro = np.atleast_2d(np.asarray(astro, float))
+    p = design.n_regressors
+    if design.outer is not None:
+        s = astro * design.b_ivar_sqrt
+        tri = (s * s) @ design.outer
+        a = np.empty((len(astro), p, p))
+        a[:, design.iu[0], design.iu[1]] = tri
+        a[:, design.iu[1], design.iu[0]] = tri
+        b = (s * design.b_target) @ design.design
+        return _solve_batch(a, b), None
+    if design.starts is None:
+        return None
+    gw = _binned_design_batch(design, astro)
+    gw *= design.b_ivar_sqrt[None, :, None]
+    a = np.matmul(gw.transpose(0, 2, 1), gw)
+    b = design.b_target @ gw
+    return _solve_batch(a, b), gw
+
+
 def residual_scatter_curve(residual: np.ndarray, *, min_bins: int = SLOPE_MIN_BINS
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rms of means of ``N`` consecutive residuals, for ``N = 1, 2, 4, ...``.
@@ -444,6 +514,27 @@ class PixelLevelDecorrelation(Systematics):
         sigma = noise_scale / self.design.b_ivar_sqrt
         return float(-0.5 * np.dot(r, r) - np.sum(np.log(sigma))
                      - 0.5 * len(r) * np.log(2 * np.pi))
+
+    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                             noise_scale: float = 1.0) -> np.ndarray:
+        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)): the binned
+        normal equations of all rows are built and solved together."""
+        solved = (_pld_solve_batch(self.design, astro)
+                  if self._batch_is_exact(PixelLevelDecorrelation) else None)
+        if solved is None:
+            return super().log_likelihood_batch(astro, theta, noise_scale)
+        coef, gw = solved
+        d = self.design
+        astro = np.atleast_2d(np.asarray(astro, float))
+        if gw is None:
+            model = astro * (coef @ d.design.T)
+            r = (d.b_flux - model) * d.b_ivar_sqrt
+        else:
+            r = d.b_target - np.matmul(gw, coef[:, :, None])[:, :, 0]
+        r = r / noise_scale
+        sigma = noise_scale / d.b_ivar_sqrt
+        return (-0.5 * np.einsum("ij,ij->i", r, r) - np.sum(np.log(sigma))
+                - 0.5 * r.shape[1] * np.log(2 * np.pi))
 
     def relative_residuals(self, astro: np.ndarray) -> np.ndarray:
         """``flux / model - 1`` of the unbinned frames, in time order."""

@@ -47,7 +47,7 @@ from numpy.polynomial import legendre
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .pld import PldDesign, pld_solve
+from .pld import PldDesign, _pld_solve_batch, pld_solve
 
 __all__ = ["polynomial_terms", "legendre_design", "scaled_coordinate", "psf_width_columns",
            "whitened_basis", "LinearDetectorModel", "PolyOptions", "Poly2", "Poly3", "Poly4",
@@ -188,6 +188,25 @@ class LinearDetectorModel(Systematics):
         """``astro * W * (R c)`` with ``c`` solved by weighted least squares."""
         scaled = self._gain_astro(astro, theta)
         return scaled * np.einsum("nk,k->n", self.design.design, pld_solve(self.design, scaled))
+
+    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                             noise_scale: float = 1.0) -> np.ndarray:
+        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)) and of ``theta``
+        (shape (m, 2) with the PSF-width term): the binned normal equations of all rows
+        are built and solved together, the coefficients applied to every frame."""
+        astro = np.atleast_2d(np.asarray(astro, float))
+        if self.widths is not None:
+            theta = np.zeros((len(astro), 2)) if theta is None else np.atleast_2d(theta)
+            scaled = astro * (1.0 + self.widths[:, 0] * theta[:, :1]
+                              + self.widths[:, 1] * theta[:, 1:2])
+        else:
+            scaled = astro
+        solved = (_pld_solve_batch(self.design, scaled)
+                  if self._batch_is_exact(LinearDetectorModel) else None)
+        if solved is None:
+            return super().log_likelihood_batch(astro, theta, noise_scale)
+        model = scaled * (solved[0] @ self.design.design.T)
+        return self._white_log_likelihood_batch(model, noise_scale)
 
     def with_flux(self, flux: np.ndarray) -> LinearDetectorModel:
         """The same design on new fluxes (equal to a fresh build)."""
