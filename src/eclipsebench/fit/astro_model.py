@@ -32,6 +32,7 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 import numpy as np
+from numba import njit
 
 from ..astro.eclipse import EclipseShape
 from ..errors import InputError
@@ -285,7 +286,246 @@ class AstroModel:
             flux *= self.ramp_factor(theta)
         return flux
 
+    def batch(self, thetas) -> np.ndarray:
+        """The model of every row of ``thetas`` at once: shape (m, n) (the MCMC's call).
+
+        Each row equals ``self(theta)``: the same arithmetic, element by
+        element. Flat, linear and quadratic phase curves with no or a linear
+        ramp are computed in one compiled pass over the frames (no temporary
+        arrays), the physical eclipse with :func:`numpy.interp`'s formula on
+        the shape's table but an O(1) search; the sinusoid and the exponential
+        ramp are broadcast with numpy (their ``sin``, ``cos``, ``exp`` stay
+        numpy's).
+
+        Parameters
+        ----------
+        thetas : array_like, shape (m, len(names))
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> class Flat:
+        ...     def visible_fraction(self, t_ecl_bmjd):
+        ...         return np.ones(3)
+        >>> m = AstroModel(np.array([0.0, 0.1, 0.2]), None, phase="linear", shape=Flat())
+        >>> m.batch([[0.002, 0.1, 0.0], [0.001, 0.1, 0.01]])
+        array([[1.002, 1.002, 1.002],
+               [1.   , 1.001, 1.002]])
+        """
+        thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
+        if thetas.ndim != 2 or thetas.shape[1] != len(self.names):
+            raise ValueError(f"expected rows of {len(self.names)} parameters {self.names}, "
+                             f"got shape {thetas.shape}")
+        fused = self._fused_arguments(thetas)
+        if fused is not None:
+            return _astro_rows(self.time_bmjd, np.ascontiguousarray(thetas), *fused)
+        t_ecl = thetas[:, 1]
+        dt = self.time_bmjd - t_ecl[:, None]
+        planet = self._planet_batch(thetas, dt)
+        cols, visible = self._visible_fraction_batch(t_ecl)
+        if cols is None:
+            flux = 1.0 + visible * planet
+        else:   # v = 1 outside cols: 1 + 1 * p is 1 + p exactly
+            flux = 1.0 + planet
+            flux[:, cols] = 1.0 + visible * planet[:, cols]
+        if self.ramp != "none":
+            flux *= self._ramp_factor_batch(thetas)
+        return flux
+
+    def _fused_arguments(self, thetas: np.ndarray) -> tuple | None:
+        """The arguments of :func:`_astro_rows` after the times and thetas, or None.
+
+        None (numpy broadcasting instead) for the sinusoid, the exponential
+        ramp, a shape other than :class:`EclipseShape`'s table at these times,
+        or eclipse times so far from the data that the shape would fold the
+        offsets by a period.
+        """
+        if self.phase == "sinusoid" or self.ramp == "exponential":
+            return None
+        phase_code = ("flat", "linear", "quadratic").index(self.phase)
+        ramp_at = 2 + self.n_phase if self.ramp == "linear" else -1
+        if self.eclipse_shape == "box":
+            return (phase_code, ramp_at, self.t_start_bmjd, True, 0.5 * self.box_duration_d,
+                    self.exposure_d, *_NO_TABLE)
+        shape = self.shape
+        if not (isinstance(shape, EclipseShape) and shape.time_bmjd.shape == self.time_bmjd.shape
+                and np.array_equal(shape.time_bmjd, self.time_bmjd)):
+            return None
+        table = self._shape_table(shape)
+        half = 0.5 * shape.period
+        t_ecl = thetas[:, 1]
+        if (table is None or self.t_start_bmjd - t_ecl.max() < -half
+                or self.t_stop_bmjd - t_ecl.min() >= half):
+            return None
+        return (phase_code, ramp_at, self.t_start_bmjd, False, 0.0, 1.0, *table[:3], *table[3:])
+
+    def _planet_batch(self, thetas: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """:meth:`planet` of every row (``dt = time - t_ecl`` of each row)."""
+        depth = thetas[:, :1]
+        c = thetas[:, 2:2 + self.n_phase]
+        if self.phase == "flat":
+            return np.broadcast_to(depth, dt.shape)
+        if self.phase == "linear":
+            return depth + c[:, :1] * dt
+        if self.phase == "quadratic":
+            return depth + dt * (c[:, :1] + c[:, 1:2] * dt)
+        arg = (2.0 * np.pi / self.period_d) * dt
+        return depth + c[:, :1] * (np.cos(arg) - 1.0) + c[:, 1:2] * np.sin(arg)
+
+    def _ramp_factor_batch(self, thetas: np.ndarray) -> np.ndarray:
+        """:meth:`ramp_factor` of every row."""
+        r = thetas[:, 2 + self.n_phase:]
+        dt = self.time_bmjd - self.t_start_bmjd
+        if self.ramp == "linear":
+            return 1.0 + r[:, :1] * dt
+        return 1.0 - r[:, :1] * np.exp(-dt / r[:, 1:2])
+
+    def _visible_fraction_batch(self, t_ecl: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
+        """:meth:`visible_fraction` of every eclipse time in ``t_ecl``.
+
+        Returns ``(cols, v)``: ``v`` (m, len(cols)) at the frames ``cols``, the
+        planet being wholly visible (v = 1) at every other frame; or ``(None,
+        v)`` with ``v`` (m, n) at every frame.
+        """
+        if self.eclipse_shape == "box":
+            return None, box_visible_fraction(self.time_bmjd, t_ecl[:, None],
+                                              self.box_duration_d, self.exposure_d)
+        shape = self.shape
+        if not isinstance(shape, EclipseShape):
+            return None, np.stack([self.visible_fraction(t) for t in t_ecl])
+        table = self._shape_table(shape)
+        times = shape.time_bmjd
+        half = 0.5 * shape.period
+        lo, hi = float(times.min() - t_ecl.max()), float(times.max() - t_ecl.min())
+        if table is None or lo < -half or hi >= half:
+            # no table to bound, or times a period apart: the shape's own fold and interpolation
+            dt = times - t_ecl[:, None]
+            return None, shape.at(dt.ravel(), 0.0).reshape(dt.shape)
+        xp = table[0]
+        cols = np.flatnonzero((times > t_ecl.min() + xp[0]) & (times < t_ecl.max() + xp[-1]))
+        dt = times[cols] - t_ecl[:, None]
+        return cols, _interp_table(dt, table)
+
+    def _shape_table(self, shape: EclipseShape):
+        """The eclipse shape's table and an O(1) search index for :func:`_interp_table` (cached).
+
+        The shape interpolates a table of v against the offset from
+        mid-eclipse (``EclipseShape.at``, :func:`numpy.interp` with v = 1
+        beyond both ends); this reads it once. None if the shape keeps no
+        such table (then the batch calls ``shape.at``).
+        """
+        cached = getattr(self, "_table_cache", None)
+        if cached is not None and cached[0] is shape:
+            return cached[1]
+        xp = np.asarray(getattr(shape, "_offset", []), dtype=float)
+        fp = np.asarray(getattr(shape, "_shape", []), dtype=float)
+        table = None
+        if xp.ndim == 1 and xp.shape == fp.shape and len(xp) >= 3 and np.all(np.diff(xp) > 0):
+            table = _search_table(xp, fp)
+        self._table_cache = (shape, table)
+        return table
+
     def describe(self) -> dict[str, Any]:
         """The model's settings, for results and logs."""
         return {"phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
                 "box_duration_d": self.box_duration_d, "period_d": self.period_d}
+
+
+def _search_table(xp: np.ndarray, fp: np.ndarray) -> tuple:
+    """``(xp, fp, slopes, start, step, index)`` for :func:`_interp_table`.
+
+    ``index[k]`` is the last ``j`` with ``xp[j] <= start + k * step`` on a
+    uniform grid whose step is the smallest spacing of ``xp`` (so a cell
+    holds at most one table point); ``slopes`` are :func:`numpy.interp`'s.
+    """
+    step = float(np.min(np.diff(xp)))
+    cells = np.arange(int(np.ceil((xp[-1] - xp[0]) / step)) + 2)
+    index = np.searchsorted(xp, xp[0] + cells * step, side="right") - 1
+    slopes = (fp[1:] - fp[:-1]) / (xp[1:] - xp[:-1])
+    return (np.ascontiguousarray(xp), np.ascontiguousarray(fp), slopes, float(xp[0]), step,
+            np.clip(index, 0, len(xp) - 2).astype(np.int64))
+
+
+#: Placeholder table arguments of :func:`_astro_rows` for the box eclipse.
+_NO_TABLE = (np.zeros(2), np.ones(2), np.zeros(1), 0.0, 1.0, np.zeros(1, dtype=np.int64))
+
+
+@njit(cache=True)
+def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, exposure,
+                xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
+    """``AstroModel.__call__`` of every row of ``thetas``, one compiled pass per row.
+
+    The expressions are those of :meth:`AstroModel.planet`,
+    :func:`box_visible_fraction` (``box``) or :func:`_interp_table` (the
+    physical shape's table), and :meth:`AstroModel.ramp_factor` (linear ramp
+    when ``ramp_at >= 0``), in the same order, so each value is the same.
+    """
+    m, n = thetas.shape[0], len(time)
+    out = np.empty((m, n))
+    last = len(xp) - 1
+    cells = len(index) - 1
+    for i in range(m):
+        depth, t_ecl = thetas[i, 0], thetas[i, 1]
+        c0 = thetas[i, 2] if phase_code >= 1 else 0.0
+        c1 = thetas[i, 3] if phase_code == 2 else 0.0
+        slope = thetas[i, ramp_at] if ramp_at >= 0 else 0.0
+        for k in range(n):
+            dt = time[k] - t_ecl
+            if phase_code == 0:
+                p = depth
+            elif phase_code == 1:
+                p = depth + c0 * dt
+            else:
+                p = depth + dt * (c0 + c1 * dt)
+            if box:
+                v = min(max((abs(dt) - box_half) / exposure + 0.5, 0.0), 1.0)
+            elif dt < xp[0] or dt > xp[last]:
+                v = 1.0
+            elif dt == xp[last]:
+                v = fp[last]
+            else:   # j: the last table point at or below dt (uniform index, then corrected)
+                j = index[min(max(int((dt - start) / step), 0), cells)]
+                while j > 0 and xp[j] > dt:
+                    j -= 1
+                while j < last - 1 and xp[j + 1] <= dt:
+                    j += 1
+                v = fp[j] if xp[j] == dt else slopes[j] * (dt - xp[j]) + fp[j]
+            f = 1.0 + v * p
+            if ramp_at >= 0:
+                f = f * (1.0 + slope * (time[k] - t_start))
+            out[i, k] = f
+    return out
+
+
+def _interp_table(x: np.ndarray, table: tuple) -> np.ndarray:
+    """``numpy.interp(x, xp, fp, left=1, right=1)`` of a 2-D ``x``, with an O(1) search.
+
+    Same formula as numpy's (``slope[j] * (x - xp[j]) + fp[j]``, ``fp[j]``
+    where ``x == xp[j]``, ``fp[-1]`` at the last point), so the values are
+    identical; ``j`` comes from the uniform index of :func:`_search_table`.
+    """
+    xp, fp, slopes, start, step, index = table
+    return _interp_rows(np.ascontiguousarray(x, dtype=float), xp, fp, slopes, start, step, index)
+
+
+@njit(cache=True)
+def _interp_rows(x, xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
+    m, n = x.shape
+    out = np.empty((m, n))
+    last = len(xp) - 1
+    cells = len(index) - 1
+    for i in range(m):
+        for k in range(n):
+            xv = x[i, k]
+            if xv < xp[0] or xv > xp[last]:
+                out[i, k] = 1.0
+            elif xv == xp[last]:
+                out[i, k] = fp[last]
+            else:
+                j = index[min(max(int((xv - start) / step), 0), cells)]
+                while j > 0 and xp[j] > xv:
+                    j -= 1
+                while j < last - 1 and xp[j + 1] <= xv:
+                    j += 1
+                out[i, k] = fp[j] if xp[j] == xv else slopes[j] * (xv - xp[j]) + fp[j]
+    return out

@@ -2,7 +2,15 @@
 
 The log-probability is ``Systematics.log_likelihood(astro(theta_a), theta_s,
 noise_scale)`` inside the bounds of every parameter (a uniform prior) and
-``-inf`` outside. The move is the method's ``preferred_move``:
+``-inf`` outside. The chain samples only the astrophysical parameters and the
+method's own nonlinear ones (``param_names``): the linear pieces (PLD and
+polynomial coefficients, BLISS knots, KR/Pmap's and SP(K2)'s ``F0``, the GP's
+mean) are solved inside the likelihood for each astrophysical curve
+(``docs/fitting.md``, "MCMC", says when that is the marginal posterior). All
+walkers of a step are evaluated in one call (emcee's ``vectorize=True``):
+:meth:`AstroModel.batch` and :meth:`Systematics.log_likelihood_batch`.
+
+The move is the method's ``preferred_move``:
 
 - ``"stretch"``: emcee's affine-invariant stretch move (Goodman & Weare 2010).
 - ``"de"``: differential evolution (ter Braak 2006), the DE-MC of the BLISS
@@ -10,11 +18,13 @@ noise_scale)`` inside the bounds of every parameter (a uniform prior) and
   ``gamma = 2.38 / sqrt(2 d)`` and 10 % with ``gamma = 1`` so that walkers can
   jump between modes, as ter Braak recommends.
 
-Convergence: the chain is run in blocks; after each block the integrated
-autocorrelation time tau of every parameter is estimated and sampling stops
-once the chain is longer than ``tau_factor * max(tau)`` (50 by default, as the
-emcee documentation advises) or the step cap is reached; ``converged`` says
-which. The first ``2 max(tau)`` steps are discarded as burn-in.
+Convergence (the emcee documentation's criterion): the chain is run in
+blocks; after each block the integrated autocorrelation time tau of every
+parameter is estimated (:func:`emcee.autocorr.integrated_time`), the first
+``2 max(tau)`` steps are discarded as burn-in, tau is estimated again on the
+rest, and sampling stops once the chain after burn-in is longer than
+``tau_factor * max(tau)`` (50 by default) or the step cap is reached;
+``converged`` says which, and ``n_over_tau`` is that ratio.
 """
 
 from __future__ import annotations
@@ -23,6 +33,7 @@ from dataclasses import dataclass, field
 
 import emcee
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ..decorrelate.base import Systematics
 from .astro_model import AstroModel
@@ -43,17 +54,23 @@ class McmcResult:
     p16, p84 : ndarray
         16th and 84th percentiles.
     tau : ndarray
-        Integrated autocorrelation time of each parameter (steps).
+        Integrated autocorrelation time of each parameter (steps), estimated on
+        the chain after burn-in.
     n_steps : int
-        Steps per walker that were run.
+        Steps per walker that were run (burn-in included).
+    n_walkers, burn_in : int
+        Ensemble size, and the steps discarded as burn-in (``2 max(tau)``).
     converged : bool
-        Whether ``n_steps > tau_factor * max(tau)``.
+        Whether ``(n_steps - burn_in) > tau_factor * max(tau)``.
     acceptance : float
         Mean acceptance fraction.
     move : str
         "stretch" or "de".
     samples : ndarray
         Flat posterior samples after burn-in and thinning.
+    n_over_tau : float
+        ``(n_steps - burn_in) / max(tau)``: the chain after burn-in in units of
+        the largest autocorrelation time.
     """
 
     names: tuple[str, ...]
@@ -69,6 +86,7 @@ class McmcResult:
     acceptance: float
     move: str
     samples: np.ndarray = field(repr=False)
+    n_over_tau: float = float("nan")
 
     def error(self, name: str) -> float:
         """Half the 16-84 percentile range of ``name`` (one sigma for a Gaussian)."""
@@ -86,6 +104,8 @@ def make_moves(move: str):
 
 
 class _LogProb:
+    """The log-posterior of a batch of walkers (emcee's ``vectorize=True``)."""
+
     def __init__(self, systematics: Systematics, astro_model: AstroModel, lower, upper,
                  noise_scale: float):
         self.sys = systematics
@@ -96,13 +116,17 @@ class _LogProb:
         self.upper = upper
         self.noise_scale = noise_scale
 
-    def __call__(self, theta: np.ndarray) -> float:
-        if np.any(theta < self.lower) or np.any(theta > self.upper):
-            return -np.inf
-        theta_s = theta[self.n_astro:] if self.has_sys else None
-        value = self.sys.log_likelihood(self.astro(theta[:self.n_astro]), theta_s,
-                                        noise_scale=self.noise_scale)
-        return value if np.isfinite(value) else -np.inf
+    def __call__(self, thetas: np.ndarray) -> np.ndarray:
+        thetas = np.atleast_2d(thetas)
+        out = np.full(len(thetas), -np.inf)
+        inside = np.all((thetas >= self.lower) & (thetas <= self.upper), axis=1)
+        if np.any(inside):
+            th = thetas[inside]
+            astro = self.astro.batch(th[:, :self.n_astro])
+            theta_s = th[:, self.n_astro:] if self.has_sys else None
+            value = self.sys.log_likelihood_batch(astro, theta_s, noise_scale=self.noise_scale)
+            out[inside] = np.where(np.isfinite(value), value, -np.inf)
+        return out
 
 
 def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, scale_start, *,
@@ -150,30 +174,52 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     p0 = _fold(p0, lower, upper)
 
     log_prob = _LogProb(systematics, astro_model, lower, upper, noise_scale)
-    sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, moves=make_moves(move))
+    sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, moves=make_moves(move),
+                                    vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
     state = p0
     n_steps = 0
-    tau = np.full(ndim, np.inf)
+    tau, burn_in, n_over_tau = np.full(ndim, np.inf), 0, 0.0
     converged = False
-    while n_steps < max_steps:
-        steps = min(block_steps, max_steps - n_steps)
-        state = sampler.run_mcmc(state, steps, progress=False)
-        n_steps += steps
-        tau = emcee.autocorr.integrated_time(sampler.get_chain(), tol=0)
-        if np.all(np.isfinite(tau)) and n_steps > tau_factor * np.max(tau):
-            converged = True
-            break
-    tau_max = float(np.max(tau)) if np.all(np.isfinite(tau)) else n_steps / 4.0
-    burn_in = min(int(np.ceil(2 * tau_max)), n_steps // 2)
-    thin = max(1, int(0.5 * np.min(tau))) if np.all(np.isfinite(tau)) else 1
+    # One BLAS thread: the batched likelihoods are small matrix products, which
+    # threads slow down on a shared machine and would sum in a thread-dependent order.
+    with threadpool_limits(limits=1, user_api="blas"):
+        while n_steps < max_steps:
+            steps = min(block_steps, max_steps - n_steps)
+            state = sampler.run_mcmc(state, steps, progress=False)
+            n_steps += steps
+            tau, burn_in, n_over_tau = _autocorrelation(sampler.get_chain())
+            if n_over_tau > tau_factor:
+                converged = True
+                break
+    finite = bool(np.all(np.isfinite(tau)))
+    thin = max(1, int(0.5 * np.min(tau))) if finite else 1
     samples = sampler.get_chain(discard=burn_in, thin=thin, flat=True)
     p16, p50, p84 = np.percentile(samples, [15.865525393145708, 50.0, 84.13447460685429], axis=0)
     return McmcResult(names=tuple(names), median=p50, std=np.std(samples, axis=0, ddof=1),
                       p16=p16, p84=p84, tau=np.asarray(tau, dtype=float), n_steps=n_steps,
                       n_walkers=n_walkers, burn_in=burn_in, converged=converged,
                       acceptance=float(np.mean(sampler.acceptance_fraction)), move=move,
-                      samples=samples)
+                      samples=samples, n_over_tau=float(n_over_tau))
+
+
+def _autocorrelation(chain: np.ndarray) -> tuple[np.ndarray, int, float]:
+    """``(tau, burn_in, n_over_tau)`` of a chain of shape (steps, walkers, ndim).
+
+    tau is first estimated on the whole chain; ``burn_in = ceil(2 max(tau))``
+    (at most half the chain) is discarded and tau estimated again on the rest;
+    ``n_over_tau = (steps - burn_in) / max(tau)``. A tau that cannot be
+    estimated gives burn-in of half the chain and ``n_over_tau = 0``.
+    """
+    n = chain.shape[0]
+    tau = emcee.autocorr.integrated_time(chain, tol=0)
+    if not np.all(np.isfinite(tau)):
+        return tau, n // 2, 0.0
+    burn_in = min(int(np.ceil(2.0 * np.max(tau))), n // 2)
+    tau = emcee.autocorr.integrated_time(chain[burn_in:], tol=0)
+    if not np.all(np.isfinite(tau)) or np.max(tau) <= 0:
+        return tau, burn_in, 0.0
+    return tau, burn_in, float((n - burn_in) / np.max(tau))
 
 
 def _fold(p: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
