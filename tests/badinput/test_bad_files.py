@@ -180,7 +180,7 @@ def _fake_reduce(monkeypatch):
 
     def reduce_epoch(*args, **kwargs):
         return types.SimpleNamespace(
-            depth_ppm=1800.0, depth_err_ppm=kwargs.pop("_err", 50.0),
+            depth_ppm=1800.0, depth_err_ppm=kwargs.pop("_err", 50.0), chain=None,
             to_dict=lambda: {"depth_ppm": 1800.0, "depth_err_ppm": 50.0},
             lightcurve_table=lambda: Table({"time_bmjd": np.arange(3.0)}))
 
