@@ -132,7 +132,8 @@ class _LogProb:
 def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, scale_start, *,
              names: tuple[str, ...], rng: np.random.Generator, n_walkers: int = 32,
              max_steps: int = 2000, block_steps: int = 250, tau_factor: float = 50.0,
-             noise_scale: float = 1.0, move: str | None = None) -> McmcResult:
+             noise_scale: float = 1.0, move: str | None = None,
+             cov_start: np.ndarray | None = None) -> McmcResult:
     """Sample the posterior of the joint parameters, starting near a least-squares solution.
 
     Parameters
@@ -158,6 +159,12 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
         ``sqrt(chi2_red)`` so that the white-noise level matches the residuals).
     move : {"stretch", "de"} or None
         Default ``systematics.preferred_move``.
+    cov_start : ndarray, shape (ndim, ndim), optional
+        Covariance of the least-squares solution: the initial ball is then
+        10 % of it (its correlations included) instead of 10 % of
+        ``scale_start`` per parameter; ignored unless positive definite.
+        Walkers that start across a narrow correlated ridge (many collinear
+        linear parameters) take long to reach it.
     """
     theta_start = np.asarray(theta_start, dtype=float)
     ndim = len(theta_start)
@@ -170,7 +177,9 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     n_walkers += n_walkers % 2
     scale = np.where(np.isfinite(scale_start) & (np.asarray(scale_start) > 0),
                      scale_start, 1e-6 * np.maximum(1.0, np.abs(theta_start)))
-    p0 = theta_start + 0.1 * scale * rng.standard_normal((n_walkers, ndim))
+    z = rng.standard_normal((n_walkers, ndim))
+    chol = _cholesky(cov_start, ndim)
+    p0 = theta_start + 0.1 * (z @ chol.T if chol is not None else scale * z)
     p0 = _fold(p0, lower, upper)
 
     log_prob = _LogProb(systematics, astro_model, lower, upper, noise_scale)
@@ -220,6 +229,19 @@ def _autocorrelation(chain: np.ndarray) -> tuple[np.ndarray, int, float]:
     if not np.all(np.isfinite(tau)) or np.max(tau) <= 0:
         return tau, burn_in, 0.0
     return tau, burn_in, float((n - burn_in) / np.max(tau))
+
+
+def _cholesky(cov: np.ndarray | None, ndim: int) -> np.ndarray | None:
+    """The lower Cholesky factor of ``cov``, or None if it is absent or not positive definite."""
+    if cov is None:
+        return None
+    cov = np.asarray(cov, dtype=float)
+    if cov.shape != (ndim, ndim) or not np.all(np.isfinite(cov)):
+        return None
+    try:
+        return np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def _fold(p: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
