@@ -1,9 +1,23 @@
-"""Fit the channel-2 gain-map models committed in ``src/eclipsebench/data/gainmap_ch2.json``.
+"""Fit the gain-map models committed in ``src/eclipsebench/data/gainmap_ch<N>.json``.
 
-Usage (from the project root, with ``../shared/data/irac/pmap_ch2/`` present)::
+Usage (from the project root, with ``../shared/data/irac/pmap_ch<N>/`` present)::
 
-    .venv/bin/python tools/fit_gainmap.py [--pmap-dir DIR] [--radius 3.0] [--degree 6]
-                                          [--out src/eclipsebench/data/gainmap_ch2.json]
+    .venv/bin/python tools/fit_gainmap.py [--channel 2] [--pmap-dir DIR] [--radius 3.0]
+                                          [--degree 6] [--out src/eclipsebench/data/gainmap_ch2.json]
+    .venv/bin/python tools/fit_gainmap.py --channel 1      # gainmap_ch1.json
+
+``--channel 1`` changes the defaults to channel 1's: the map ``pmap_ch1``,
+the band 3.18-3.93 um, IRACSIM's channel-1 pixel scale (1.2233"), and the
+noise pixels of the 30 real 0.1 s cubes of HD 209458 (AOR 41629440: 7.43,
+median of the good frames, at their mean centroid (14.877, 14.684)) with the
+jitter the Table-5 FBM puts inside a 0.1 s frame (0.075 px RMS per axis).
+
+Cells that no calibration measurement reached (NaN in ``pmap_ch1``): every fit
+uses only the box spanned by the cells with occupancy > 20 (finite cells
+inside it with low occupancy at the low weight); the polynomials carry that
+``box`` and are evaluated with the phase clamped to it (see
+``GainPolynomial.evaluate``), so nothing is extrapolated. ``pmap_ch2`` has no
+NaN: no box, as before.
 
 Nothing from ``shared/`` is copied into the repository; only coefficients.
 
@@ -50,7 +64,16 @@ from eclipsebench.photometry.estimators import (  # noqa: E402
 OCC_MIN = 20.0
 
 
-def load_pmap(folder: Path):
+CHANNEL_DEFAULTS = {
+    2: {"source": "pmap_ch2_0p1s_x4_500x500_0043_120124 (Spitzer Science Center)",
+        "beta": 4.60, "jitter": 0.088, "position": (15.09, 15.18), "pixel_scale": None},
+    1: {"source": "pmap_ch1_500x500_0043_120828 (Spitzer Science Center)",
+        "beta": 7.43, "jitter": 0.075, "position": (14.877, 14.684),
+        "pixel_scale": (1.22334117768332 * 1.22328355209902) ** 0.5},
+}
+
+
+def load_pmap(folder: Path, channel: int = 2):
     """pmap, x grid, y grid (0-based pixel coordinates), occupancy."""
     import warnings
 
@@ -59,7 +82,7 @@ def load_pmap(folder: Path):
 
     out = {}
     for key in ("pmap", "xgrid", "ygrid", "occu"):
-        path = next(folder.glob(f"{key}_ch2_*.fits"))
+        path = next(folder.glob(f"{key}_ch{channel}_*.fits"))
         with warnings.catch_warnings():
             # the pmap files end with a non-standard trailer (see shared/data/irac/README.md)
             warnings.simplefilter("ignore", VerifyWarning)
@@ -94,9 +117,35 @@ def fit_pmap_poly(pm, degree):
             "fit_rms": rms, "n_cells": int(mask.sum())}
 
 
-def beta_at(blur_px, obscuration, os_, half_px, x, y, jitter_px):
+def trusted_box(pm):
+    """((u_lo, u_hi), (v_lo, v_hi)): the phases of the cells with occupancy > 20, or None
+    when the map has no NaN cell (nothing needs clamping)."""
+    if np.all(np.isfinite(pm["pmap"])):
+        return None
+    high = pm["occu"] > OCC_MIN
+    u, v = pm["xgrid"][high] - 15.0, pm["ygrid"][high] - 15.0
+    return ((float(u.min()), float(u.max())), (float(v.min()), float(v.max())))
+
+
+def in_box(u, v, box):
+    if box is None:
+        return np.ones(np.shape(u), bool)
+    (u0, u1), (v0, v1) = box
+    return (u >= u0) & (u <= u1) & (v >= v0) & (v <= v1)
+
+
+def psf_kwargs(channel, pixel_scale):
+    from eclipsebench.detector.constants import channel_constants
+
+    kw = {"band_um": channel_constants(channel).band_um}
+    if pixel_scale is not None:
+        kw["pixel_scale_arcsec"] = pixel_scale
+    return kw
+
+
+def beta_at(blur_px, obscuration, os_, half_px, x, y, jitter_px, **psf_kw):
     """Noise pixels of the frame-averaged image of a star jittering around (x, y)."""
-    psf = P.psf_fine(os_, half_px - 0.5, obscuration=obscuration, blur_px=blur_px)
+    psf = P.psf_fine(os_, half_px - 0.5, obscuration=obscuration, blur_px=blur_px, **psf_kw)
     table = P.pixel_integrated_table(psf, os_)
     prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
     # a fixed 2-D Gauss-Hermite cloud of sub-sample offsets with RMS jitter_px per axis
@@ -116,43 +165,59 @@ def weighted_poly(u, v, target, weights, degree):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--pmap-dir", type=Path, default=ROOT / ".." / "shared" / "data" / "irac"
-                    / "pmap_ch2")
+    ap.add_argument("--channel", type=int, choices=(1, 2), default=2)
+    ap.add_argument("--pmap-dir", type=Path, default=None,
+                    help="default ../shared/data/irac/pmap_ch<channel>")
     ap.add_argument("--radius", type=float, default=3.0, help="aperture radius (px) of the pmap")
     ap.add_argument("--degree", type=int, default=6, help="polynomial total degree")
     ap.add_argument("--low-weight", type=float, default=0.05,
                     help="weight of gain-map cells with occupancy <= 20")
     ap.add_argument("--obscuration", type=float, default=0.14)
-    ap.add_argument("--beta", type=float, default=4.60, help="target noise pixels")
-    ap.add_argument("--jitter", type=float, default=0.088,
+    ap.add_argument("--beta", type=float, default=None,
+                    help="target noise pixels (channel 2: 4.60, channel 1: 7.43)")
+    ap.add_argument("--jitter", type=float, default=None,
                     help="RMS (px per axis) of the jitter inside a frame that the target "
-                         "noise pixels include (0.088: Table 5's FBM, A_fbm = 0.4 px)")
+                         "noise pixels include (0.088: Table 5's FBM, A_fbm = 0.4 px, in a "
+                         "2 s frame; 0.075 in a 0.1 s frame)")
     ap.add_argument("--step", type=float, default=0.02, help="true-position grid step (px)")
-    ap.add_argument("--out", type=Path, default=ROOT / "src" / "eclipsebench" / "data"
-                    / "gainmap_ch2.json")
+    ap.add_argument("--out", type=Path, default=None,
+                    help="default src/eclipsebench/data/gainmap_ch<channel>.json")
     args = ap.parse_args(argv)
+    ch = args.channel
+    dflt = CHANNEL_DEFAULTS[ch]
+    pmap_dir = args.pmap_dir or ROOT / ".." / "shared" / "data" / "irac" / f"pmap_ch{ch}"
+    out_path = args.out or ROOT / "src" / "eclipsebench" / "data" / f"gainmap_ch{ch}.json"
+    beta = dflt["beta"] if args.beta is None else args.beta
+    jitter = dflt["jitter"] if args.jitter is None else args.jitter
+    x_beta, y_beta = dflt["position"]
+    psf_kw = psf_kwargs(ch, dflt["pixel_scale"])
 
-    pm = load_pmap(args.pmap_dir)
-    result = {"source": "pmap_ch2_0p1s_x4_500x500_0043_120124 (Spitzer Science Center)",
+    pm = load_pmap(pmap_dir, ch)
+    result = {"source": dflt["source"],
               "made_by": "tools/fit_gainmap.py " + " ".join(sys.argv[1:] if argv is None else argv)}
+    box = trusted_box(pm)
 
     # (1) the gain map itself as a function of the centroid phase
     high = pm["occu"] > OCC_MIN
-    w = np.where(high, 1.0, args.low_weight).ravel()
     u, v = pm["xgrid"].ravel() - 15.0, pm["ygrid"].ravel() - 15.0
-    powers, c, fit = weighted_poly(u, v, pm["pmap"].ravel(), w, args.degree)
-    rms = float(np.sqrt(np.mean((fit - pm["pmap"].ravel())[high.ravel()] ** 2)))
+    use = np.isfinite(pm["pmap"].ravel()) & in_box(u, v, box)
+    w = np.where(high, 1.0, args.low_weight).ravel()[use]
+    powers, c, fit = weighted_poly(u[use], v[use], pm["pmap"].ravel()[use], w, args.degree)
+    rms = float(np.sqrt(np.mean((fit - pm["pmap"].ravel()[use])[high.ravel()[use]] ** 2)))
     result["pmap_poly"] = {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
                            "variable": "centroid phase about the nearest pixel centre",
                            "occupancy_min": OCC_MIN, "fit_rms": rms}
-    print(f"pmap polynomial (degree {args.degree}): rms {rms:.5f} where occupancy > {OCC_MIN}")
+    if box is not None:
+        result["pmap_poly"]["box"] = [list(box[0]), list(box[1])]
+    print(f"pmap polynomial (degree {args.degree}): rms {rms:.5f} where occupancy > {OCC_MIN}"
+          + (f", phase clamped to {box}" if box is not None else ""))
 
     # (2) the builtin PSF width
     os_, half = 20, 12.8
-    blur = optimize.brentq(lambda b: beta_at(b, args.obscuration, os_, half, 15.09, 15.18,
-                                             args.jitter) - args.beta, 0.0, 1.0, xtol=1e-4)
-    print(f"PSF blur {blur:.4f} px gives noise pixels {args.beta} with {args.jitter} px jitter")
-    psf = P.psf_fine(os_, half - 0.5, obscuration=args.obscuration, blur_px=blur)
+    blur = optimize.brentq(lambda b: beta_at(b, args.obscuration, os_, half, x_beta, y_beta,
+                                             jitter, **psf_kw) - beta, 0.0, 1.0, xtol=1e-4)
+    print(f"PSF blur {blur:.4f} px gives noise pixels {beta} with {jitter} px jitter")
+    psf = P.psf_fine(os_, half - 0.5, obscuration=args.obscuration, blur_px=blur, **psf_kw)
     table = P.pixel_integrated_table(psf, os_)
     prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
 
@@ -166,7 +231,7 @@ def main(argv=None) -> int:
     val, occ = pmap_interpolator(pm)
     pts = np.column_stack([yc, xc])
     target = val(pts)
-    inside = np.isfinite(target)
+    inside = np.isfinite(target) & in_box(xc - 15.0, yc - 15.0, box)
     ok = inside & (occ(pts) > OCC_MIN)
     wt = np.where(ok, 1.0, args.low_weight)[inside]
     powers, c, fit = weighted_poly(xs[inside] - 15.0, ys[inside] - 15.0,
@@ -176,24 +241,30 @@ def main(argv=None) -> int:
     scale = np.sum(model[sel] * target[inside][sel]) / np.sum(model[sel] ** 2)
     rel = model[sel] * scale / target[inside][sel] - 1.0
     rms = float(np.sqrt(np.mean(rel**2)))
-    full = poly_design(xs - 15.0, ys - 15.0, args.degree)[1] @ c
+    gain = {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
+            "variable": "true sub-pixel phase about the nearest pixel centre"}
+    if box is not None:  # the true phases whose centroids fall in the map's box
+        tu, tv = xs[inside] - 15.0, ys[inside] - 15.0
+        gain["box"] = [[float(tu.min()), float(tu.max())], [float(tv.min()), float(tv.max())]]
+    full = P.GainPolynomial.from_dict(gain).evaluate(xs, ys)
     print(f"builtin gain (degree {args.degree}): {sel.sum()} positions, rms {rms:.5f}; "
           f"G over the whole pixel {full.min() / full.mean():.4f}..{full.max() / full.mean():.4f}")
     result["builtin"] = {
         "obscuration": args.obscuration, "blur_px": float(blur),
-        "target_noise_pixels": args.beta, "noise_pixels_position": [15.09, 15.18],
-        "noise_pixels_jitter_rms_px": args.jitter,
-        "gain": {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
-                 "variable": "true sub-pixel phase about the nearest pixel centre"},
+        "target_noise_pixels": beta, "noise_pixels_position": [x_beta, y_beta],
+        "noise_pixels_jitter_rms_px": jitter,
+        "gain": gain,
         "aperture_radius_px": args.radius,
         "centroid": "centre of light, 7x7 box on pixel (15, 15)",
         "fit_rms": rms, "n_positions": int(sel.sum()),
     }
     from eclipsebench.io.atomic import atomic_path
 
-    with atomic_path(args.out) as tmp:
+    if dflt["pixel_scale"] is not None:
+        result["builtin"]["pixel_scale_arcsec"] = float(dflt["pixel_scale"])
+    with atomic_path(out_path) as tmp:
         Path(tmp).write_text(json.dumps(result, indent=1) + "\n")
-    print(f"wrote {args.out}")
+    print(f"wrote {out_path}")
     return 0
 
 

@@ -29,8 +29,12 @@ between the patch normal and the line of sight), on a Gauss-Legendre grid in
 Flux ratios
 -----------
 ``monochromatic`` (IRACSIM's exoplanet wrapper): ratio of Planck functions at
-one wavelength, 4.5095 um by default.  ``tophat``: photon-weighted band
-average (``integral lambda B_lambda``) over a top-hat 4.0-5.0 um band.
+one wavelength, 4.5095 um by default (IRACSIM's channel 2; the simulator uses
+3.551 um, the Handbook's effective wavelength, for channel 1).  ``tophat``:
+photon-weighted band average (``integral lambda B_lambda``) over a top-hat
+band: the IRAC band that contains ``wavelength_um`` (:data:`TOPHAT_BANDS_UM`:
+4.0-5.0 um for channel 2, 3.176-3.926 um for channel 1, the Handbook's
+3.551 +- 0.375 um), 4.0-5.0 um for a wavelength in neither.
 """
 
 from __future__ import annotations
@@ -43,7 +47,13 @@ from numba import njit
 
 from .orbit import eccentric_to_true, periastron_angular_velocity, solve_kepler
 
-__all__ = ["planck_lambda", "Band", "band_for", "ThermalModel", "PlanetFluxTable"]
+__all__ = ["planck_lambda", "Band", "band_for", "ThermalModel", "PlanetFluxTable",
+           "DEFAULT_WAVELENGTH_UM", "TOPHAT_BANDS_UM"]
+
+#: The monochromatic wavelength of IRACSIM's exoplanet wrapper (channel 2), um.
+DEFAULT_WAVELENGTH_UM = 4.5095
+#: Top-hat bands (um) of IRAC channels 2 and 1 (Handbook Table 2.2 for channel 1).
+TOPHAT_BANDS_UM = ((4.0, 5.0), (3.176, 3.926))
 
 _HC_OVER_K_UM_K = 14387.7688  # h c / k in um K
 
@@ -85,16 +95,30 @@ class Band:
             float(planck_lambda(lam, t) @ w)
 
 
-def band_for(flux_ratio_model: str, wavelength_um: float = 4.5095) -> Band:
-    """The :class:`Band` for a ``[system] flux_ratio_model``."""
+def _um(value: float) -> str:
+    """A wavelength with at least one decimal: 4.0, 3.176."""
+    text = f"{value:.3f}".rstrip("0")
+    return text + "0" if text.endswith(".") else text
+
+
+def band_for(flux_ratio_model: str, wavelength_um: float = DEFAULT_WAVELENGTH_UM) -> Band:
+    """The :class:`Band` for a ``[system] flux_ratio_model``.
+
+    Examples
+    --------
+    >>> band_for("tophat").name, band_for("tophat", 3.551).name
+    ('top-hat 4.0-5.0 um', 'top-hat 3.176-3.926 um')
+    """
     if flux_ratio_model == "monochromatic":
         return Band(f"monochromatic {wavelength_um:g} um", (float(wavelength_um),), (1.0,))
     if flux_ratio_model == "tophat":
-        # Simpson-weighted samples of a flat response between 4.0 and 5.0 um
-        lam = np.linspace(4.0, 5.0, 201)
+        lo, hi = next((b for b in TOPHAT_BANDS_UM if b[0] <= wavelength_um <= b[1]),
+                      TOPHAT_BANDS_UM[0])
+        # Simpson-weighted samples of a flat response across the band
+        lam = np.linspace(lo, hi, 201)
         w = np.ones_like(lam)
         w[1:-1:2], w[2:-1:2] = 4.0, 2.0
-        return Band("top-hat 4.0-5.0 um", tuple(lam), tuple(w))
+        return Band(f"top-hat {_um(lo)}-{_um(hi)} um", tuple(lam), tuple(w))
     raise ValueError(f"unknown flux_ratio_model {flux_ratio_model!r} "
                      "(expected 'monochromatic' or 'tophat')")
 

@@ -1,4 +1,4 @@
-"""Point response functions (PRFs) of IRAC channel 2 (paper Appendix A.2).
+"""Point response functions (PRFs) of IRAC channels 1 and 2 (paper Appendix A.2).
 
 A PRF here is a table ``C(dy, dx)`` of the charge a pixel collects when the
 star sits ``(dx, dy)`` pixels *from* it (the PSF integrated over the pixel),
@@ -20,14 +20,15 @@ pixel centre equals the input position.
 Two PRFs:
 
 :class:`BuiltinPRF`
-    The package's own: the polychromatic (4.0-5.0 um) PSF of an 85 cm
-    telescope with a central obstruction, blurred by a Gaussian (detector
-    diffusion; its width makes the noise pixels of frames jittered by the
-    default pointing model match real XO-3 frames),
-    sampled at 1/20 px and integrated over 1.2" pixels, times the intra-pixel
-    gain: a smooth function ``G`` of the star's sub-pixel position fitted so
-    that aperture photometry across the sweet-spot pixel follows the warm
-    gain map (``tools/fit_gainmap.py``, ``data/gainmap_ch2.json``).
+    The package's own: the polychromatic (4.0-5.0 um for channel 2,
+    3.18-3.93 um for channel 1) PSF of an 85 cm telescope with a central
+    obstruction, blurred by a Gaussian (detector diffusion; its width makes
+    the noise pixels of frames jittered by the default pointing model match
+    real frames: XO-3 for channel 2, HD 209458 for channel 1), sampled at
+    1/20 px and integrated over the pixel, times the intra-pixel gain: a
+    smooth function ``G`` of the star's sub-pixel position fitted so that
+    aperture photometry across the sweet-spot pixel follows the channel's
+    warm gain map (``tools/fit_gainmap.py``, ``data/gainmap_ch<N>.json``).
 
     Why a flux multiplier and not a response inside the pixel integral: the
     optics cut off spatial frequencies above ``D / lambda`` = 1.1-1.4 cycles
@@ -69,7 +70,7 @@ from ..photometry.estimators import aperture_flux, centroid_col
 from . import _spline
 
 __all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial",
-           "load_gainmap_coefficients",
+           "load_gainmap_coefficients", "irsa_prf_channel",
            "electrons_per_second_scale", "jy_to_electrons_per_second", "psf_fine",
            "pixel_integrated_table", "warm_rescaling"]
 
@@ -100,6 +101,8 @@ class GainPolynomial:
     powers: tuple[tuple[int, int], ...]
     coeffs: tuple[float, ...]
 
+    box: tuple[tuple[float, float], tuple[float, float]] | None = None
+
     def phase(self, x, y):
         """Sub-pixel phase about the nearest pixel centre."""
         x = np.asarray(x, float)
@@ -109,9 +112,19 @@ class GainPolynomial:
     def evaluate(self, x, y, order: int = 0):
         """Value (and derivatives up to ``order``) at positions ``x, y``.
 
+        With ``box = ((u_lo, u_hi), (v_lo, v_hi))`` the phase is clamped to
+        the box (where the fitted map can be trusted), so ``G`` is constant
+        along a clamped direction outside it (its derivatives there are 0).
+
         Returns ``g`` or ``(g, gx, gy)`` or ``(g, gx, gy, gxx, gxy, gyy)``.
         """
         u, v = self.phase(x, y)
+        inside_u = inside_v = None
+        if self.box is not None:
+            (u_lo, u_hi), (v_lo, v_hi) = self.box
+            inside_u = ((u >= u_lo) & (u <= u_hi)).astype(float)
+            inside_v = ((v >= v_lo) & (v <= v_hi)).astype(float)
+            u, v = np.clip(u, u_lo, u_hi), np.clip(v, v_lo, v_hi)
         out = [np.zeros_like(u) for _ in range(1 if order == 0 else 3 if order == 1 else 6)]
         for (m, n), c in zip(self.powers, self.coeffs, strict=True):
             out[0] += c * u**m * v**n
@@ -127,18 +140,37 @@ class GainPolynomial:
                     out[4] += c * m * n * u ** (m - 1) * v ** (n - 1)
                 if n > 1:
                     out[5] += c * n * (n - 1) * u**m * v ** (n - 2)
+        if inside_u is not None and order >= 1:
+            out[1] *= inside_u
+            out[2] *= inside_v
+            if order >= 2:
+                out[3] *= inside_u
+                out[4] *= inside_u * inside_v
+                out[5] *= inside_v
         return out[0] if order == 0 else tuple(out)
 
     @classmethod
     def from_dict(cls, d: dict) -> GainPolynomial:
-        """From ``{"powers": [[m, n], ...], "coeffs": [...]}``."""
+        """From ``{"powers": [[m, n], ...], "coeffs": [...]}`` and an optional
+        ``"box": [[u_lo, u_hi], [v_lo, v_hi]]``."""
+        box = d.get("box")
+        if box is not None:
+            box = ((float(box[0][0]), float(box[0][1])), (float(box[1][0]), float(box[1][1])))
         return cls(tuple((int(m), int(n)) for m, n in d["powers"]),
-                   tuple(float(c) for c in d["coeffs"]))
+                   tuple(float(c) for c in d["coeffs"]), box)
 
 
-def load_gainmap_coefficients() -> dict:
-    """The committed gain-map fit (``eclipsebench/data/gainmap_ch2.json``)."""
-    text = resources.files("eclipsebench.data").joinpath("gainmap_ch2.json").read_text()
+def load_gainmap_coefficients(channel: int = 2) -> dict:
+    """The committed gain-map fit of a channel (``eclipsebench/data/gainmap_ch<N>.json``).
+
+    Examples
+    --------
+    >>> sorted(load_gainmap_coefficients(1))[:3]
+    ['builtin', 'made_by', 'pmap_poly']
+    """
+    constants.channel_constants(channel)  # 1 or 2, else one line
+    name = f"gainmap_ch{int(channel)}.json"
+    text = resources.files("eclipsebench.data").joinpath(name).read_text()
     return json.loads(text)
 
 
@@ -263,24 +295,27 @@ class PRF:
 
 
 def psf_fine(oversample: int, half_px: float, *, obscuration: float, blur_px: float,
-             n_wavelengths: int = 11) -> np.ndarray:
+             n_wavelengths: int = 11, band_um: tuple[float, float] = constants.BAND_UM,
+             pixel_scale_arcsec: float = constants.PIXEL_SCALE_ARCSEC) -> np.ndarray:
     """Polychromatic PSF on a grid of ``1/oversample`` px, points at ``(i + 1/2)/os - half_px``.
 
     Annular-aperture Airy pattern of an 85 cm telescope (central obstruction
-    ratio ``obscuration``) averaged over 4.0-5.0 um with equal photon
-    weights, convolved with a Gaussian of ``blur_px`` (px), arbitrary units.
+    ratio ``obscuration``) averaged over ``band_um`` (channel 2's 4.0-5.0 um
+    by default) with equal photon weights, on pixels of
+    ``pixel_scale_arcsec``, convolved with a Gaussian of ``blur_px`` (px),
+    arbitrary units.
     """
     n = int(round(2 * half_px * oversample))
     u = (np.arange(n) + 0.5) / oversample - half_px
     r_px = np.hypot(u[None, :], u[:, None])
-    r_rad = r_px * constants.PIXEL_SCALE_ARCSEC / 206264.80624709636
+    r_rad = r_px * pixel_scale_arcsec / 206264.80624709636
     psf = np.zeros_like(r_px)
     eps = obscuration
-    for lam_um in np.linspace(constants.BAND_UM[0], constants.BAND_UM[1], n_wavelengths):
+    for lam_um in np.linspace(band_um[0], band_um[1], n_wavelengths):
         v = np.pi * constants.TELESCOPE_DIAMETER_M * r_rad / (lam_um * 1e-6)
         v = np.where(v == 0, 1e-12, v)
         amp = 2 * special.j1(v) / v - eps**2 * 2 * special.j1(eps * v) / (eps * v)
-        psf += (amp / (1 - eps**2)) ** 2 * (lam_um / constants.BAND_UM[0]) ** -2
+        psf += (amp / (1 - eps**2)) ** 2 * (lam_um / band_um[0]) ** -2
     if blur_px > 0:
         k = np.arange(-int(np.ceil(5 * blur_px * oversample)),
                       int(np.ceil(5 * blur_px * oversample)) + 1) / oversample
@@ -305,7 +340,7 @@ def pixel_integrated_table(psf: np.ndarray, oversample: int) -> np.ndarray:
 
 
 class BuiltinPRF(PRF):
-    """The package's own channel-2 PRF (see the module docstring).
+    """The package's own PRF of IRAC channel 1 or 2 (see the module docstring).
 
     Parameters
     ----------
@@ -313,21 +348,30 @@ class BuiltinPRF(PRF):
         Apply the fitted intra-pixel gain (False: flux independent of the
         sub-pixel position, for tests and for users who want none).
     coefficients : dict or None
-        The ``"builtin"`` entry of ``gainmap_ch2.json`` (default: the
-        committed one): ``obscuration``, ``blur_px`` and the gain polynomial
-        ``powers``/``coeffs``.
+        The ``"builtin"`` entry of ``gainmap_ch<channel>.json`` (default: the
+        committed one): ``obscuration``, ``blur_px``, optionally
+        ``pixel_scale_arcsec`` (default 1.2) and the gain polynomial
+        ``powers``/``coeffs`` (optionally ``box``).
     oversample : int
         Table samples per pixel.
     half_px : float
         Half-width of the PSF support (px); 12.8 like the IRSA files.
+    channel : {1, 2}
+        The band of the PSF (:class:`~eclipsebench.detector.constants.ChannelConstants`)
+        and the committed coefficients.
     """
 
     def __init__(self, *, gain: bool = True, coefficients: dict | None = None,
-                 oversample: int = 20, half_px: float = 12.8):
-        coeff = load_gainmap_coefficients()["builtin"] if coefficients is None else coefficients
+                 oversample: int = 20, half_px: float = 12.8, channel: int = 2):
+        self.channel = constants.channel_constants(channel).channel
+        coeff = (load_gainmap_coefficients(self.channel)["builtin"] if coefficients is None
+                 else coefficients)
         self.coefficients = coeff
         psf = psf_fine(oversample, half_px - 0.5, obscuration=float(coeff["obscuration"]),
-                       blur_px=float(coeff["blur_px"]))
+                       blur_px=float(coeff["blur_px"]),
+                       band_um=constants.channel_constants(self.channel).band_um,
+                       pixel_scale_arcsec=float(coeff.get("pixel_scale_arcsec",
+                                                          constants.PIXEL_SCALE_ARCSEC)))
         table = pixel_integrated_table(psf, oversample)
         gp = GainPolynomial.from_dict(coeff["gain"]) if gain else None
         super().__init__(table, oversample, (0.5 * (table.shape[1] - 1),
@@ -335,6 +379,24 @@ class BuiltinPRF(PRF):
 
 
 _IRSA_NAME = re.compile(r"col(\d+)_row(\d+)\.fits$", re.IGNORECASE)
+# IRACSIM ``IRAC<ch>_...`` and IRSA ``IRACPC<ch>_...`` file names carry the channel
+_IRSA_CHANNEL = re.compile(r"^IRAC(?:PC)?(\d)_", re.IGNORECASE)
+
+
+def irsa_prf_channel(folder) -> int | None:
+    """The channel the PRF files of ``folder`` are for (from ``IRAC[PC]<N>_`` names), or None.
+
+    Raises
+    ------
+    DataError
+        When the folder mixes channels.
+    """
+    folder = Path(folder)
+    found = {int(m.group(1)) for p in folder.glob("*.fits") if _IRSA_NAME.search(p.name)
+             for m in [_IRSA_CHANNEL.match(p.name)] if m}
+    if len(found) > 1:
+        raise DataError(folder, f"PRF files of channels {sorted(found)} mixed in one folder")
+    return found.pop() if found else None
 
 
 class IrsaPRF(PRF):
@@ -342,7 +404,7 @@ class IrsaPRF(PRF):
 
     @classmethod
     def from_files(cls, folder, *, array_position=None, gain_rescale: bool = False,
-                   subarray: bool = True) -> IrsaPRF:
+                   subarray: bool = True, channel: int | None = None) -> IrsaPRF:
         """Load the PRF of the array position nearest to ``array_position``.
 
         Parameters
@@ -360,6 +422,10 @@ class IrsaPRF(PRF):
             warm gain map (:func:`warm_rescaling`), as the paper did for the
             cryogenic PRFs. The ``warm_2015`` set is said to contain such a
             rescaling already.
+        channel : {1, 2}, optional
+            The channel expected; files named for another channel
+            (``IRAC[PC]<N>_``) are refused. Default: the files' own channel
+            (2 when the names do not say).
 
         Notes
         -----
@@ -371,6 +437,10 @@ class IrsaPRF(PRF):
         files = sorted(p for p in folder.glob("*.fits") if _IRSA_NAME.search(p.name))
         if not files:
             raise DataError(folder, "no IRSA PRF files named *col<NNN>_row<NNN>.fits")
+        named = irsa_prf_channel(folder)
+        if channel is not None and named is not None and named != int(channel):
+            raise DataError(folder, f"PRF files of channel {named}, expected channel {channel}")
+        channel = int(channel if channel is not None else named if named is not None else 2)
         x, y = (15.0, 15.0) if array_position is None else map(float, array_position)
         if subarray:
             x, y = x + constants.SUBARRAY_ORIGIN_FULL[0], y + constants.SUBARRAY_ORIGIN_FULL[1]
@@ -395,23 +465,26 @@ class IrsaPRF(PRF):
         obj = cls(np.where(np.isfinite(data), data, 0.0), osx,
                   (0.5 * (data.shape[1] - 1), 0.5 * (data.shape[0] - 1)))
         obj.path = best
+        obj.channel = channel
         if gain_rescale:
-            obj.gain = warm_rescaling(obj)
+            obj.gain = warm_rescaling(obj, channel=channel)
             obj.scale /= float(obj.render([15.0], [15.0]).sum())
         return obj
 
 
-def warm_rescaling(prf: PRF, *, step_px: float = 0.05, degree: int = 6) -> GainPolynomial:
+def warm_rescaling(prf: PRF, *, step_px: float = 0.05, degree: int = 6,
+                   channel: int = 2) -> GainPolynomial:
     """The gain that makes aperture photometry of ``prf`` follow the warm gain map.
 
     Paper Appendix A.2: realisations are scaled with respect to each other so
-    that aperture photometry (radius as in ``gainmap_ch2.json``, 3 px) at the
-    7x7 centre-of-light centroid varies like the warm gain map (its committed
-    polynomial ``pmap_poly`` in the centroid phase). Solved on a grid of true
-    sub-pixel positions and fitted with a polynomial of total ``degree`` in
-    the true phase.
+    that aperture photometry (radius as in ``gainmap_ch<channel>.json``,
+    3 px) at the 7x7 centre-of-light centroid varies like the warm gain map
+    (its committed polynomial ``pmap_poly`` in the centroid phase, clamped to
+    its trusted box when it has one). Solved on a grid of true sub-pixel
+    positions and fitted with a polynomial of total ``degree`` in the true
+    phase.
     """
-    coeff = load_gainmap_coefficients()
+    coeff = load_gainmap_coefficients(channel)
     pmap = GainPolynomial.from_dict(coeff["pmap_poly"])
     radius = float(coeff["builtin"]["aperture_radius_px"])
     g = np.arange(-0.5, 0.5 + 1e-9, step_px)
