@@ -13,7 +13,15 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
-from ..detector.constants import FLUXCONV_WARM_CH2, GAIN_E_PER_DN, SUB_2S
+from ..detector.constants import (
+    READOUT_MODES,
+    SUB_2S,
+    ReadoutMode,
+    channel_constants,
+    cube_interval_default_s,
+    frame_interval_default_s,
+)
+from ..errors import ConfigError
 from .base import check
 
 # Table 2 (sim_xo3meas) of the paper: start of the first exposure of each
@@ -22,6 +30,14 @@ TABLE2_START_TIMES_JD = (2206.1459, 2209.2927, 2212.5079, 2215.7214, 2218.9047,
                          2222.0547, 2225.2356, 2228.4898, 2231.6296, 2234.8406)
 
 SUBARRAY_PX = 32
+FULL_ARRAY_PX = 256
+#: Readout choices: the predefined modes plus ``"custom"`` (subarray with the
+#: ``fowler``/``wait``/``sample_time_s`` keys).
+READOUT_CHOICES = (*READOUT_MODES, "custom")
+#: Durations of the 2015 challenge's AORs, kept in every readout mode:
+#: 11 and 233 cubes of the 2 s subarray every 129.4 s.
+PRE_AOR_S = 11 * 129.4
+MAIN_AOR_S = 233 * 129.4
 
 
 @dataclass(frozen=True)
@@ -35,22 +51,94 @@ class ObservationSection:
     between consecutive ``BMJD_OBS`` in the real cubes of AOR 46466816).
     ``start_times_jd`` (JD - 2455000) are the epochs' first exposures; epochs
     beyond the list continue on later orbits (see ``docs/simulate.md``).
+
+    ``channel`` (1 = 3.6 um, 2 = 4.5 um) and ``readout`` (a predefined mode,
+    :data:`~eclipsebench.detector.constants.READOUT_MODES`, or ``"custom"``)
+    choose the detector. Keys left unset take the readout's values: FN, WT and
+    tick of the mode; 64 frames per cube on the subarray, one 256 x 256 frame
+    per file on the full array; frames every ``t_int + 0.008`` s (IRACSIM);
+    files every :func:`~eclipsebench.detector.constants.cube_interval_default_s`;
+    as many cubes as fill the 2015 challenge's AOR durations (11 and 233
+    cubes of 2 s frames); the star at the channel's peak-up target
+    (:class:`~eclipsebench.detector.constants.ChannelConstants`). A key given
+    with a named readout must agree with it (``"custom"`` takes any FN, WT and
+    tick on the subarray, with the 2 s subarray's values for those unset).
     """
 
-    pre_cubes: int = 11
-    main_cubes: int = 233
-    frames_per_cube: int = 64
-    fowler: int = SUB_2S.fowler
-    wait: int = SUB_2S.wait
-    sample_time_s: float = SUB_2S.sample_time_s
-    frame_interval_s: float = 2.008
-    cube_interval_s: float = 129.4
+    channel: int = 2
+    readout: str = "sub_2s"
+    pre_cubes: int | None = None
+    main_cubes: int | None = None
+    frames_per_cube: int | None = None
+    fowler: int | None = None
+    wait: int | None = None
+    sample_time_s: float | None = None
+    frame_interval_s: float | None = None
+    cube_interval_s: float | None = None
     aor_gap_s: float = 300.0
     start_times_jd: tuple[float, ...] = TABLE2_START_TIMES_JD
     aorkey_base: int = 20150000
-    x0_px: float = 15.15
-    y0_px: float = 15.20
+    x0_px: float | None = None
+    y0_px: float | None = None
     peakup_scatter_px: float = 0.04
+
+    def __post_init__(self):
+        if self.channel not in (1, 2):
+            raise ConfigError("observation.channel", f"expected 1 (3.6 um) or 2 (4.5 um), "
+                                                     f"got {self.channel!r}")
+        if self.readout not in READOUT_CHOICES:
+            raise ConfigError("observation.readout", "expected one of "
+                              + ", ".join(READOUT_CHOICES) + f", got {self.readout!r}")
+        named = READOUT_MODES.get(self.readout)
+        base = named if named is not None else SUB_2S
+        # the checks of validate() that the defaults below need, on the values given
+        for key, ok, expected in (("fowler", lambda v: v >= 1, "a Fowler number >= 1"),
+                                  ("wait", lambda v: v >= 0, "a non-negative number of wait ticks"),
+                                  ("sample_time_s", lambda v: v > 0,
+                                   "a positive sample time in s")):
+            given = getattr(self, key)
+            check(given is None or ok(given), f"observation.{key}", expected)
+        for key, value in (("fowler", base.fowler), ("wait", base.wait),
+                           ("sample_time_s", base.sample_time_s)):
+            given = getattr(self, key)
+            if given is None:
+                object.__setattr__(self, key, value)
+            elif named is not None and not math.isclose(float(given), float(value)):
+                raise ConfigError(f"observation.{key}", f"{given} disagrees with readout "
+                                  f"{self.readout!r} ({key} = {value}); leave it unset or "
+                                  "choose readout = 'custom'")
+        mode = self.readout_mode()
+        if self.frames_per_cube is None:
+            object.__setattr__(self, "frames_per_cube", mode.frames_per_file)
+        if self.frame_interval_s is None:
+            object.__setattr__(self, "frame_interval_s", frame_interval_default_s(mode))
+        if self.cube_interval_s is None:
+            object.__setattr__(self, "cube_interval_s", cube_interval_default_s(mode))
+        for key, duration_s, least in (("pre_cubes", PRE_AOR_S, 0), ("main_cubes", MAIN_AOR_S, 1)):
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, max(least, round(duration_s / self.cube_interval_s)))
+        target = channel_constants(self.channel).target_px(mode.subarray)
+        for key, value in (("x0_px", target[0]), ("y0_px", target[1])):
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, value)
+
+    def readout_mode(self) -> ReadoutMode:
+        """The :class:`~eclipsebench.detector.constants.ReadoutMode` of ``readout``.
+
+        ``"custom"`` is a subarray mode named ``"configured"`` with the
+        section's FN, WT and tick.
+        """
+        named = READOUT_MODES.get(self.readout)
+        if named is not None:
+            return named
+        t_int = (2 * self.fowler + self.wait) * self.sample_time_s
+        return ReadoutMode("configured", self.fowler, self.wait, self.sample_time_s,
+                           round(t_int, 6), True)
+
+    @property
+    def array_px(self) -> int:
+        """Side of the array: 32 (subarray) or 256 (full array)."""
+        return SUBARRAY_PX if self.readout_mode().subarray else FULL_ARRAY_PX
 
     def validate(self) -> None:
         check(self.pre_cubes >= 0, "pre_cubes", "a non-negative number of cubes")
@@ -59,6 +147,9 @@ class ObservationSection:
         check(self.fowler >= 1, "fowler", "a Fowler number >= 1")
         check(self.wait >= 0, "wait", "a non-negative number of wait ticks")
         check(self.sample_time_s > 0, "sample_time_s", "a positive sample time in s")
+        mode = self.readout_mode()
+        check(mode.subarray or self.frames_per_cube == 1, "frames_per_cube",
+              f"1 frame per file for the full-array readout {self.readout!r}")
         t_int_s = (2 * self.fowler + self.wait) * self.sample_time_s
         check(self.frame_interval_s >= t_int_s - 1e-9, "frame_interval_s",
               f"at least the integration time (2 FN + WT) x sample_time = {t_int_s:g} s")
@@ -70,10 +161,10 @@ class ObservationSection:
         check(all(b > a for a, b in itertools.pairwise(self.start_times_jd)),
               "start_times_jd", "start times in increasing order")
         check(0 <= self.aorkey_base <= 99_999_000, "aorkey_base", "an AORKEY of at most 8 digits")
-        check(2.0 <= self.x0_px <= SUBARRAY_PX - 3.0, "x0_px",
-              "a position on the 32x32 subarray (2-29 px)")
-        check(2.0 <= self.y0_px <= SUBARRAY_PX - 3.0, "y0_px",
-              "a position on the 32x32 subarray (2-29 px)")
+        side = self.array_px
+        where = "the 32x32 subarray" if side == SUBARRAY_PX else "the 256x256 array"
+        check(2.0 <= self.x0_px <= side - 3.0, "x0_px", f"a position on {where} (2-{side - 3} px)")
+        check(2.0 <= self.y0_px <= side - 3.0, "y0_px", f"a position on {where} (2-{side - 3} px)")
         check(0 <= self.peakup_scatter_px <= 1.0, "peakup_scatter_px",
               "a scatter between 0 and 1 px")
 
@@ -107,9 +198,9 @@ class SimulationSection:
     background_e_per_px: float = 55.4  # 881 e in the r = 2.25 px aperture (paper Sec. 3.3)
     background_reference: Literal["annulus", "sky"] = "annulus"
     background_slope_per_day: float = 0.0
-    read_noise_e: float | None = None  # unset: 9.4 e (physical), 16.8 e (iracsim2015)
-    gain_e_per_dn: float = GAIN_E_PER_DN
-    fluxconv: float = FLUXCONV_WARM_CH2
+    read_noise_e: float | None = None  # unset: the channel's RONOISE (physical) / IRACSIM's
+    gain_e_per_dn: float | None = None  # unset: the channel's header GAIN (3.71 / 3.7)
+    fluxconv: float | None = None  # unset: the channel's warm FLUXCONV (0.1469 / 0.1253)
     subsamples: int = 10
     prf: str = "builtin"
     stamp_px: int = 13
@@ -131,8 +222,9 @@ class SimulationSection:
               "background_slope_per_day", "a fractional slope per day with |slope| < 10")
         check(self.read_noise_e is None or self.read_noise_e >= 0, "read_noise_e",
               "a non-negative read noise in electrons")
-        check(self.gain_e_per_dn > 0, "gain_e_per_dn", "a positive gain")
-        check(self.fluxconv > 0, "fluxconv", "a positive FLUXCONV")
+        check(self.gain_e_per_dn is None or self.gain_e_per_dn > 0, "gain_e_per_dn",
+              "a positive gain")
+        check(self.fluxconv is None or self.fluxconv > 0, "fluxconv", "a positive FLUXCONV")
         check(1 <= self.subsamples <= 100, "subsamples",
               "between 1 and 100 sub-samples per Fowler sample")
         check(bool(self.prf.strip()), "prf", "'builtin', 'irsa' or a folder of IRSA PRF files")

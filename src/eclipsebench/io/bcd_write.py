@@ -1,8 +1,8 @@
 """Write simulated IRAC BCD cubes (``_bcd.fits`` and ``_bunc.fits``) as the archive names them.
 
-Files go to ``ROOT/r<AORKEY>/ch2/bcd/SPITZER_I2_<AORKEY>_<EXPID:04d>_0000_1_bcd.fits``
-(and ``..._bunc.fits``): a primary HDU with a float32 (64, 32, 32) cube in
-MJy/sr. Headers are formatted here directly from card tuples (see
+Files go to ``ROOT/r<AORKEY>/ch<N>/bcd/SPITZER_I<N>_<AORKEY>_<EXPID:04d>_0000_1_bcd.fits``
+(and ``..._bunc.fits``): a primary HDU with a float32 (64, 32, 32) subarray
+cube, or one (256, 256) full-array frame, in MJy/sr. Headers are formatted here directly from card tuples (see
 :mod:`eclipsebench.io.header_template`) because a challenge has ~10,000 of
 them; every file is written atomically.
 """
@@ -32,15 +32,22 @@ from .header_template import (
 __all__ = ["bcd_path", "bunc_path", "AorWriter", "bmjd_to_utc", "cube_bytes"]
 
 
-def bcd_path(root: str | Path, aorkey: int, expid: int) -> Path:
-    """``ROOT/r<AORKEY>/ch2/bcd/SPITZER_I2_<AORKEY>_<EXPID:04d>_0000_1_bcd.fits``."""
-    return (Path(root) / f"r{aorkey}" / "ch2" / "bcd"
-            / f"SPITZER_I2_{aorkey}_{expid:04d}_0000_1_bcd.fits")
+def bcd_path(root: str | Path, aorkey: int, expid: int, channel: int = 2) -> Path:
+    """``ROOT/r<AORKEY>/ch<N>/bcd/SPITZER_I<N>_<AORKEY>_<EXPID:04d>_0000_1_bcd.fits``.
+
+    Examples
+    --------
+    >>> bcd_path("d", 20150001, 7, channel=1).as_posix()
+    'd/r20150001/ch1/bcd/SPITZER_I1_20150001_0007_0000_1_bcd.fits'
+    """
+    ch = int(channel)
+    return (Path(root) / f"r{aorkey}" / f"ch{ch}" / "bcd"
+            / f"SPITZER_I{ch}_{aorkey}_{expid:04d}_0000_1_bcd.fits")
 
 
-def bunc_path(root: str | Path, aorkey: int, expid: int) -> Path:
+def bunc_path(root: str | Path, aorkey: int, expid: int, channel: int = 2) -> Path:
     """The ``_bunc.fits`` beside :func:`bcd_path`."""
-    p = bcd_path(root, aorkey, expid)
+    p = bcd_path(root, aorkey, expid, channel)
     return p.with_name(p.name.replace("_bcd.fits", "_bunc.fits"))
 
 
@@ -117,13 +124,14 @@ class AorWriter:
                    xy_mean: np.ndarray | None = None) -> tuple[Path, Path]:
         """Write cube ``expid`` (``_bunc`` first, then ``_bcd``) and return both paths."""
         n = self.info.frames_per_cube
-        if bcd_mjysr.shape != (n, 32, 32) or bunc_mjysr.shape != (n, 32, 32):
-            raise ValueError(f"cubes must be ({n}, 32, 32), got {bcd_mjysr.shape} and "
+        shape = (n, *self.info.shape)
+        if bcd_mjysr.shape != shape or bunc_mjysr.shape != shape:
+            raise ValueError(f"cubes must be {shape}, got {bcd_mjysr.shape} and "
                              f"{bunc_mjysr.shape}")
         h_bcd, h_bunc = self.headers(expid=expid, bmjd_obs=bmjd_obs, mjd_obs=mjd_obs,
                                      date_obs=date_obs, xy_mean=xy_mean)
-        p_bcd = bcd_path(self.root, self.info.aorkey, expid)
-        p_bunc = bunc_path(self.root, self.info.aorkey, expid)
+        p_bcd = bcd_path(self.root, self.info.aorkey, expid, self.info.channel)
+        p_bunc = bunc_path(self.root, self.info.aorkey, expid, self.info.channel)
         write_bytes(p_bunc, h_bunc + cube_bytes(bunc_mjysr))
         write_bytes(p_bcd, h_bcd + cube_bytes(bcd_mjysr))
         return p_bcd, p_bunc

@@ -1,11 +1,17 @@
-"""Header cards of simulated IRAC channel-2 subarray BCD cubes.
+"""Header cards of simulated IRAC channel-1 and channel-2 BCD files (subarray or full array).
 
 The keywords, their order, formats and comments follow a real warm-mission
-BCD header (pipeline S19.2.0, XO-3, AORKEY 46466816); the values that
-describe an observation are computed by the simulator, the rest are typed
-in from that header. Cards are kept as ``(keyword, value, comment)`` tuples
-so that :mod:`eclipsebench.io.bcd_write` can format the few that change from
-cube to cube without building an astropy header per file.
+BCD header (pipeline S19.2.0, XO-3, AORKEY 46466816; channel 1: S18.18.0,
+HD 209458, AORKEY 41629440); the values that describe an observation are
+computed by the simulator, the rest are typed in from those headers. Cards are
+kept as ``(keyword, value, comment)`` tuples so that
+:mod:`eclipsebench.io.bcd_write` can format the few that change from cube to
+cube without building an astropy header per file.
+
+Per channel (:data:`CHANNEL_CARDS`): ``FOVID``/``FOVNAME`` (70/67 for the
+channel-1 subarray/array, 77/74 for channel 2, as IRACSIM's ``iracsim.pro``
+and ``spitzer_fov.pro``), the CD matrix and ``PXSCAL1/2`` of the real header
+of that channel (they depend on the roll angle; any valid matrix serves).
 """
 
 from __future__ import annotations
@@ -17,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Card", "format_card", "format_cards", "end_header", "format_header", "BcdHeaderInfo", "bcd_cards", "bunc_cards",
-           "cube_cards", "sim_cards", "IRAC_TURN_ON_MJD_UTC", "XO3_RA_DEG", "XO3_DEC_DEG", "CD_MATRIX_DEG"]
+           "cube_cards", "sim_cards", "IRAC_TURN_ON_MJD_UTC", "XO3_RA_DEG", "XO3_DEC_DEG", "CD_MATRIX_DEG",
+           "CHANNEL_CARDS"]
 
 Card = tuple[str, object, str]
 
@@ -30,6 +37,19 @@ XO3_RA_DEG = 65.469452237357
 XO3_DEC_DEG = 57.817333722922
 CD_MATRIX_DEG = ((0.000144772485275896, -0.000302888712014758),
                  (-0.000302008826913906, -0.000147183662865151))
+#: What the header says per channel: FOV ids and names (subarray, full array),
+#: the CD matrix (deg/px) and PXSCAL1/2 of the channel's real header.
+CHANNEL_CARDS = {
+    1: {"fov_sub": (70, "IRAC_Center_of_3.6umSub-array"),
+        "fov_full": (67, "IRAC_Center_of_3.6&5.8umArray"),
+        "cd": ((-9.96078618101942e-05, 0.000327975181020821),
+               (0.000325252187504057, 0.000101638740134936)),
+        "pxscal": (-1.22457237448543, 1.23610681621358)},
+    2: {"fov_sub": (77, "IRAC_Center_of_4.5umSub-Array"),
+        "fov_full": (74, "IRAC_Center_of_4.5&8.0umArray"),
+        "cd": CD_MATRIX_DEG,
+        "pxscal": (-1.20566164841875, 1.21232159435749)},
+}
 
 
 def _format_value(value: object) -> str:
@@ -126,15 +146,35 @@ class BcdHeaderInfo:
     pointing_motion: bool = True
     flat_gain: bool = False
     prf: str = "builtin"
+    channel: int = 2
+    subarray: bool = True
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(ny, nx) of a frame: 32 x 32 subarray or 256 x 256 full array."""
+        return (32, 32) if self.subarray else (256, 256)
+
+
+def _axis_cards(info: BcdHeaderInfo) -> list[Card]:
+    """NAXIS cards: a (n, 32, 32) subarray cube, or one 256 x 256 full-array frame (2-D,
+    as the archive writes them)."""
+    ny, nx = info.shape
+    if info.subarray:
+        return [("NAXIS", 3, "STANDARD FITS FORMAT"), ("NAXIS1", nx, "STANDARD FITS FORMAT"),
+                ("NAXIS2", ny, "STANDARD FITS FORMAT"),
+                ("NAXIS3", info.frames_per_cube, "STANDARD FITS FORMAT")]
+    return [("NAXIS", 2, "STANDARD FITS FORMAT"), ("NAXIS1", nx, "STANDARD FITS FORMAT"),
+            ("NAXIS2", ny, "STANDARD FITS FORMAT")]
 
 
 def _wcs_cards(info: BcdHeaderInfo) -> list[Card]:
     # The star (0-based x, y) sits at FITS pixel (x + 1, y + 1); CRVAL is the
     # sky position of CRPIX so that the star lands at (RA, Dec) to first order.
-    crpix = 16.5
+    crpix = 16.5 if info.subarray else 128.5
     dx = info.star_x_px + 1.0 - crpix
     dy = info.star_y_px + 1.0 - crpix
-    (c11, c12), (c21, c22) = CD_MATRIX_DEG
+    chan = CHANNEL_CARDS[info.channel]
+    (c11, c12), (c21, c22) = chan["cd"]
     cosd = math.cos(math.radians(info.dec_deg))
     crval1 = info.ra_deg - (c11 * dx + c12 * dy) / cosd
     crval2 = info.dec_deg - (c21 * dx + c22 * dy)
@@ -151,8 +191,8 @@ def _wcs_cards(info: BcdHeaderInfo) -> list[Card]:
         ("CD2_2", c22, "CD matrix element"),
         ("CTYPE1", "RA---TAN", "RA---TAN (simulated: no distortion)"),
         ("CTYPE2", "DEC--TAN", "DEC--TAN (simulated: no distortion)"),
-        ("PXSCAL1", -1.20566164841875, "[arcsec/pix] Scale for axis 1 at CRPIX1,CRPIX2"),
-        ("PXSCAL2", 1.21232159435749, "[arcsec/pix] Scale for axis 2 at CRPIX1,CRPIX2"),
+        ("PXSCAL1", chan["pxscal"][0], "[arcsec/pix] Scale for axis 1 at CRPIX1,CRPIX2"),
+        ("PXSCAL2", chan["pxscal"][1], "[arcsec/pix] Scale for axis 2 at CRPIX1,CRPIX2"),
         ("RA_RQST", info.ra_deg, "[deg] Requested RA at CRPIX1, CRPIX2"),
         ("DEC_RQST", info.dec_deg, "[deg] Requested Dec at CRPIX1, CRPIX2"),
         ("RA_REF", info.ra_deg, "[deg] Commanded RA (J2000) of ref. position"),
@@ -166,24 +206,22 @@ def bcd_cards(info: BcdHeaderInfo) -> tuple[list[Card], list[Card]]:
     Returns ``(before, after)``: the cube header is ``before`` + the cards of
     :func:`cube_cards` + ``after``.
     """
+    fovid, fovname = CHANNEL_CARDS[info.channel]["fov_sub" if info.subarray else "fov_full"]
     before: list[Card] = [
         ("SIMPLE", True, "Fits standard"),
         ("BITPIX", -32, "FOUR-BYTE SINGLE PRECISION FLOATING POINT"),
-        ("NAXIS", 3, "STANDARD FITS FORMAT"),
-        ("NAXIS1", 32, "STANDARD FITS FORMAT"),
-        ("NAXIS2", 32, "STANDARD FITS FORMAT"),
-        ("NAXIS3", info.frames_per_cube, "STANDARD FITS FORMAT"),
+        *_axis_cards(info),
         ("ORIGIN", "eclipsebench", "Organization generating this FITS file"),
         ("CREATOR", "eclipsebench simulate", "SW version used to create this FITS file"),
         ("TELESCOP", "Spitzer", "SPITZER Space Telescope"),
         ("INSTRUME", "IRAC", "SPITZER Space Telescope instrument ID"),
-        ("CHNLNUM", 2, "1 digit instrument channel number"),
+        ("CHNLNUM", info.channel, "1 digit instrument channel number"),
         ("EXPTYPE", "sci", "Exposure Type"),
         ("REQTYPE", "AOR", "Request type (AOR, IER, or  SER)"),
         ("AOT_TYPE", "IracMapPC", "Observation template type"),
         ("AORLABEL", info.aorlabel, "AOR Label"),
-        ("FOVID", 77, "Field of View ID"),
-        ("FOVNAME", "IRAC_Center_of_4.5umSub-Array", "Field of View Name"),
+        ("FOVID", fovid, "Field of View ID"),
+        ("FOVNAME", fovname, "Field of View Name"),
         ("", None, ""),
         ("COMMENT", "  / TIME AND EXPOSURE INFORMATION", ""),
         ("", None, ""),
@@ -197,7 +235,7 @@ def bcd_cards(info: BcdHeaderInfo) -> tuple[list[Card], list[Card]]:
         ("AFOWLNUM", info.fowler, "Fowler number"),
         ("AWAITPER", info.wait, "[0.2 sec] Wait period"),
         ("ANUMREPS", 1, "Number of repeat integrations"),
-        ("AREADMOD", 1, "Full (0) or subarray (1)"),
+        ("AREADMOD", 1 if info.subarray else 0, "Full (0) or subarray (1)"),
         ("APEDSIG", 0, "0=Normal, 1=Pedestal, 2=Signal"),
         ("", None, ""),
         ("COMMENT", "  / TARGET AND POINTING INFORMATION", ""),
@@ -215,7 +253,7 @@ def bcd_cards(info: BcdHeaderInfo) -> tuple[list[Card], list[Card]]:
         ("", None, ""),
         ("COMMENT", "  / IRAC MAPPING KEYWORDS", ""),
         ("", None, ""),
-        ("READMODE", "SUB", "Readout mode (full or sub)"),
+        ("READMODE", "SUB" if info.subarray else "FULL", "Readout mode (full or sub)"),
         ("PKUPMODE", "PCRS", "Peakup mode (none, IRS, or PCRS)"),
         ("", None, ""),
         ("COMMENT", "  / DATA FLOW KEYWORDS", ""),
@@ -274,13 +312,10 @@ def bunc_cards(info: BcdHeaderInfo) -> tuple[list[Card], list[Card]]:
     before: list[Card] = [
         ("SIMPLE", True, "STANDARD FITS FORMAT"),
         ("BITPIX", -32, "FOUR-BYTE SINGLE PRECISION FLOATING POINT"),
-        ("NAXIS", 3, "STANDARD FITS FORMAT"),
-        ("NAXIS1", 32, "STANDARD FITS FORMAT"),
-        ("NAXIS2", 32, "STANDARD FITS FORMAT"),
-        ("NAXIS3", info.frames_per_cube, "STANDARD FITS FORMAT"),
+        *_axis_cards(info),
         ("TELESCOP", "Spitzer", "Spitzer Space Telescope"),
         ("INSTRUME", "IRAC", "Spitzer Space Telescope instrument ID"),
-        ("CHNLNUM", 2, "1 digit instrument channel number"),
+        ("CHNLNUM", info.channel, "1 digit instrument channel number"),
     ]
     after: list[Card] = [
         ("RONOISE", info.read_noise_e, "[Electrons] Readout Noise"),

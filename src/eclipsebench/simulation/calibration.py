@@ -204,6 +204,7 @@ def write_calibration_table(cfg: Config, data: dict[str, np.ndarray], out_dir: s
     for k in ("x", "y", "x_true", "y_true"):
         table[k].unit = "pix"
     table.meta.update({"SIMSEED": cfg.challenge.seed, "NFRAMES": len(table),
+                       "CHNLNUM": cfg.observation.channel,
                        "READMODE": "SUB 0.1s", "AFOWLNUM": SUB_0P1S.fowler,
                        "AWAITPER": SUB_0P1S.wait, "SAMPTIME": SUB_0P1S.sample_time_s,
                        "APRADIUS": opt.radius_px,

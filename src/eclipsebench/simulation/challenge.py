@@ -3,7 +3,7 @@
 ``simulate_challenge(config, out_dir)`` writes the folder described in
 ``docs/contracts.md``::
 
-    DIR/config.toml, DIR/truth.ecsv, DIR/r<AORKEY>/ch2/bcd/*_bcd.fits (+ _bunc),
+    DIR/config.toml, DIR/truth.ecsv, DIR/r<AORKEY>/ch<N>/bcd/*_bcd.fits (+ _bunc),
     DIR/lightcurves/epoch_NN.ecsv, DIR/calibration/pmap_calibration.fits
 
 This module is the simulate *stage*: pure functions (:func:`simulate_aor`,
@@ -28,8 +28,9 @@ redoes only what is missing or not whole.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from functools import partial
 from pathlib import Path
 
@@ -38,8 +39,15 @@ from astropy.table import Table
 
 from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
+from ..astro.thermal import DEFAULT_WAVELENGTH_UM
 from ..config import Config, dump_toml, to_mapping
-from ..detector.constants import ReadoutMode, read_noise_of
+from ..detector.constants import (
+    ReadoutMode,
+    channel_constants,
+    fluxconv_of,
+    gain_of,
+    read_noise_of,
+)
 from ..detector.fowler import bunc_mjysr, electrons_to_mjysr
 from ..engine.tasks import Task, run_tasks
 from ..errors import ConfigError, InputError
@@ -61,7 +69,7 @@ from .render import FrameModel, render_frames, stamp_origin, tick_moments
 from .star import StarImager, make_star_imager, prf_label
 
 __all__ = ["simulate_challenge", "ChallengeResult", "pointing_ranges_from_config",
-           "readout_from_config", "frame_model_from_config", "STATE_DIR", "light_curve_of",
+           "readout_from_config", "system_of", "frame_model_from_config", "STATE_DIR", "light_curve_of",
            "challenge_plans", "plan_simulate_tasks", "simulate_aor", "aor_state_path",
            "epoch_marker_path"]
 
@@ -71,25 +79,38 @@ TRUTH_COLUMNS = ("epoch", "aorkey_pre", "aorkey_main", "start_bmjd", "t_ecl_bmjd
 log = get_logger("simulate")
 
 
+def system_of(cfg: Config):
+    """``cfg.system`` for the channel observed.
+
+    The ``[system]`` default ``wavelength_um`` (4.5095 um, IRACSIM's for
+    channel 2) becomes channel 1's effective wavelength (3.551 um, IRAC
+    Instrument Handbook Table 2.2) when ``observation.channel = 1``; any other
+    value is kept.
+    """
+    system = cfg.system
+    if cfg.observation.channel == 1 and math.isclose(system.wavelength_um, DEFAULT_WAVELENGTH_UM):
+        system = replace(system, wavelength_um=channel_constants(1).effective_wavelength_um)
+    return system
+
+
 def light_curve_of(cfg: Config) -> LightCurve:
-    """L(t) of ``cfg.system`` (the one per-process cache, :func:`cached_light_curve`)."""
-    return cached_light_curve(cfg.system)
+    """L(t) of ``cfg.system`` at the channel's wavelength (:func:`system_of`; the one
+    per-process cache, :func:`cached_light_curve`)."""
+    return cached_light_curve(system_of(cfg))
 
 
 def readout_from_config(cfg: Config) -> ReadoutMode:
-    """The :class:`ReadoutMode` of ``[observation]`` (subarray)."""
-    obs = cfg.observation
-    t_int = (2 * obs.fowler + obs.wait) * obs.sample_time_s
-    return ReadoutMode("configured", obs.fowler, obs.wait, obs.sample_time_s,
-                       round(t_int, 6), True)
+    """The :class:`ReadoutMode` of ``[observation]`` (``readout``, or ``"custom"``)."""
+    return cfg.observation.readout_mode()
 
 
 def frame_model_from_config(cfg: Config) -> FrameModel:
     """The :class:`FrameModel` of a configuration."""
     sim = cfg.simulation
-    return FrameModel(mode=readout_from_config(cfg), noise_model=sim.noise_model,
+    mode = readout_from_config(cfg)
+    return FrameModel(mode=mode, noise_model=sim.noise_model,
                       read_noise_e=read_noise_of(cfg), subsamples=sim.subsamples,
-                      stamp_px=sim.stamp_px)
+                      stamp_px=sim.stamp_px, shape=mode.shape)
 
 
 def pointing_ranges_from_config(cfg: Config) -> PointingRanges:
@@ -151,10 +172,11 @@ def _header_info(cfg: Config, aor: AORPlan, seed: int, mode: ReadoutMode, ra: fl
         seed=seed, noise_model=sim.noise_model, fowler=mode.fowler, wait=mode.wait,
         sample_time_s=mode.sample_time_s, frame_time_s=round(mode.t_int_s, 6),
         frame_interval_s=obs.frame_interval_s, exptime_s=round(mode.t_exp_s, 6),
-        frames_per_cube=obs.frames_per_cube, fluxconv=sim.fluxconv,
-        gain_e_per_dn=sim.gain_e_per_dn, read_noise_e=read_noise_e, ra_deg=ra, dec_deg=dec,
+        frames_per_cube=obs.frames_per_cube, fluxconv=fluxconv_of(cfg),
+        gain_e_per_dn=gain_of(cfg), read_noise_e=read_noise_e, ra_deg=ra, dec_deg=dec,
         star_x_px=aor.x0_px, star_y_px=aor.y0_px, pointing_motion=sim.pointing_motion,
-        flat_gain=sim.flat_gain, prf=prf_label(sim.prf))
+        flat_gain=sim.flat_gain, prf=prf_label(sim.prf), channel=obs.channel,
+        subarray=mode.subarray)
 
 
 def _target(cfg: Config) -> tuple[float, float, str]:
@@ -208,6 +230,7 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
                               sim.background_reference)
     bg_per_tick = sky_e / model.ticks_per_exposure
     ny, nx = model.shape
+    fluxconv, gain = fluxconv_of(cfg), gain_of(cfg)
 
     truth = {k: [] for k in ("time_bmjd", "flux_true", "x_true", "y_true", "expid", "frame",
                              "sky_e_per_px")}
@@ -244,10 +267,10 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
             background_e_per_tick=bg,
             rng_photon=rng(seed, "simulate", plan.epoch, aor.aorkey, expid, "photon"),
             rng_read=rng(seed, "simulate", plan.epoch, aor.aorkey, expid, "read"))
-        bcd = electrons_to_mjysr(frames_e, fluxconv=sim.fluxconv, gain=sim.gain_e_per_dn,
+        bcd = electrons_to_mjysr(frames_e, fluxconv=fluxconv, gain=gain,
                                  t_exp_s=mode.t_exp_s).astype(np.float32)
         bunc = bunc_mjysr(expected_e, mode, read_noise_e=model.read_noise_e,
-                          fluxconv=sim.fluxconv, gain=sim.gain_e_per_dn).astype(np.float32)
+                          fluxconv=fluxconv, gain=gain).astype(np.float32)
         writer.write_cube(expid=expid, bcd_mjysr=bcd, bunc_mjysr=bunc,
                           bmjd_obs=float(cube_bmjd[c]), mjd_obs=float(cube_mjd[c]),
                           date_obs=cube_iso[c], xy_mean=np.column_stack([x_f, y_f]))
@@ -381,10 +404,12 @@ def truth_task(cfg: Config, out_dir: str, epochs: list[int]) -> None:
     _write_truth([json.loads(epoch_marker_path(out, e).read_text()) for e in epochs], out)
 
 
-def _cubes_exist(out_dir: str, aorkey: int, n_cubes: int, *outputs: Path) -> bool:
+def _cubes_exist(out_dir: str, aorkey: int, n_cubes: int, *outputs: Path,
+                 channel: int = 2) -> bool:
     """Check of an AOR task: every cube its truth marker stands for is on disk."""
-    return all(bcd_path(Path(out_dir), aorkey, c).is_file()
-               and bunc_path(Path(out_dir), aorkey, c).is_file() for c in range(n_cubes))
+    return all(bcd_path(Path(out_dir), aorkey, c, channel).is_file()
+               and bunc_path(Path(out_dir), aorkey, c, channel).is_file()
+               for c in range(n_cubes))
 
 
 def _epoch_row_ok(epoch: int, lightcurve: Path, marker: Path) -> bool:
@@ -436,7 +461,8 @@ def plan_simulate_tasks(cfg: Config, out_dir: str | Path, *, calibration: bool |
         aor = plan.aors[i]
         tasks.append(Task(f"{prefix}/r{aor.aorkey}", "simulate", simulate_aor_task,
                           (cfg, plan, i, str(out), seed), (aor_state_path(out, aor.aorkey),),
-                          check=partial(_cubes_exist, str(out), aor.aorkey, aor.n_cubes)))
+                          check=partial(_cubes_exist, str(out), aor.aorkey, aor.n_cubes,
+                                        channel=cfg.observation.channel)))
     truth_deps = []
     if calibration:
         tasks.append(Task(f"{prefix}/calibration", "simulate", calibration_task, (cfg, str(out)),

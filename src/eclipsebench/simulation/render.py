@@ -1,4 +1,4 @@
-"""Render Fowler-sampled subarray frames of a moving point source (paper Appendix A.2-A.3).
+"""Render Fowler-sampled frames (subarray or full array) of a moving point source (paper Appendix A.2-A.3).
 
 Pure kernels on arrays: the orchestration (plans, files) lives in
 :mod:`eclipsebench.simulation.challenge`.

@@ -3,14 +3,16 @@
 ``simulation.prf`` selects the PRF:
 
 ``"builtin"``
-    :class:`eclipsebench.instrument.prf.BuiltinPRF` (the package's own optics
-    times a fitted intra-pixel response); ``simulation.flat_gain = true``
-    switches the intra-pixel response off.
+    :class:`eclipsebench.instrument.prf.BuiltinPRF` of ``observation.channel``
+    (the package's own optics times a fitted intra-pixel response);
+    ``simulation.flat_gain = true`` switches the intra-pixel response off.
 ``"irsa:<folder>"``
     :class:`eclipsebench.instrument.prf.IrsaPRF` from a folder of IRSA/IRACSIM
-    PRF files (e.g. ``../shared/data/irac/prf/warm_2015_ch2``). Their
-    intra-pixel structure is part of the files, so ``flat_gain`` cannot switch
-    it off (a configuration error says so).
+    PRF files (e.g. ``../shared/data/irac/prf/warm_2015_ch2``), the file of
+    the array position nearest the peak-up target (subarray or full array).
+    Their intra-pixel structure is part of the files, so ``flat_gain`` cannot
+    switch it off (a configuration error says so); files named for the other
+    channel are refused.
 
 The flux scale makes a star at the peak-up target ``(x0_px, y0_px)`` give
 ``flux_aperture_e`` electrons per exposure in the ``aperture_radius_px``
@@ -57,14 +59,23 @@ def prf_label(name: str) -> str:
     return name
 
 
-def make_prf(name: str, *, flat_gain: bool = False) -> PRF:
-    """The PRF that ``simulation.prf = name`` selects (cached per process)."""
-    key = (name, flat_gain)
+def make_prf(name: str, *, flat_gain: bool = False, channel: int = 2,
+             array_position: tuple[float, float] | None = None, subarray: bool = True) -> PRF:
+    """The PRF that ``simulation.prf = name`` selects (cached per process).
+
+    ``channel`` picks the builtin PRF's band and gain map (and must match the
+    IRSA files'); ``array_position`` (0-based, on the subarray or the full
+    array) picks the IRSA file (default the subarray sweet spot).
+    """
+    position = None if array_position is None else (round(float(array_position[0])),
+                                                    round(float(array_position[1])))
+    key = (name, flat_gain, int(channel), position if name.startswith("irsa:") else None,
+           bool(subarray))
     cached = _PRF_CACHE.get(key)
     if cached is not None:
         return cached
     if name == "builtin":
-        prf: PRF = BuiltinPRF(gain=not flat_gain)
+        prf: PRF = BuiltinPRF(gain=not flat_gain, channel=channel)
     elif name.startswith("irsa:"):
         folder = Path(name[5:]).expanduser()
         if flat_gain:
@@ -74,7 +85,8 @@ def make_prf(name: str, *, flat_gain: bool = False) -> PRF:
             raise ConfigError("simulation.prf", f"{str(folder)!r} is not a folder of IRSA PRF "
                                                 "files")
         try:
-            prf = IrsaPRF.from_files(folder)
+            prf = IrsaPRF.from_files(folder, array_position=position, subarray=subarray,
+                                     channel=channel)
         except InputError as exc:
             raise ConfigError("simulation.prf", str(exc)) from None
     else:
@@ -110,10 +122,14 @@ class StarImager:
                  annulus_extra_per_e: float = 0.0):
         self.prf = prf
         self.annulus_extra_per_e = float(annulus_extra_per_e)
-        im = prf.render(np.array([x_ref_px]), np.array([y_ref_px]), shape=(32, 32))
-        self.aperture_per_unit = float(aperture_flux(im, x_ref_px, y_ref_px, radius_px)[0])
+        # measured on a 32 x 32 window with the star on its pixel (15, 15) at the same
+        # sub-pixel phase (the PRF, gain included, depends on the phase only)
+        x_loc = x_ref_px - (round(x_ref_px) - 15)
+        y_loc = y_ref_px - (round(y_ref_px) - 15)
+        im = prf.render(np.array([x_loc]), np.array([y_loc]), shape=(32, 32))
+        self.aperture_per_unit = float(aperture_flux(im, x_loc, y_loc, radius_px)[0])
         self.annulus_per_unit = float(
-            annulus_background(im, x_ref_px, y_ref_px, annulus_px)["mean_e"][0])
+            annulus_background(im, x_loc, y_loc, annulus_px)["mean_e"][0])
 
     def electrons_per_unit(self, flux_aperture_e: float) -> float:
         """Electrons per exposure per PRF unit for an aperture flux ``flux_aperture_e``."""
@@ -193,7 +209,10 @@ def make_star_imager(cfg: Config) -> StarImager:
     background level is the 2015 frames' (``background_e_per_px`` of sky plus
     the wings of the 2015 PRFs, :data:`IRACSIM2015_ANNULUS_WING_PER_E`).
     """
-    prf = make_prf(cfg.simulation.prf.strip(), flat_gain=cfg.simulation.flat_gain)
+    obs = cfg.observation
+    prf = make_prf(cfg.simulation.prf.strip(), flat_gain=cfg.simulation.flat_gain,
+                   channel=obs.channel, array_position=(obs.x0_px, obs.y0_px),
+                   subarray=obs.readout_mode().subarray)
     extra = IRACSIM2015_ANNULUS_WING_PER_E if cfg.simulation.noise_model == "iracsim2015" else 0.0
     return StarImager(prf, x_ref_px=cfg.observation.x0_px, y_ref_px=cfg.observation.y0_px,
                       radius_px=cfg.simulation.aperture_radius_px,
