@@ -291,3 +291,13 @@ def test_0p1s_subarray_epoch_reduced_with_bliss_recovers_its_depth(tmp_path):
     assert np.allclose(inside, 0.108, atol=1e-3)
     _star_found(table, lc, 0.05)
     _depth_within_4_sigma(result, truth)
+
+
+def test_a_header_without_ronoise_takes_the_channel_and_mode_value(tmp_path):
+    writer = AorWriter(tmp_path, _info())
+    data = np.zeros((64, 32, 32), np.float32)
+    p_bcd, _ = writer.write_cube(expid=0, bcd_mjysr=data, bunc_mjysr=data, bmjd_obs=57000.0,
+                                 mjd_obs=56999.99, date_obs="2014-12-08T23:45:36.000")
+    with fits.open(p_bcd, mode="update") as hdul:
+        del hdul[0].header["RONOISE"]
+    assert read_bcd_header(p_bcd).read_noise_e == 16.9  # channel 1, 0.1 s

@@ -48,7 +48,7 @@ import numpy as np
 from astropy.io import fits
 from astropy.time import Time
 
-from ..detector.constants import READ_NOISE_E
+from ..detector.constants import ReadoutMode, ronoise_e
 from ..errors import DataError, InputError
 
 __all__ = ["BCD_NAME", "BcdInfo", "BcdCube", "Epoch", "find_bcd_files", "read_bcd_header",
@@ -334,13 +334,18 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
             candidate = spread / (n_frames - 1)
             if values["FRAMTIME"] <= candidate < 1.1 * values["FRAMTIME"]:
                 interval = candidate
+        fowler, wait = max(int(fowler), 1), max(int(wait), 0)
+        read_noise = _card(header, "RONOISE", path, float, None)
+        if read_noise is None:  # the channel's RONOISE for this readout (detector.constants)
+            mode = ReadoutMode("header", fowler, wait, sample_s, values["FRAMTIME"], subarray)
+            read_noise = ronoise_e(chnl, mode) if chnl in (1, 2) else ronoise_e(2, mode)
         return BcdInfo(
             path=path, channel=chnl, aorkey=aorkey, expid=expid,
             dce=dce, n_frames=n_frames, ny=ny, nx=nx,
             subarray=subarray, bmjd_obs=values["BMJD_OBS"], tdb=tdb,
             framtime_s=values["FRAMTIME"], exptime_s=values["EXPTIME"], gain=values["GAIN"],
-            fluxconv=values["FLUXCONV"], fowler=max(int(fowler), 1), wait=max(int(wait), 0),
-            read_noise_e=_card(header, "RONOISE", path, float, READ_NOISE_E), frame_interval_s=interval,
+            fluxconv=values["FLUXCONV"], fowler=fowler, wait=wait,
+            read_noise_e=read_noise, frame_interval_s=interval,
             sample_time_s=sample_s, epoch=epoch, simulate=simulate,
             extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD")})
 
