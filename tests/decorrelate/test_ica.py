@@ -85,23 +85,65 @@ def test_asymptotic_isr_agrees_with_repeated_separations():
     assert 0.3 < isr_formula[0, 1] / measured < 3.0, (isr_formula, measured)
 
 
-def test_eclipse_component_selection_and_depth_with_photon_noise(epoch_sys, synth):
-    """3x3 stamps with photon noise: the eclipse component carries the mean stamp's
-    signature, pure-noise components are not all kept, and the depth is recovered."""
-    g = rng(9, "tests", "ica", "noise")
-    d = epoch_sys.data.subset(np.arange(2000, 12000))
-    pix = d.pixels.reshape(-1, 5, 5)[:, 1:4, 1:4].reshape(-1, 9)
-    pix = pix + np.sqrt(pix) * g.standard_normal(pix.shape)
-    noisy = dataclasses.replace(d, pixels=pix, flux=pix.sum(axis=1),
-                                flux_err=np.sqrt(pix.sum(axis=1)))
-    m = IndependentComponents(noisy, context=MethodContext(seed=3, epoch=1, method="ica"))
+def _truth_box_amplitudes(components, epoch_sys, time_bmjd):
+    """Each component's eclipse amplitude against the TRUE eclipse (tests only)."""
+    astro = np.interp(time_bmjd, epoch_sys.data.time_bmjd, epoch_sys.astro)
+    box = (astro.max() - astro) / (astro.max() - astro.min())
+    tn = (time_bmjd - time_bmjd.mean()) / np.ptp(time_bmjd)
+    design = np.column_stack([np.ones_like(tn), tn, tn**2, box])
+    return np.linalg.lstsq(design, components, rcond=None)[0][-1]
+
+
+def test_eclipse_component_and_depth_with_photon_noise(epoch_sys, synth):
+    """3x3 stamps with photon noise (10,000 frames): the eclipse component is the one a
+    common-mode change enters most, every other component is kept (App. B.3), and the
+    depth is recovered to -207 ppm (photon error about 70 ppm; purity 0.76: a kept
+    component follows the eclipse window without taking a common-mode change)."""
+    m = IndependentComponents(_noisy_epoch(epoch_sys, predicted=False),
+                              context=MethodContext(seed=3, epoch=1, method="ica"))
     diag = m.diagnostics()
-    assert diag["eclipse_cosine"] > 0.98 > diag["next_cosine"]
-    assert m.eclipse_index not in m.selected
-    assert len(m.selected) == diag["n_selected"] <= 8
+    assert diag["eclipse_rule"] == "common_mode_gain"
+    assert m.eclipse_index == int(np.argmax(np.abs(diag["common_mode_gain"])))
+    assert 0.0 < diag["eclipse_purity"] <= 1.0
+    assert m.selected == [j for j in range(9) if j != m.eclipse_index] and m.n_effective_params() == 9
     depth, _ = synth.fit_depth(m, m.data.time_bmjd,
                                t_ecl_guess=epoch_sys.t_ecl_bmjd + 5.0 / 1440)
     assert abs(depth - epoch_sys.depth_ppm) < 250.0, depth
+
+
+def test_common_mode_gain_finds_the_eclipse_where_the_mixing_column_does_not(epoch_sys, synth):
+    """Low noise (0.3 x photon noise, 3x3): the estimated mixing column of the eclipse
+    component takes the signature of the strong pointing signals, so the component
+    most parallel to the mean stamp is a pointing one; the common-mode gain picks
+    the component that carries the (true) eclipse, and the depth follows."""
+    g = rng(9, "tests", "ica", "low-noise")
+    d = epoch_sys.data
+    pix = d.pixels.reshape(-1, 5, 5)[:, 1:4, 1:4].reshape(-1, 9)
+    pix = pix + 0.3 * np.sqrt(pix) * g.standard_normal(pix.shape)
+    data = dataclasses.replace(d, pixels=pix, flux=pix.sum(axis=1), flux_err=np.sqrt(pix.sum(axis=1)))
+    m = IndependentComponents(data, context=MethodContext(seed=3, epoch=1, method="ica"))
+    diag = m.diagnostics()
+    amp = np.abs(_truth_box_amplitudes(m.all_components, epoch_sys, data.time_bmjd))
+    assert m.eclipse_index == int(np.argmax(amp)), (amp, diag["common_mode_gain"])
+    assert amp[diag["mean_stamp_index"]] < 0.2 * amp.max()
+    depth, _ = synth.fit_depth(m, data.time_bmjd, t_ecl_guess=epoch_sys.t_ecl_bmjd + 5.0 / 1440)
+    assert abs(depth - epoch_sys.depth_ppm) < 100.0, depth
+
+
+def test_noiseless_stress_epoch_spreads_the_eclipse_and_the_purity_says_so(epoch_sys):
+    """Noiseless pixel series that are a non-linear function of the pointing (rank about
+    10 for the 5x5 stamp, pointing terms as small as the eclipse) are not a linear
+    mixture of independent sources: the eclipse lands in several components. The
+    common-mode gains predict each component's (true) eclipse content and the
+    purity flags the failure; the ISR does not (docs/methods.md, ICA)."""
+    m = IndependentComponents(epoch_sys.data, context=MethodContext(seed=0, method="ica"))
+    diag = m.diagnostics()
+    gain = np.asarray(diag["common_mode_gain"]) * epoch_sys.depth_ppm * 1e-6
+    amp = _truth_box_amplitudes(m.all_components, epoch_sys, epoch_sys.data.time_bmjd)
+    assert abs(np.corrcoef(gain, amp)[0, 1]) > 0.9, (gain, amp)
+    assert diag["eclipse_purity"] < 0.7
+    assert np.sum(np.abs(amp) > 0.3 * np.abs(amp).max()) >= 3
+    assert diag["isr_max"] < 0.05
 
 
 def test_seed_enters_fastica_and_bootstrap_restarts(epoch_small):
@@ -118,12 +160,13 @@ def test_seed_enters_fastica_and_bootstrap_restarts(epoch_small):
 
 
 def test_refit_keeps_the_separation_and_redoes_the_selection(epoch_small):
-    m = IndependentComponents(epoch_small.data, max_iter=400)
+    m = IndependentComponents(epoch_small.data, max_iter=400, selection="bic")
     flux = m.data.flux + 30.0 * m.all_components[:, m.eclipse_index - 1]
     refit = m.with_flux(flux)
     fresh = IndependentComponents(dataclasses.replace(m.data, flux=flux), m.options,
                                   context=m.context)
     assert refit.selected == fresh.selected
+    assert refit.diagnostics()["selection_bic"] == fresh.diagnostics()["selection_bic"]
     np.testing.assert_array_equal(refit.all_components, m.all_components)
 
 
@@ -159,15 +202,15 @@ def _noisy_epoch(epoch_sys, *, predicted=True):
 
 def test_eclipse_shape_at_the_predicted_time_is_scored_not_used(epoch_sys):
     """With the predicted eclipse time each component gets an eclipse-shape score (box
-    at that time) in the diagnostics; the component used is the mean-stamp one (the
+    at that time) in the diagnostics; the component used is the common-mode one (the
     box score is fooled by red-noise components: docs/methods.md). Without the time
     there is no score and the same component."""
     data = _noisy_epoch(epoch_sys)
     ctx = MethodContext(seed=3, epoch=1, method="ica")
     m = IndependentComponents(data, context=ctx)
     diag = m.diagnostics()
-    assert diag["eclipse_rule"] == "mean_stamp"
-    assert m.eclipse_index == diag["mean_stamp_index"]
+    assert diag["eclipse_rule"] == "common_mode_gain"
+    assert m.eclipse_index == int(np.argmax(np.abs(diag["common_mode_gain"])))
     assert len(diag["eclipse_shape_score"]) == m.all_components.shape[1]
     assert diag["eclipse_box_duration_d"] > 0
     blind = IndependentComponents(_noisy_epoch(epoch_sys, predicted=False), context=ctx)
@@ -193,5 +236,6 @@ def test_eclipse_left_in_kept_components_enters_the_separation_error(epoch_sys):
     diag = m.diagnostics()
     assert j in m.selected
     assert abs(diag["eclipse_leak_ppm"] - leak_clean) > 100.0, (diag, leak_clean)
-    assert np.sqrt(var) * 1e6 >= abs(diag["eclipse_leak_ppm"]) > np.sqrt(clean) * 1e6
+    assert np.sqrt(var) * 1e6 >= abs(diag["eclipse_leak_ppm"])
+    assert np.sqrt(clean) * 1e6 >= abs(leak_clean)
     assert diag["depth_err_isr_ppm"] < 0.2 * abs(diag["eclipse_leak_ppm"])

@@ -11,7 +11,10 @@ separation error."
 Steps (``docs/methods.md``, "ICA", says which are the authors' and which ours):
 
 1. Pixel light curves of the stamp (``data.pixels``), divided by the median
-   summed stamp flux (one common scale) and centred in time.
+   summed stamp flux (one common scale) and centred in time. Not normalised
+   frame by frame (PLD's step): that would take the eclipse out of every
+   pixel, and B.3 fits "the non-eclipse independent components", so the
+   eclipse is one of the separated components.
 2. Discrete wavelet transform of each (PyWavelets, ``db4``, periodic
    extension, all levels' coefficients concatenated): :func:`wavelet_coefficients`.
 3. FastICA (scikit-learn, logcosh contrast, symmetric) on the coefficient
@@ -19,13 +22,16 @@ Steps (``docs/methods.md``, "ICA", says which are the authors' and which ours):
 4. Back to the time domain: the DWT is linear and orthogonal, so the inverse
    transform of the separated coefficients is the unmixing matrix applied to
    the pixel series (:func:`time_domain_components`).
-5. The eclipse component: the one whose mixing column is most nearly parallel
-   to the mean stamp (an eclipse scales every pixel alike, pointing does not):
-   :func:`eclipse_component`.
-6. Ranking and selection of the non-eclipse components: ranked by the raw
-   light-curve variance each explains, kept while the BIC of the raw light
-   curve fit improves (:func:`select_components`).
-7. ``predict(astro) = F0 astro + sum_j o_j IC_j`` over the selected components,
+5. The eclipse component: an eclipse scales every pixel by the same fraction,
+   so it enters component ``j`` with the gain of the unmixing row ``j`` on the
+   mean stamp (:func:`common_mode_gains`); the component with the largest
+   gain is the eclipse component, and its share of the squared gains is the
+   separation's purity (:func:`eclipse_component_by_gain`; ours).
+6. All non-eclipse components are kept (B.3: "scaled versions of the
+   non-eclipse independent components"); ``selection = "bic"`` (ours) ranks
+   them by the raw light-curve variance each explains and keeps as many as
+   minimise the BIC (:func:`select_components`).
+7. ``predict(astro) = F0 astro + sum_j o_j IC_j`` over the kept components,
    ``F0`` and ``o_j`` by weighted linear least squares for the given ``astro``
    (the shared astrophysical model: eclipse and phase curve).
 8. Separation error: the interference-to-signal ratio (ISR) of the
@@ -54,7 +60,8 @@ from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["IndependentComponents", "IcaOptions", "wavelet_coefficients", "separate",
-           "time_domain_components", "eclipse_component", "eclipse_component_by_shape",
+           "time_domain_components", "common_mode_gains", "eclipse_component_by_gain",
+           "eclipse_component", "eclipse_component_by_shape",
            "eclipse_box_amplitudes", "eclipse_leak", "select_components",
            "fastica_isr", "bootstrap_isr", "separation_rms"]
 
@@ -150,12 +157,81 @@ def time_domain_components(centred_pixels: np.ndarray, unmixing: np.ndarray) -> 
     return comps / np.where(sd > 0, sd, 1.0)
 
 
+def common_mode_gains(unmixing: np.ndarray, centred_pixels: np.ndarray,
+                      mean_stamp: np.ndarray) -> np.ndarray:
+    """How much a change of every pixel by the same fraction enters each component.
+
+    An eclipse (or any change of the star's flux) multiplies every pixel by
+    ``1 + delta``: in the pixel series it is ``delta`` times the mean stamp.
+    Component ``j`` is ``W_j x / sd_j`` (:func:`time_domain_components`), so it
+    carries ``g_j delta`` with ``g_j = W_j . mean_stamp / sd_j``: the gain, in
+    units of the component's standard deviation per unit fractional change.
+    Unlike the mixing column (the pixel signature of the component, which a
+    strong pointing signal correlated with the component dominates), the
+    gain says what a uniform scaling does to the component.
+
+    Parameters
+    ----------
+    unmixing : ndarray, shape (K, p)
+        Rows of the separation (:func:`separate`).
+    centred_pixels : ndarray, shape (n, p)
+        The pixel series the components are made from.
+    mean_stamp : ndarray, shape (p,)
+        The mean of the (uncentred) pixel series on the same scale.
+
+    Returns
+    -------
+    ndarray, shape (K,)
+
+    Examples
+    --------
+    >>> t = np.arange(1000)
+    >>> ecl = -1e-3 * ((t > 400) & (t < 600))
+    >>> point = np.sin(t / 30.0)
+    >>> stamp = np.array([1.0, 2.0, 1.0])
+    >>> pix = stamp * (1 + ecl)[:, None] + np.outer(point, [0.1, 0.0, -0.1])
+    >>> w = np.array([[1.0, 0.0, -1.0], [0.0, 1.0, 0.0]])   # pointing, centre pixel
+    >>> g = common_mode_gains(w, pix - pix.mean(axis=0), pix.mean(axis=0))
+    >>> np.round(g * 1e-3, 2).tolist()   # component sd per 0.1 % change of every pixel
+    [0.0, 2.5]
+    """
+    w = np.asarray(unmixing, dtype=float)
+    comps = np.asarray(centred_pixels, dtype=float) @ w.T
+    sd = comps.std(axis=0)
+    return (w @ np.asarray(mean_stamp, dtype=float)) / np.where(sd > 0, sd, np.inf)
+
+
+def eclipse_component_by_gain(gains: np.ndarray) -> tuple[int, float]:
+    """The component with the largest common-mode gain, and the separation's purity.
+
+    The purity ``g_k^2 / sum_j g_j^2`` is the share of an eclipse's signal (in
+    the components' own units) that lands in the eclipse component: 1 for a
+    clean separation; below 1 the rest is in the components the fit keeps
+    (:func:`common_mode_gains`; ours).
+
+    Examples
+    --------
+    >>> k, purity = eclipse_component_by_gain(np.array([0.1, -2.0, 0.2]))
+    >>> k, round(purity, 3)
+    (1, 0.988)
+    """
+    g = np.asarray(gains, dtype=float)
+    k = int(np.argmax(np.abs(g)))
+    total = float(np.sum(g**2))
+    return k, float(g[k] ** 2 / total) if total > 0 else 0.0
+
+
 def eclipse_component(mixing: np.ndarray, mean_stamp: np.ndarray) -> tuple[int, np.ndarray]:
     """The component whose mixing column is most nearly parallel to the mean stamp.
 
     An eclipse changes every pixel by the same fraction of its mean value, so
     its pixel signature is the mean stamp; a pointing change moves light
     between pixels. Returns the index and the |cosine| of every column.
+    Reported, not used to choose: the estimated column of a weak eclipse
+    component takes the signature of any strong pointing signal that is
+    correlated with it over the epoch (cosine 0.53-0.66 for the right
+    component on low-noise simulated epochs; ``docs/methods.md``, ICA), so
+    the eclipse component is chosen by :func:`eclipse_component_by_gain`.
 
     Examples
     --------
@@ -427,7 +503,7 @@ class IcaOptions(MethodOptions):
     wavelet: str = "db4"
     level: int = 0
     combine: Literal["additive", "multiplicative"] = "additive"
-    selection: Literal["bic", "all"] = "bic"
+    selection: Literal["all", "bic"] = "all"
     n_restarts: int = 0
     max_iter: int = 2000
     tol: float = 1e-5
@@ -459,9 +535,10 @@ class IndependentComponents(Systematics):
         DWT level (0: the largest PyWavelets allows, at most 8).
     combine : {"additive", "multiplicative"}
         ``F0 astro + sum o_j IC_j`` (Morello et al.) or ``astro (F0 + sum o_j IC_j)``.
-    selection : {"bic", "all"}
-        Non-eclipse components kept: ranked by the raw light-curve variance
-        they explain, as many as minimise the BIC ("bic"), or all of them.
+    selection : {"all", "bic"}
+        Non-eclipse components kept: all of them ("all", paper App. B.3), or
+        (ours) ranked by the raw light-curve variance they explain and as
+        many as minimise the BIC ("bic").
     n_restarts : int
         0: the separation's ISR from the asymptotic formula of FastICA; 2 or
         more: from that many bootstrap FastICA restarts.
@@ -472,7 +549,7 @@ class IndependentComponents(Systematics):
     --------
     >>> from eclipsebench.decorrelate import get_method
     >>> get_method("ica").Options().selection
-    'bic'
+    'all'
     """
 
     name: ClassVar[str] = "ica"
@@ -480,7 +557,7 @@ class IndependentComponents(Systematics):
     Options: ClassVar[type[MethodOptions]] = IcaOptions
     stochastic: ClassVar[bool] = True
     description: ClassVar[str] = ("wavelet pixel-ICA: FastICA on DWT coefficients of the pixel "
-                                  "light curves, eclipse + selected scaled components, "
+                                  "light curves, eclipse + the scaled non-eclipse components, "
                                   "ISR separation error (Morello et al. 2016)")
 
     def __init__(self, data: EpochData, options: Any = None, *,
@@ -512,13 +589,17 @@ class IndependentComponents(Systematics):
         self.unmixing, self.mixing = unmix, mixing
         #: All independent components in the time domain, unit variance, (n, K).
         self.all_components = time_domain_components(centred, unmix)
+        # The eclipse scales every pixel alike: the component it enters most is the
+        # eclipse component (ours; docs/methods.md, ICA, step 5).
+        self.common_mode_gain = common_mode_gains(unmix, centred, norm.mean(axis=0))
+        self.eclipse_index, purity = eclipse_component_by_gain(self.common_mode_gain)
+        rule = "common_mode_gain"
+        # Reported, not used: the mixing-column cosine picked a pointing component on
+        # low-noise simulated epochs, and the box score at the predicted time a pointing
+        # component on the real epoch 1 (red noise fools box |t| values).
         k_stamp, cosines = eclipse_component(mixing, norm.mean(axis=0))
         t_pred = data.meta.get("t_ecl_predicted_bmjd")
         durations = _box_durations(data.time_bmjd, t_pred)
-        # The shape score is reported, not used: on the real epoch 1 the best box at the
-        # predicted time was a pointing component (mean-stamp cosine 0.08, depth -726 ppm);
-        # red noise makes box |t| values unreliable (docs/methods.md, ICA).
-        self.eclipse_index, rule = k_stamp, "mean_stamp"
         shape_index, shape_score, box_d = (eclipse_component_by_shape(
             self.all_components, data.time_bmjd, float(t_pred), durations)
             if durations.size else (None, None, None))
@@ -543,8 +624,10 @@ class IndependentComponents(Systematics):
         self._diagnostics: dict[str, Any] = {
             "wavelet": opts.wavelet, "level": lev, "n_components": n_comp,
             "converged": conv, "eclipse_index": self.eclipse_index, "eclipse_rule": rule,
+            "eclipse_purity": purity,
+            "common_mode_gain": [float(v) for v in self.common_mode_gain],
             "eclipse_cosine": float(cosines[self.eclipse_index]),
-            "mean_stamp_index": k_stamp, "next_cosine": float(np.sort(cosines)[-2]),
+            "mean_stamp_index": k_stamp, "mean_stamp_cosine": float(cosines[k_stamp]),
             "isr_method": isr_kind, "isr_max": float(self.isr.max()),
         }
         if n_conv is not None:
@@ -585,8 +668,9 @@ class IndependentComponents(Systematics):
         self._fw_perp = fw - q @ (q.T @ fw)
 
     def diagnostics(self) -> dict[str, Any]:
-        """The decomposition, the eclipse component's |cosine| with the mean stamp (and
-        the runner-up's), the ranking and selection, the ISR and, once
+        """The decomposition, every component's common-mode gain and the eclipse
+        component's purity, its mixing column's |cosine| with the mean stamp (and
+        the largest cosine's component), the selection, the ISR and, once
         :meth:`extra_depth_variance` has run, ``depth_err_separation_ppm``."""
         return dict(self._diagnostics)
 
