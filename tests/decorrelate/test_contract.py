@@ -42,11 +42,13 @@ DEPTH_BOUND_PPM_BY_METHOD = {
 }
 #: Methods fitted on the same epoch with photon noise added (pixels and flux), with their
 #: bound: pixel ICA needs noise to separate sources (docs/methods.md, ICA: on the noiseless
-#: epoch the pixel values are a non-linear function of pointing, not a linear mixture of
-#: independent sources, and it gives 188 ppm for 1875). With noise it is still fragile:
-#: -336.7, -41.4 and -31.0 ppm for noise seeds 2015, 1 and 2, where the photon-noise depth
-#: error is about 50 ppm (a finding of issue 13, not a bound to tune).
-NOISY_DEPTH_BOUND_PPM = {"ica": 400.0}
+#: epoch the 5x5 pixel series are a non-linear function of the pointing, numerically of rank
+#: 10, not a linear mixture of independent sources; the eclipse lands in four of the nine
+#: components (purity 0.60) and the depth is 208 ppm for 1875). With photon noise
+#: (photon-limited depth error about 55 ppm) it measured -76.9, -40.6 and -33.9 ppm for
+#: noise seeds 2015, 1 and 2, where PLD measures -82.5, -49.9 and -38.9 on the same data.
+#: The bound is three photon-limited errors, not a measured value.
+NOISY_DEPTH_BOUND_PPM = {"ica": 3 * 55.0}
 METHODS = (*eb.methods(), PLUGIN)
 
 
