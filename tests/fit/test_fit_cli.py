@@ -109,3 +109,14 @@ def test_several_tables_are_fitted_jointly(tmp_path, xo3_epoch, polygain, capsys
     assert abs(res["depth_ppm"] - 1875.0) < 3 * res["depth_err_ppm"]
     assert main(["reduce", str(folder), "--method", polygain.name, "--sampler", "mcmc"]) == 2
     assert "applies to one table" in capsys.readouterr().err
+
+
+def test_text_summary_with_no_beta_red():
+    """A fit of too few points has beta_red null: the text summary says n/a, not a crash."""
+    from eclipsebench.commands.reduce import format_text
+    result = {"method": "m", "epoch": 1, "phase": "flat", "sampler": "leastsq",
+              "depth_ppm": 1800.0, "depth_err_ppm": 90.0, "depth_err_method": "jacobian",
+              "t_ecl_bmjd": 57000.0, "t_ecl_err_d": 1e-3, "rms_ppm": 900.0, "beta_red": None,
+              "chi2_red": 1.0, "bic": 1.0, "aic": 1.0, "k": 3, "result_file": "r.json",
+              "lightcurve_file": "r.lc.ecsv"}
+    assert "beta_red n/a" in format_text(result)

@@ -287,6 +287,11 @@ def run(args: argparse.Namespace) -> dict:
     return summary
 
 
+def _num(value, digits: int = 2) -> str:
+    """A number for the text summary; "n/a" for null (e.g. beta_red of too few points)."""
+    return "n/a" if value is None else f"{value:.{digits}f}"
+
+
 def format_text(result: dict) -> str:
     if result.get("joint"):
         lines = [f"method        {result['method']}, joint fit of {len(result['epochs'])} "
@@ -298,7 +303,7 @@ def format_text(result: dict) -> str:
                  "inverse-variance mean)"]
         for e in result["per_epoch"]:
             lines.append(f"  epoch {e['epoch']}: alone {e['depth_alone_ppm']:7.1f} +- "
-                         f"{e['depth_alone_err_ppm']:5.1f} ppm, beta_red {e['beta_red']:.2f}")
+                         f"{e['depth_alone_err_ppm']:5.1f} ppm, beta_red {_num(e['beta_red'])}")
         lines.append(f"wrote         {result['result_file']}")
         return "\n".join(lines)
     lines = [f"method        {result['method']} (epoch {result['epoch']}, phase {result['phase']}, "
@@ -307,7 +312,7 @@ def format_text(result: dict) -> str:
              f"(error from {result['depth_err_method']})",
              f"t_ecl         {result['t_ecl_bmjd']:.5f} +- {result['t_ecl_err_d'] * 86400:.0f} s "
              "BMJD_TDB",
-             f"rms           {result['rms_ppm']:.0f} ppm, beta_red {result['beta_red']:.2f}, "
+             f"rms           {result['rms_ppm']:.0f} ppm, beta_red {_num(result['beta_red'])}, "
              f"chi2_red {result['chi2_red']:.3f}",
              f"BIC / AIC     {result['bic']:.1f} / {result['aic']:.1f} (k = {result['k']})"]
     models = result.get("phase_models")
