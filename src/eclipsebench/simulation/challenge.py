@@ -39,6 +39,7 @@ from astropy.table import Table
 
 from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
+from ..astro.orbit import eclipse_time_bmjd
 from ..astro.thermal import DEFAULT_WAVELENGTH_UM
 from ..config import Config, dump_toml, to_mapping
 from ..detector.constants import (
@@ -425,9 +426,27 @@ def _truth_ok(config: Path, truth: Path) -> bool:
 
 
 def challenge_plans(cfg: Config) -> list[EpochPlan]:
-    """The observing plans of every epoch (:func:`.plan.plan_challenge`)."""
-    period = system_for(cfg.system).period_days
-    return plan_challenge(cfg.observation, cfg.challenge.epochs, period, cfg.challenge.seed)
+    """The observing plans of every epoch (:func:`.plan.plan_challenge`).
+
+    An epoch whose frames hold no eclipse of the planet (another planet with
+    the XO-3b challenge's start times, say) is planned, since a simulation
+    without an eclipse has its uses (noise and pointing studies), but a warning
+    names it and ``observation.start_times_jd``; its truth row has no eclipse
+    time (NaN).
+    """
+    system = system_for(cfg.system)
+    plans = plan_challenge(cfg.observation, cfg.challenge.epochs, system.period_days,
+                           cfg.challenge.seed)
+    for plan in plans:
+        t0 = plan.start_bmjd
+        t1 = t0 + plan.duration_s / SECONDS_PER_DAY
+        t_ecl = float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
+        if not t0 <= t_ecl <= t1:
+            log.warning("epoch %d (%.4f-%.4f BMJD) holds no eclipse of %s (the nearest is at "
+                        "%.4f BMJD): set observation.start_times_jd (JD - 2455000) a few hours "
+                        "before its eclipses to simulate one", plan.epoch, t0, t1, system.name,
+                        t_ecl)
+    return plans
 
 
 def plan_simulate_tasks(cfg: Config, out_dir: str | Path, *, calibration: bool | None = None,
