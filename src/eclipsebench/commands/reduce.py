@@ -11,7 +11,7 @@ from ..astro.catalogue import system_for
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
-from ..fit.astro_model import ECLIPSE_SHAPES, PHASE_MODELS, RAMP_MODELS
+from ..fit.astro_model import ECLIPSE_SHAPES, EVENTS, PHASE_MODELS, RAMP_MODELS
 from ..fit.data import TIME_FORMATS
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
@@ -43,6 +43,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="detector ramp (default: [reduce] ramp, none)")
     p.add_argument("--eclipse-shape", choices=("auto",) + ECLIPSE_SHAPES, default=None,
                    help="eclipse shape; auto = the method's default (box for segpoly)")
+    p.add_argument("--event", choices=EVENTS, default=None,
+                   help="event fitted (default: [reduce] event, eclipse); transit: Rp/R* and "
+                        "mid-transit time with batman's quadratic limb darkening, a/R*, b, q1, "
+                        "q2 fixed to the catalogue unless [reduce] transit_free names them"),
     p.add_argument("--profile", choices=("controlled", "paper"), default=None,
                    help="controlled: the shared [reduce] settings (default); paper: the "
                         "method's team's centroid, phase model, sampler and reported error "
@@ -127,6 +131,7 @@ _TABLE_LABELS = {"columns": "--columns", "time_column": "--time-column",
 def _options(args: argparse.Namespace):
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {"phase": args.phase, "ramp": args.ramp, "eclipse_shape": args.eclipse_shape,
+               "event": args.event,
                "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
                "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius,
                "profile": args.profile}
@@ -306,15 +311,19 @@ def format_text(result: dict) -> str:
                          f"{e['depth_alone_err_ppm']:5.1f} ppm, beta_red {_num(e['beta_red'])}")
         lines.append(f"wrote         {result['result_file']}")
         return "\n".join(lines)
+    when = "t_transit" if result.get("event") == "transit" else "t_ecl"
     lines = [f"method        {result['method']} (epoch {result['epoch']}, phase {result['phase']}, "
              f"{result['sampler']}, {result.get('profile', 'controlled')} profile)",
              f"depth         {result['depth_ppm']:.1f} +- {result['depth_err_ppm']:.1f} ppm "
              f"(error from {result['depth_err_method']})",
-             f"t_ecl         {result['t_ecl_bmjd']:.5f} +- {result['t_ecl_err_d'] * 86400:.0f} s "
+             f"{when:<14}{result[when + '_bmjd']:.5f} +- {result[when + '_err_d'] * 86400:.0f} s "
              "BMJD_TDB",
              f"rms           {result['rms_ppm']:.0f} ppm, beta_red {_num(result['beta_red'])}, "
              f"chi2_red {result['chi2_red']:.3f}",
              f"BIC / AIC     {result['bic']:.1f} / {result['aic']:.1f} (k = {result['k']})"]
+    if when == "t_transit":
+        lines.insert(2, f"rp_rs         {result['rp_rs']:.5f} +- {result['rp_rs_err']:.5f} "
+                        "(depth = rp_rs^2)")
     models = result.get("phase_models")
     if models:
         lines.append("phase models  (BIC picks " + models["best_bic"] + ", AIC picks "

@@ -70,6 +70,21 @@ class ReduceSection:
         Per-method options, ``[reduce.options.<method>]`` tables (the keys of
         each method's ``Options``; ``docs/methods.md``). Checked against the
         method's options when the reduce stage builds the method.
+    event : {"eclipse", "transit"}
+        The event fitted: the secondary eclipse (depth), or the transit
+        (Rp/R*, batman's quadratic limb darkening; ``docs/fitting.md``,
+        "Transits").
+    transit_free : list of {"a_rs", "b", "q1", "q2"}
+        The transit's parameters fitted besides Rp/R* and the mid-transit
+        time; the others stay at the catalogue's values (``b``: the impact
+        parameter; ``q1``, ``q2``: Kipping's 2013 limb-darkening parameters).
+    transit_priors : dict
+        ``[reduce.transit_priors]`` ``name = [mean, sigma]``: a Gaussian prior
+        on a free transit parameter (a free one without has a uniform prior
+        within its bounds).
+    limb_darkening_q : [q1, q2]
+        Kipping's q1, q2, fixed (or the start of free ones); empty: those of
+        the catalogue's quadratic coefficients.
     """
 
     phase: Literal["flat", "linear", "quadratic", "sinusoid"] = "quadratic"
@@ -91,6 +106,10 @@ class ReduceSection:
     error_rule: Literal["largest", "method"] = "largest"
     profile: Literal["controlled", "paper"] = "controlled"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
+    event: Literal["eclipse", "transit"] = "eclipse"
+    transit_free: tuple[str, ...] = ()
+    transit_priors: dict[str, tuple[float, ...]] = field(default_factory=dict)
+    limb_darkening_q: tuple[float, ...] = ()
 
     def validate(self) -> None:
         check(self.mcmc_walkers >= 4 and self.mcmc_walkers % 2 == 0, "mcmc_walkers",
@@ -107,3 +126,14 @@ class ReduceSection:
         check(self.radius_px == 0 or 0.5 <= self.radius_px <= 10.0, "radius_px",
               "0 (the table's flux column) or an aperture radius in 0.5-10 px")
         check(self.max_nfev >= 10, "max_nfev", "at least 10 evaluations")
+        free = ("a_rs", "b", "q1", "q2")   # eclipsebench.fit.astro_model.TRANSIT_FREE
+        check(all(n in free for n in self.transit_free)
+              and len(set(self.transit_free)) == len(self.transit_free), "transit_free",
+              "distinct names among " + ", ".join(free))
+        for name, pair in self.transit_priors.items():
+            check(name in self.transit_free, f"transit_priors.{name}",
+                  "a prior on a parameter named in transit_free")
+            check(len(pair) == 2 and pair[1] > 0, f"transit_priors.{name}", "[mean, sigma > 0]")
+        check(len(self.limb_darkening_q) in (0, 2)
+              and all(0.0 <= q <= 1.0 for q in self.limb_darkening_q), "limb_darkening_q",
+              "[] (the catalogue's) or [q1, q2], each in [0, 1]")

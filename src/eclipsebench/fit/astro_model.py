@@ -25,24 +25,57 @@ The model of the stellar-system flux, normalised so that 1 is the star alone
 
 The parameter vector is ``[depth, t_ecl_bmjd, phase coefficients..., ramp
 coefficients...]`` (depth as a fraction, not ppm).
+
+Transits (``event="transit"``) share the phase and ramp models::
+
+    A(t) = R(t) * [T(t) + p(t)]
+
+- ``T(t)`` is the stellar flux in transit (1 outside): batman's quadratic
+  limb-darkening law (Mandel & Agol 2002; Kreidberg 2015) with Kipping's
+  (2013, MNRAS 435, 2152, Eqs. 15-16) ``u1 = 2 sqrt(q1) q2``,
+  ``u2 = sqrt(q1) (1 - 2 q2)``, on the orbit of the system (period,
+  eccentricity, argument of periastron; ``a_rs`` and the impact parameter
+  ``b`` from the catalogue unless free).
+- ``p(t)`` is the planet's phase variation about mid-transit, the eclipse's
+  phase curve without its constant: 0 (flat), ``c1 (t - t_tr)`` (linear),
+  ``+ c2 (t - t_tr)^2`` (quadratic), ``c1 [cos(2 pi (t - t_tr) / P) - 1] +
+  c2 sin(...)`` (sinusoid). The planet's own flux at mid-transit is taken
+  into the normalisation that every method fits, so the transit is diluted
+  by ``1 / (1 + F_p(t_tr))`` (F_p: the planet-to-star flux ratio then; 1119
+  ppm on the simulated 2015-challenge XO-3b's night side, so Rp/R* comes out
+  low by a fraction F_p / 2 = 5.6e-4, 5e-5 in Rp/R*).
+
+The transit's parameter vector is ``[rp_rs, t_transit_bmjd, a_rs?, b?, q1?,
+q2?, phase coefficients..., ramp coefficients...]`` (the ``?`` ones when free):
+the first parameter is always the event's size (the eclipse depth, or Rp/R*)
+and the second its mid-time, so that code reading ``names[0]`` and
+``names[1]`` handles both events; :meth:`AstroModel.depth_ppm` turns the size
+into the event's depth (the transit's is ``rp_rs^2``, geometric: not the
+limb-darkened flux drop at mid-transit).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
 
 import numpy as np
+from batman import _quadratic_ld, _rsky
 from numba import njit
 
 from ..astro.eclipse import EclipseShape
 from ..errors import InputError
 
-__all__ = ["AstroModel", "PHASE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES", "box_visible_fraction",
-           "system_period_days"]
+__all__ = ["AstroModel", "PHASE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES", "EVENTS",
+           "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u", "u_from_q"]
 
 PHASE_MODELS = ("flat", "linear", "quadratic", "sinusoid")
 RAMP_MODELS = ("none", "linear", "exponential")
 ECLIPSE_SHAPES = ("physical", "box")
+EVENTS = ("eclipse", "transit")
+#: The transit's optional free parameters, in the order they take in the vector.
+TRANSIT_FREE = ("a_rs", "b", "q1", "q2")
 
 _PHASE_NAMES = {
     "flat": (),
@@ -59,7 +92,15 @@ _RAMP_NAMES = {
 # and the size of the initial MCMC ball.
 _SCALES = {"depth": 1e-4, "t_ecl_bmjd": 1e-3, "c1_per_day": 1e-3, "c2_per_day2": 1e-3,
            "c_cos": 1e-4, "c_sin": 1e-4, "ramp_slope_per_day": 1e-3, "ramp_amplitude": 1e-3,
-           "ramp_tau_days": 1e-2}
+           "ramp_tau_days": 1e-2, "rp_rs": 1e-3, "t_transit_bmjd": 1e-3, "a_rs": 1e-2,
+           "b": 1e-2, "q1": 1e-2, "q2": 1e-2}
+#: Bounds of the transit's parameters (also the MCMC's uniform prior): q1, q2 in
+#: [0, 1] is Kipping's (2013) physically allowed triangle.
+_TRANSIT_BOUNDS = {"rp_rs": (0.0, 0.5), "a_rs": (1.5, 200.0), "b": (0.0, 1.5),
+                   "q1": (0.0, 1.0), "q2": (0.0, 1.0)}
+#: Sky separation (stellar radii) that batman's rsky gives when the planet is behind the
+#: star; also the value outside the tabulated transit window (no overlap for rp_rs <= 0.5).
+_FAR = 100.0
 
 
 class VisibleFraction(Protocol):
@@ -101,6 +142,108 @@ def _half_depth_duration(time_bmjd: np.ndarray, visible: np.ndarray) -> float | 
     return float(t_out - t_in)
 
 
+def u_from_q(q1: float, q2: float) -> tuple[float, float]:
+    """Quadratic limb-darkening coefficients from Kipping's (2013) q1, q2 (his Eqs. 15-16).
+
+    Examples
+    --------
+    >>> u_from_q(0.25, 0.25)
+    (0.25, 0.25)
+    """
+    root = math.sqrt(q1)
+    return 2.0 * root * q2, root * (1.0 - 2.0 * q2)
+
+
+def q_from_u(u1: float, u2: float) -> tuple[float, float]:
+    """Kipping's (2013) q1, q2 of quadratic coefficients u1, u2 (his Eqs. 17-18).
+
+    ``q2`` is 0 when ``u1 + u2 = 0`` (a uniform disc, where it is undefined).
+
+    Examples
+    --------
+    >>> q_from_u(0.25, 0.25)
+    (0.25, 0.25)
+    """
+    total = u1 + u2
+    return total * total, (u1 / (2.0 * total) if total != 0 else 0.0)
+
+
+def _inclination_deg(a_rs: float, b: float, ecc: float, omega_deg: float) -> float:
+    """Inclination (deg) of impact parameter ``b`` (Winn 2010, Eq. 7, inverted).
+
+    ``b = a cos i (1 - e^2) / (1 + e sin omega)``, the form of
+    :attr:`eclipsebench.astro.catalogue.PlanetSystem.impact_parameter`; cos i
+    is kept in [0, 1] (a ``b`` that ``a_rs`` cannot reach gives i = 0).
+    """
+    w = math.radians(omega_deg)
+    cos_i = b * (1.0 + ecc * math.sin(w)) / (a_rs * (1.0 - ecc * ecc))
+    return math.degrees(math.acos(min(max(cos_i, 0.0), 1.0)))
+
+
+class _TransitCurve:
+    """T(t): the limb-darkened transit of one orbit at fixed times, batman's routines.
+
+    The observed mid-transit ``t_tr`` (minimum sky separation, light travel
+    included: :func:`eclipsebench.astro.orbit.transit_time_bmjd`) is
+    ``offset_d`` after batman's ``t0`` (the inferior conjunction, 138 s for the
+    2015 challenge's XO-3b with e = 0.29), computed once on the catalogue
+    orbit. With ``a_rs`` and ``b`` fixed the sky separation of the planet is
+    tabulated once against the time from conjunction (batman's rsky on a 0.25 s
+    grid where it is below 2 stellar radii) and interpolated at each call;
+    with either free batman's rsky is evaluated at the data times. The flux
+    is batman's quadratic law (Mandel & Agol 2002) on those separations, the
+    same two compiled routines that ``batman.TransitModel.light_curve`` calls
+    (a test checks that they agree).
+    """
+
+    def __init__(self, time_bmjd: np.ndarray, system: Any, *, fixed_orbit: bool,
+                 grid_step_s: float = 0.25) -> None:
+        self.time_bmjd = time_bmjd
+        self.period_d = float(system.period_days)
+        self.ecc = float(system.ecc)
+        self.omega_deg = float(system.omega_deg)
+        clock = system.clock
+        t_conj = clock.conjunction_geom("transit", system.t_transit_bmjd)
+        # conjunction minus mid-transit (both geometric: the light delay is common)
+        self.offset_d = float(t_conj - clock._mid_event_geom(t_conj, "transit"))
+        self.fixed_orbit = fixed_orbit
+        self._tau = self._sep = None
+        if fixed_orbit:
+            self._tabulate(float(system.a_rs), float(system.inc_deg), grid_step_s)
+
+    def separation(self, t0_bmjd: float, a_rs: float, inc_deg: float) -> np.ndarray:
+        """batman's rsky (stellar radii; 100 behind the star) at the data times."""
+        return _rsky._rsky(self.time_bmjd, t0_bmjd, self.period_d, a_rs, math.radians(inc_deg),
+                           self.ecc, math.radians(self.omega_deg), 1, 1)
+
+    def _tabulate(self, a_rs: float, inc_deg: float, grid_step_s: float) -> None:
+        coarse = np.linspace(-0.25, 0.25, 20001) * self.period_d
+        sep = _rsky._rsky(coarse, 0.0, self.period_d, a_rs, math.radians(inc_deg), self.ecc,
+                          math.radians(self.omega_deg), 1, 1)
+        near = np.flatnonzero(sep < 2.0)
+        if len(near) == 0:   # no transit at all: T = 1 everywhere
+            self._tau, self._sep = np.array([-1.0, 1.0]), np.full(2, _FAR)
+            return
+        lo, hi = coarse[max(near[0] - 1, 0)], coarse[min(near[-1] + 1, len(coarse) - 1)]
+        n = max(int(math.ceil((hi - lo) * 86400.0 / grid_step_s)) + 1, 3)
+        self._tau = np.linspace(lo, hi, n)
+        self._sep = _rsky._rsky(self._tau, 0.0, self.period_d, a_rs, math.radians(inc_deg),
+                                self.ecc, math.radians(self.omega_deg), 1, 1)
+
+    def __call__(self, rp_rs: float, t_transit_bmjd: float, a_rs: float, inc_deg: float,
+                 u1: float, u2: float) -> np.ndarray:
+        t0 = t_transit_bmjd + self.offset_d
+        if self.fixed_orbit:
+            tau = self.time_bmjd - t0
+            half = 0.5 * self.period_d
+            if tau.min() < -half or tau.max() >= half:   # data a period away: fold
+                tau = tau - self.period_d * np.floor(tau / self.period_d + 0.5)
+            sep = np.interp(tau, self._tau, self._sep, left=_FAR, right=_FAR)
+        else:
+            sep = self.separation(t0, a_rs, inc_deg)
+        return _quadratic_ld._quadratic_ld(sep, abs(rp_rs), u1, u2, 1)
+
+
 class AstroModel:
     """The eclipse, phase-curve and ramp model at fixed times.
 
@@ -127,6 +270,21 @@ class AstroModel:
         Orbital period for the sinusoid (default: the system's).
     box_duration_d : float, optional
         Duration of the box eclipse (default: measured from the physical shape).
+    event : {"eclipse", "transit"}
+        The event fitted. A transit needs ``system`` (its orbit) and ignores
+        ``eclipse_shape``, ``shape`` and ``box_duration_d``.
+    transit_free : sequence of {"a_rs", "b", "q1", "q2"}
+        The transit's parameters fitted besides ``rp_rs`` and
+        ``t_transit_bmjd``; the others stay at the catalogue's ``a_rs``, impact
+        parameter and limb darkening (or ``limb_darkening_q``).
+    transit_priors : mapping, optional
+        ``{name: (mean, sigma)}``: a Gaussian prior on a free transit
+        parameter (added to the least-squares residuals and the MCMC's
+        log-probability); a free parameter without one has a uniform prior
+        within its bounds.
+    limb_darkening_q : (float, float), optional
+        Kipping's q1, q2 (fixed values, or the start of free ones); default
+        those of the catalogue's quadratic coefficients (:func:`q_from_u`).
 
     Examples
     --------
@@ -139,16 +297,34 @@ class AstroModel:
     ('depth', 't_ecl_bmjd')
     >>> m(np.array([0.002, 0.1]))
     array([1.002, 1.002, 1.002])
+
+    A transit of the 2015 challenge's XO-3b, limb darkening free:
+
+    >>> from eclipsebench.astro.catalogue import get_system
+    >>> xo3 = get_system("XO-3b (2015 challenge)")
+    >>> t = xo3.t_transit_bmjd + np.linspace(-0.1, 0.1, 5)
+    >>> tr = AstroModel(t, xo3, phase="flat", event="transit", transit_free=("q1", "q2"))
+    >>> tr.names
+    ('rp_rs', 't_transit_bmjd', 'q1', 'q2')
+    >>> tr(tr.initial()).round(5).tolist()
+    [1.0, 0.99487, 0.99167, 0.99488, 1.0]
+    >>> round(tr.depth_ppm(0.0906), 2)
+    8208.36
     """
 
     def __init__(self, time_bmjd, system: Any = None, *, phase: str = "quadratic",
                  ramp: str = "none", eclipse_shape: str = "physical",
                  shape: VisibleFraction | None = None, period_d: float | None = None,
-                 box_duration_d: float | None = None) -> None:
+                 box_duration_d: float | None = None, event: str = "eclipse",
+                 transit_free: Sequence[str] = (),
+                 transit_priors: Mapping[str, Sequence[float]] | None = None,
+                 limb_darkening_q: Sequence[float] | None = None) -> None:
         if phase not in PHASE_MODELS:
             raise InputError(f"--phase {phase!r}: expected one of {', '.join(PHASE_MODELS)}")
         if ramp not in RAMP_MODELS:
             raise InputError(f"--ramp {ramp!r}: expected one of {', '.join(RAMP_MODELS)}")
+        if event not in EVENTS:
+            raise InputError(f"--event {event!r}: expected one of {', '.join(EVENTS)}")
         if eclipse_shape not in ECLIPSE_SHAPES:
             raise InputError(f"eclipse_shape {eclipse_shape!r}: expected one of "
                              f"{', '.join(ECLIPSE_SHAPES)}")
@@ -161,6 +337,25 @@ class AstroModel:
         self.eclipse_shape = eclipse_shape
         self.t_start_bmjd = float(self.time_bmjd.min())
         self.t_stop_bmjd = float(self.time_bmjd.max())
+        self.event = event
+        self.n_shape = 0          # the transit's free a_rs, b, q1, q2
+        self.priors: dict[str, tuple[float, float]] = {}
+        self.n_priors = 0
+        self.exposure_d = float(np.median(np.diff(np.sort(self.time_bmjd))))
+        if not self.exposure_d > 0:
+            raise InputError("time_bmjd: the frames do not advance in time")
+        self.box_duration_d = None
+        if event == "transit":
+            self.shape = None
+            self.period_d = period_d if period_d is not None else system_period_days(system)
+            self._setup_transit(system, transit_free, transit_priors, limb_darkening_q)
+            self.names: tuple[str, ...] = ("rp_rs", "t_transit_bmjd") + self.transit_free \
+                + _PHASE_NAMES[phase] + _RAMP_NAMES[ramp]
+            self.n_phase = len(_PHASE_NAMES[phase])
+            self.n_ramp = len(_RAMP_NAMES[ramp])
+            return
+        if transit_free or transit_priors:
+            raise InputError("transit_free, transit_priors: apply to event 'transit' only")
         if shape is None:
             if system is None:
                 raise InputError("AstroModel: give a planetary system or a precomputed shape")
@@ -169,10 +364,6 @@ class AstroModel:
         self.period_d = period_d if period_d is not None else system_period_days(system)
         if phase == "sinusoid" and not self.period_d:
             raise InputError("--phase sinusoid: the orbital period is unknown (give period_d)")
-        self.exposure_d = float(np.median(np.diff(np.sort(self.time_bmjd))))
-        if not self.exposure_d > 0:
-            raise InputError("time_bmjd: the frames do not advance in time")
-        self.box_duration_d = None
         if eclipse_shape == "box":
             if box_duration_d is None:
                 box_duration_d = self._measure_box_duration(system, shape)
@@ -187,6 +378,43 @@ class AstroModel:
             + _RAMP_NAMES[ramp]
         self.n_phase = len(_PHASE_NAMES[phase])
         self.n_ramp = len(_RAMP_NAMES[ramp])
+
+    def _setup_transit(self, system: Any, free: Sequence[str],
+                       priors: Mapping[str, Sequence[float]] | None,
+                       q: Sequence[float] | None) -> None:
+        """The transit's fixed values, free parameters, priors and precomputed curve."""
+        if system is None:
+            raise InputError("event 'transit': give the planetary system (its orbit)")
+        if self.phase == "sinusoid" and not self.period_d:
+            raise InputError("--phase sinusoid: the orbital period is unknown (give period_d)")
+        unknown = [n for n in free if n not in TRANSIT_FREE]
+        if unknown or len(set(free)) != len(tuple(free)):
+            raise InputError(f"transit_free {list(free)!r}: expected distinct names among "
+                             f"{', '.join(TRANSIT_FREE)}")
+        self.transit_free = tuple(n for n in TRANSIT_FREE if n in free)
+        self.n_shape = len(self.transit_free)
+        if q is None or len(q) == 0:
+            q = q_from_u(*(float(u) for u in system.ld_quadratic))
+        if len(q) != 2 or not all(0.0 <= float(v) <= 1.0 for v in q):
+            raise InputError(f"limb_darkening_q {list(q)!r}: expected [q1, q2], each in [0, 1]")
+        #: The transit's values when fixed (and the start when free).
+        self.transit_fixed = {"a_rs": float(system.a_rs), "b": float(system.impact_parameter),
+                              "q1": float(q[0]), "q2": float(q[1])}
+        for name, pair in dict(priors or {}).items():
+            if name not in self.transit_free:
+                raise InputError(f"transit_priors.{name}: a prior needs a free parameter "
+                                 f"(transit_free: {', '.join(self.transit_free) or 'none'})")
+            pair = tuple(float(v) for v in pair)
+            if len(pair) != 2 or not (math.isfinite(pair[0]) and pair[1] > 0):
+                raise InputError(f"transit_priors.{name}: expected [mean, sigma > 0]")
+            self.priors[name] = pair
+        self.n_priors = len(self.priors)
+        self.rp_rs_catalogue = float(system.rp_rs)
+        self.ecc = float(system.ecc)
+        self.omega_deg = float(system.omega_deg)
+        self._transit = _TransitCurve(self.time_bmjd, system,
+                                      fixed_orbit=not {"a_rs", "b"} & set(self.transit_free))
+        self._inc_fixed_deg = float(system.inc_deg)
 
     def _measure_box_duration(self, system: Any, shape: VisibleFraction) -> float | None:
         """Half-depth duration of the physical eclipse.
@@ -216,45 +444,73 @@ class AstroModel:
 
         The depth lies in (-0.1, 0.1); the eclipse centre inside the time span
         of the data; an exponential ramp has amplitude in (-0.2, 0.2) and a
-        timescale between one frame and the time span.
+        timescale between one frame and the time span. A transit's Rp/R* lies
+        in [0, 0.5], its mid-time inside the data, a/R* in [1.5, 200], b in
+        [0, 1.5] and q1, q2 in [0, 1].
         """
         lo = np.full(len(self.names), -np.inf)
         hi = np.full(len(self.names), np.inf)
         lo[0], hi[0] = -0.1, 0.1
         lo[1], hi[1] = self.t_start_bmjd, self.t_stop_bmjd
+        if self.event == "transit":
+            for i, name in enumerate(self.names[:2 + self.n_shape]):
+                if name in _TRANSIT_BOUNDS:
+                    lo[i], hi[i] = _TRANSIT_BOUNDS[name]
         if self.ramp == "exponential":
-            k = 2 + self.n_phase
+            k = 2 + self.n_shape + self.n_phase
             lo[k], hi[k] = -0.2, 0.2
             lo[k + 1] = self.exposure_d
             hi[k + 1] = self.t_stop_bmjd - self.t_start_bmjd
         return lo, hi
 
-    def initial(self, *, depth: float = 1e-3, t_ecl_bmjd: float | None = None) -> np.ndarray:
-        """Starting parameters: the given depth and eclipse time, no phase variation or ramp."""
+    def initial(self, *, depth: float | None = None, t_ecl_bmjd: float | None = None,
+                rp_rs: float | None = None) -> np.ndarray:
+        """Starting parameters: no phase variation or ramp, and
+
+        - an eclipse: ``depth`` (default 1e-3) at ``t_ecl_bmjd``;
+        - a transit: ``rp_rs`` (default the catalogue's) at ``t_ecl_bmjd`` (the
+          event's time: mid-transit), free a_rs, b, q1, q2 at their prior
+          means or else their fixed values.
+
+        The time defaults to the middle of the data.
+        """
         if t_ecl_bmjd is None:
             t_ecl_bmjd = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
         if not self.t_start_bmjd <= t_ecl_bmjd <= self.t_stop_bmjd:
-            raise InputError(f"eclipse time {t_ecl_bmjd:.5f} BMJD lies outside the data "
+            raise InputError(f"{self.event} time {t_ecl_bmjd:.5f} BMJD lies outside the data "
                              f"({self.t_start_bmjd:.5f}-{self.t_stop_bmjd:.5f})")
         theta = np.zeros(len(self.names))
-        theta[0] = depth
+        if self.event == "transit":
+            theta[0] = self.rp_rs_catalogue if rp_rs is None else rp_rs
+            for i, name in enumerate(self.transit_free):
+                theta[2 + i] = self.priors.get(name, (self.transit_fixed[name],))[0]
+        else:
+            theta[0] = 1e-3 if depth is None else depth
         theta[1] = t_ecl_bmjd
         if self.ramp == "exponential":
             theta[-1] = min(0.02, 0.25 * (self.t_stop_bmjd - self.t_start_bmjd))
         return theta
 
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
-        """v(t): 1 = planet fully visible, 0 = fully eclipsed."""
+        """v(t): 1 = planet fully visible, 0 = fully eclipsed (1 throughout a transit)."""
+        if self.event == "transit":
+            return np.ones_like(self.time_bmjd)
         if self.eclipse_shape == "box":
             return box_visible_fraction(self.time_bmjd, t_ecl_bmjd, self.box_duration_d,
                                         self.exposure_d)
         return np.asarray(self.shape.visible_fraction(t_ecl_bmjd), dtype=float)
 
     def planet(self, theta) -> np.ndarray:
-        """p(t), the planet-to-star flux ratio; p(t_ecl) = depth for every phase model."""
+        """p(t), the planet-to-star flux ratio; p(t_ecl) = depth for every phase model.
+
+        For a transit, the phase variation about mid-transit (0 there).
+        """
         theta = np.asarray(theta, dtype=float)
         depth, t_ecl = theta[0], theta[1]
-        c = theta[2:2 + self.n_phase]
+        if self.event == "transit":
+            depth = 0.0
+        k = 2 + self.n_shape
+        c = theta[k:k + self.n_phase]
         dt = self.time_bmjd - t_ecl
         if self.phase == "flat":
             return np.full_like(dt, depth)
@@ -269,22 +525,89 @@ class AstroModel:
         """R(t), the multiplicative ramp (1 when ``ramp="none"``)."""
         if self.ramp == "none":
             return np.ones_like(self.time_bmjd)
-        r = np.asarray(theta, dtype=float)[2 + self.n_phase:]
+        r = np.asarray(theta, dtype=float)[2 + self.n_shape + self.n_phase:]
         dt = self.time_bmjd - self.t_start_bmjd
         if self.ramp == "linear":
             return 1.0 + r[0] * dt
         return 1.0 - r[0] * np.exp(-dt / r[1])
 
+    def transit_values(self, theta) -> dict[str, float]:
+        """The transit's a_rs, b, q1, q2 (free from ``theta``, fixed otherwise), inclination
+        and quadratic coefficients u1, u2."""
+        values = dict(self.transit_fixed)
+        for i, name in enumerate(self.transit_free):
+            values[name] = float(theta[2 + i])
+        if {"a_rs", "b"} & set(self.transit_free):
+            values["inc_deg"] = _inclination_deg(values["a_rs"], values["b"], self.ecc,
+                                                 self.omega_deg)
+        else:
+            values["inc_deg"] = self._inc_fixed_deg
+        values["u1"], values["u2"] = u_from_q(values["q1"], values["q2"])
+        return values
+
+    def stellar_flux(self, theta) -> np.ndarray:
+        """T(t), the star's flux in transit (1 outside; a transit only)."""
+        if self.event != "transit":
+            raise InputError("stellar_flux: the model is of an eclipse, not a transit")
+        v = self.transit_values(theta)
+        return self._transit(float(theta[0]), float(theta[1]), v["a_rs"], v["inc_deg"],
+                             v["u1"], v["u2"])
+
     def __call__(self, theta) -> np.ndarray:
-        """A(t) = R(t) [1 + v(t) p(t)], normalised to 1 = the star alone."""
+        """A(t) = R(t) [1 + v(t) p(t)], normalised to 1 = the star alone.
+
+        A transit: A(t) = R(t) [T(t) + p(t)].
+        """
         theta = np.asarray(theta, dtype=float)
         if len(theta) != len(self.names):
             raise ValueError(f"expected {len(self.names)} parameters {self.names}, "
                              f"got {len(theta)}")
-        flux = 1.0 + self.visible_fraction(theta[1]) * self.planet(theta)
+        if self.event == "transit":
+            flux = self.stellar_flux(theta)
+            if self.phase != "flat":
+                flux = flux + self.planet(theta)
+        else:
+            flux = 1.0 + self.visible_fraction(theta[1]) * self.planet(theta)
         if self.ramp != "none":
             flux *= self.ramp_factor(theta)
         return flux
+
+    # ------------------------------------------------------------------ the event's depth
+    def depth_ppm(self, size: float) -> float:
+        """The event's depth (ppm) of its size parameter ``names[0]``.
+
+        An eclipse's size is its depth (``size * 1e6``); a transit's is Rp/R*,
+        whose depth is the geometric ``rp_rs^2 * 1e6`` (the limb-darkened flux
+        drop at mid-transit is deeper).
+        """
+        return float(size * size * 1e6) if self.event == "transit" else float(size * 1e6)
+
+    def depth_error_ppm(self, size: float, error: float) -> float:
+        """An error of the size parameter as an error of the depth (ppm), to first order."""
+        if self.event == "transit":
+            return float(2.0 * abs(size) * error * 1e6)
+        return float(error * 1e6)
+
+    def depth_difference_ppm(self, lower: float, upper: float) -> float:
+        """``depth(upper) - depth(lower)`` in ppm (a posterior interval's side)."""
+        if self.event == "transit":
+            return float((upper * upper - lower * lower) * 1e6)
+        return float((upper - lower) * 1e6)
+
+    # ------------------------------------------------------------------ priors
+    def prior_residuals(self, theta) -> np.ndarray:
+        """``(value - mean) / sigma`` of each Gaussian prior (empty without priors)."""
+        theta = np.asarray(theta, dtype=float)
+        return np.array([(theta[self.names.index(n)] - mu) / sigma
+                         for n, (mu, sigma) in self.priors.items()])
+
+    def log_prior_batch(self, thetas) -> np.ndarray:
+        """``-0.5 sum(prior residuals^2)`` of every row (0 without priors)."""
+        thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
+        out = np.zeros(len(thetas))
+        for n, (mu, sigma) in self.priors.items():
+            out -= 0.5 * ((thetas[:, self.names.index(n)] - mu) / sigma) ** 2
+        return out
 
     def batch(self, thetas) -> np.ndarray:
         """The model of every row of ``thetas`` at once: shape (m, n) (the MCMC's call).
@@ -295,7 +618,7 @@ class AstroModel:
         arrays), the physical eclipse with :func:`numpy.interp`'s formula on
         the shape's table but an O(1) search; the sinusoid and the exponential
         ramp are broadcast with numpy (their ``sin``, ``cos``, ``exp`` stay
-        numpy's).
+        numpy's). A transit is evaluated row by row (:meth:`__call__`).
 
         Parameters
         ----------
@@ -316,6 +639,8 @@ class AstroModel:
         if thetas.ndim != 2 or thetas.shape[1] != len(self.names):
             raise ValueError(f"expected rows of {len(self.names)} parameters {self.names}, "
                              f"got shape {thetas.shape}")
+        if self.event == "transit":   # batman's routines per row: each row is self(theta)
+            return np.stack([self(theta) for theta in thetas])
         fused = self._fused_arguments(thetas)
         if fused is not None:
             return _astro_rows(self.time_bmjd, np.ascontiguousarray(thetas), *fused)
@@ -362,7 +687,7 @@ class AstroModel:
     def _planet_batch(self, thetas: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """:meth:`planet` of every row (``dt = time - t_ecl`` of each row)."""
         depth = thetas[:, :1]
-        c = thetas[:, 2:2 + self.n_phase]
+        c = thetas[:, 2 + self.n_shape:2 + self.n_shape + self.n_phase]
         if self.phase == "flat":
             return np.broadcast_to(depth, dt.shape)
         if self.phase == "linear":
@@ -374,7 +699,7 @@ class AstroModel:
 
     def _ramp_factor_batch(self, thetas: np.ndarray) -> np.ndarray:
         """:meth:`ramp_factor` of every row."""
-        r = thetas[:, 2 + self.n_phase:]
+        r = thetas[:, 2 + self.n_shape + self.n_phase:]
         dt = self.time_bmjd - self.t_start_bmjd
         if self.ramp == "linear":
             return 1.0 + r[:, :1] * dt
@@ -426,9 +751,21 @@ class AstroModel:
         return table
 
     def describe(self) -> dict[str, Any]:
-        """The model's settings, for results and logs."""
-        return {"phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
-                "box_duration_d": self.box_duration_d, "period_d": self.period_d}
+        """The model's settings, for results and logs.
+
+        A transit adds ``event``, its free parameters, their priors, the fixed
+        (or starting) a_rs, b, q1, q2 and the conjunction's offset from
+        mid-transit.
+        """
+        out = {"phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
+               "box_duration_d": self.box_duration_d, "period_d": self.period_d}
+        if self.event == "transit":
+            out.update({"event": "transit", "eclipse_shape": None,
+                        "transit_free": list(self.transit_free),
+                        "transit_priors": {k: list(v) for k, v in self.priors.items()},
+                        "transit_fixed": dict(self.transit_fixed),
+                        "conjunction_minus_mid_transit_s": self._transit.offset_d * 86400.0})
+        return out
 
 
 def _search_table(xp: np.ndarray, fp: np.ndarray) -> tuple:

@@ -195,7 +195,10 @@ class _Problem:
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         theta_a, theta_s = self.split(theta)
-        return self.sys.residuals(self.astro(theta_a), theta_s)
+        resid = self.sys.residuals(self.astro(theta_a), theta_s)
+        if getattr(self.astro, "n_priors", 0):   # Gaussian priors (a transit's q1, q2, ...)
+            resid = np.concatenate([resid, self.astro.prior_residuals(theta_a)])
+        return resid
 
     def jacobian(self, theta: np.ndarray, *, central: bool = False,
                  f0: np.ndarray | None = None) -> np.ndarray:

@@ -125,6 +125,8 @@ class _LogProb:
             astro = self.astro.batch(th[:, :self.n_astro])
             theta_s = th[:, self.n_astro:] if self.has_sys else None
             value = self.sys.log_likelihood_batch(astro, theta_s, noise_scale=self.noise_scale)
+            if getattr(self.astro, "n_priors", 0):   # Gaussian priors (a transit's q1, q2, ...)
+                value = value + self.astro.log_prior_batch(th[:, :self.n_astro])
             out[inside] = np.where(np.isfinite(value), value, -np.inf)
         return out
 

@@ -24,7 +24,7 @@ from astropy.table import Table
 from scipy.optimize import least_squares
 
 from ..astro.catalogue import as_system, get_system
-from ..astro.orbit import eclipse_time_bmjd
+from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..config.reduce import ReduceSection
 from ..config.system import SystemSection
 from ..decorrelate import available_methods, get_method
@@ -85,15 +85,18 @@ def resolve_system(system: Any):
     return as_system(system)
 
 
-def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data") -> float:
-    """The catalogue ephemeris's eclipse nearest the data; InputError if it is outside them."""
+def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
+                           event: str = "eclipse") -> float:
+    """The catalogue ephemeris's eclipse (or transit) nearest the data; InputError if it is
+    outside them."""
     t0, t1 = float(np.min(time_bmjd)), float(np.max(time_bmjd))
-    t_ecl = float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
+    when = transit_time_bmjd if event == "transit" else eclipse_time_bmjd
+    t_ecl = float(when(system, 0.5 * (t0 + t1)))
     if not t0 <= t_ecl <= t1:
         name = getattr(system, "name", "the system")
-        raise InputError(f"{source}: the {name} eclipse nearest the data is at "
+        raise InputError(f"{source}: the {name} {event} nearest the data is at "
                          f"{t_ecl:.5f} BMJD, outside the time span {t0:.5f}-{t1:.5f} "
-                         "(wrong system, or no eclipse in these frames)")
+                         f"(wrong system, or no {event} in these frames)")
     return t_ecl
 
 
@@ -109,7 +112,8 @@ def _epoch_number(table, epoch):
 
 @dataclass
 class PreparedEpoch:
-    """One epoch ready to fit: the method built on the data, and the predicted eclipse."""
+    """One epoch ready to fit: the method built on the data, and the predicted eclipse
+    (``t_ecl_predicted_bmjd``: the predicted mid-transit when ``[reduce] event`` is a transit)."""
 
     table: Any
     systematics: Systematics
@@ -132,7 +136,10 @@ class PreparedEpoch:
         if shape == "auto":
             shape = getattr(self.systematics, "default_eclipse_shape", "physical")
         return AstroModel(self.systematics.data.time_bmjd, self.system,
-                          phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape)
+                          phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape,
+                          event=options.event, transit_free=options.transit_free,
+                          transit_priors=options.transit_priors,
+                          limb_darkening_q=options.limb_darkening_q)
 
 
 def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
@@ -217,7 +224,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
             dropped["settling_aor"] = int(settling.sum())
             data = data.subset(~settling)
     system = resolve_system(system)
-    t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source)
+    t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source, options.event)
     # What the ephemeris predicts (never the truth): a method may use it to find the
     # eclipse's signature in its own decomposition (ICA's eclipse component).
     data = replace(data, meta={**data.meta, "t_ecl_predicted_bmjd": t_pred})
@@ -283,6 +290,10 @@ class EpochResult:
     profile_detail: dict[str, Any] = field(default_factory=dict)
     #: The MCMC's flat posterior samples (``{"names", "samples"}``), or None without MCMC.
     chain: dict[str, np.ndarray] | None = field(default=None, repr=False, compare=False)
+    #: A transit's keys (``rp_rs``, ``rp_rs_err``, ``t_transit_bmjd``, ...; empty for an
+    #: eclipse): its ``depth_*`` fields then hold the transit depth rp_rs^2 and
+    #: ``t_ecl_*`` the mid-transit time, which ``to_dict`` names ``t_transit_*``.
+    event_detail: dict[str, Any] = field(default_factory=dict)
 
     def write_chain(self, path) -> None:
         """Write the posterior samples as ``.npz`` (``names``, ``samples``; depth as a fraction).
@@ -322,7 +333,7 @@ class EpochResult:
         if self.profile_detail:
             out["profile_detail"] = _jsonable(self.profile_detail)
         for name, value in self.params.items():
-            if name not in ("depth", "t_ecl_bmjd"):
+            if name not in ("depth", "t_ecl_bmjd", "rp_rs", "t_transit_bmjd"):
                 out[name] = value
                 out[f"{name}_err"] = self.param_errors[name]
         lo = hi = self.depth_err_ppm
@@ -337,6 +348,10 @@ class EpochResult:
         out.update({f"depth_err_{k}_ppm": v for k, v in self.depth_err_own_ppm.items()})
         out["options"] = dict(self.options)
         out["diagnostics"] = dict(self.diagnostics)
+        if self.event_detail:   # a transit: its times under their own names
+            for key in ("t_ecl_bmjd", "t_ecl_err_d", "t_ecl_predicted_bmjd"):
+                del out[key]
+            out.update(_jsonable(self.event_detail))
         return out
 
     def lightcurve_table(self):
@@ -373,7 +388,8 @@ def _mcmc_noise_scale(systematics: Systematics, fit: FitResult) -> float:
 
 
 def _depth_derivative(astro_model: AstroModel, fit: FitResult) -> tuple[np.ndarray, np.ndarray]:
-    """The best-fitting astrophysical curve and its derivative with respect to the depth."""
+    """The best-fitting astrophysical curve and its derivative with respect to the depth
+    (the event's size parameter ``names[0]``: a transit's Rp/R*)."""
     theta = fit.theta_astro.copy()
     astro = astro_model(theta)
     h = 1e-6
@@ -513,15 +529,21 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
 
     ``reported`` names the depth errors to report, the largest of them (the
     paper profile's team rule); None applies ``options.error_rule``.
+
+    The errors are those of the event's size parameter ``astro_model.names[0]``
+    (the depth, or a transit's Rp/R*) and time ``names[1]``; the ``depth_*``
+    fields hold them as the event's depth (:meth:`AstroModel.depth_ppm`), and
+    a transit's ``event_detail`` has Rp/R* and its error as fitted.
     """
     systematics = prep.systematics
     astro_model = prep.astro_model(options, phase=phase)
-    theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
+    size, when = astro_model.names[:2]   # ("depth", "t_ecl_bmjd") or ("rp_rs", "t_transit_bmjd")
+    theta0 = astro_model.initial(t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
     fit = fit_leastsq(systematics, astro_model, theta0, max_nfev=options.max_nfev,
                       beta_bin_minutes=tuple(options.beta_bin_minutes))
     inflate = max(1.0, fit.beta_red) if np.isfinite(fit.beta_red) else 1.0
-    jac_depth = fit.error("depth")
-    jac_tecl = fit.error("t_ecl_bmjd")
+    jac_depth = fit.error(size)
+    jac_tecl = fit.error(when)
 
     pb_depth = pb_tecl = None
     if (errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True)
@@ -542,20 +564,22 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
                       block_steps=options.mcmc_block_steps, tau_factor=options.mcmc_tau_factor,
                       noise_scale=_mcmc_noise_scale(systematics, fit))
-        i = fit.names.index("depth")
+        i = fit.names.index(size)
         mcmc_info = {"move": mc.move, "walkers": mc.n_walkers, "steps": mc.n_steps,
                      "burn_in": mc.burn_in, "tau_max": float(np.max(mc.tau)),
                      "n_over_tau": float(getattr(mc, "n_over_tau", np.nan)),
                      "acceptance": mc.acceptance, "converged": mc.converged,
                      "noise_scale": _mcmc_noise_scale(systematics, fit),
-                     "depth_median_ppm": float(mc.median[i] * 1e6),
-                     "depth_err_lo_ppm": float((mc.median[i] - mc.p16[i]) * 1e6),
-                     "depth_err_hi_ppm": float((mc.p84[i] - mc.median[i]) * 1e6)}
+                     "depth_median_ppm": astro_model.depth_ppm(mc.median[i]),
+                     "depth_err_lo_ppm": astro_model.depth_difference_ppm(mc.p16[i],
+                                                                          mc.median[i]),
+                     "depth_err_hi_ppm": astro_model.depth_difference_ppm(mc.median[i],
+                                                                          mc.p84[i])}
 
     astro_fit, dastro = _depth_derivative(astro_model, fit)
     separation_var = _extra_depth_variance(systematics, astro_fit, dastro)
     shared = {"jacobian_beta": jac_depth * inflate, "prayer_bead": pb_depth,
-              "mcmc": mc.error("depth") if mc is not None else None}
+              "mcmc": mc.error(size) if mc is not None else None}
     own = {name: float(v) for name, v in systematics.depth_error_estimates(
         astro_fit, dastro, fit.theta[fit.n_astro:] if len(systematics.param_names) else None
     ).items()} if errors else {}
@@ -573,7 +597,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         depth_err = float(np.hypot(depth_err, np.sqrt(separation_var)))
         err_method += "+separation"
     t_err, _ = _largest({"jacobian_beta": jac_tecl * inflate, "prayer_bead": pb_tecl,
-                         "mcmc": mc.error("t_ecl_bmjd") if mc is not None else None})
+                         "mcmc": mc.error(when) if mc is not None else None})
     theta_report = mc.median if mc is not None else fit.theta
     astro = astro_model(theta_report[:fit.n_astro])
     theta_s = theta_report[fit.n_astro:] if len(systematics.param_names) else None
@@ -586,15 +610,26 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     if mc is not None:
         param_err = {n: max(param_err[n], mc.error(n)) for n in fit.names}
     converged = bool(fit.success and (mc.converged if mc is not None else True))
+    value = params[size]
+
+    def ppm(err):   # an error of the size parameter as a depth error (ppm)
+        return astro_model.depth_error_ppm(value, err)
+
+    detail = {} if astro_model.event == "eclipse" else {
+        "event": astro_model.event, "rp_rs": value, "rp_rs_err": depth_err,
+        "transit_depth_ppm": astro_model.depth_ppm(value), "transit_depth_err_ppm": ppm(depth_err),
+        "transit_depth_definition": "rp_rs^2 (geometric)", "t_transit_bmjd": params[when],
+        "t_transit_err_d": t_err, "t_transit_predicted_bmjd": prep.t_ecl_predicted_bmjd,
+        "transit_model": astro_model.describe()}
     return EpochResult(
         method=method, epoch=prep.epoch,
-        depth_ppm=params["depth"] * 1e6, depth_err_ppm=depth_err * 1e6,
-        depth_err_method=err_method, depth_leastsq_ppm=fit.value("depth") * 1e6,
-        depth_err_jacobian_ppm=jac_depth * 1e6,
-        depth_err_prayer_bead_ppm=None if pb_depth is None else pb_depth * 1e6,
-        depth_err_mcmc_ppm=None if mc is None else mc.error("depth") * 1e6,
-        depth_err_separation_ppm=float(np.sqrt(separation_var) * 1e6),
-        t_ecl_bmjd=params["t_ecl_bmjd"], t_ecl_err_d=t_err,
+        depth_ppm=astro_model.depth_ppm(value), depth_err_ppm=ppm(depth_err),
+        depth_err_method=err_method, depth_leastsq_ppm=astro_model.depth_ppm(fit.value(size)),
+        depth_err_jacobian_ppm=ppm(jac_depth),
+        depth_err_prayer_bead_ppm=None if pb_depth is None else ppm(pb_depth),
+        depth_err_mcmc_ppm=None if mc is None else ppm(mc.error(size)),
+        depth_err_separation_ppm=ppm(float(np.sqrt(separation_var))),
+        t_ecl_bmjd=params[when], t_ecl_err_d=t_err,
         t_ecl_predicted_bmjd=prep.t_ecl_predicted_bmjd,
         bic=fit.bic, aic=fit.aic, k=fit.k, log_likelihood=fit.log_likelihood,
         chi2_red=fit.chi2_red, rms_ppm=fit.rms_ppm, beta_red=fit.beta_red,
@@ -605,9 +640,10 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
         mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
         options=systematics.options.to_dict(), diagnostics=_jsonable(systematics.diagnostics()),
-        depth_err_own_ppm={k: v * 1e6 for k, v in own.items()}, lightcurve=lightcurve,
+        depth_err_own_ppm={k: ppm(v) for k, v in own.items()}, lightcurve=lightcurve,
         chain=None if mc is None else {"names": np.asarray(mc.names),
-                                       "samples": np.asarray(mc.samples)})
+                                       "samples": np.asarray(mc.samples)},
+        event_detail=detail)
 
 
 def _jsonable(obj: Any) -> Any:
@@ -788,6 +824,9 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     tables = list(tables)
     if not tables:
         raise InputError("reduce_joint: no photometry tables given")
+    if options.event != "eclipse":
+        raise InputError(f"reduce_joint: event '{options.event}': joint fits share an eclipse "
+                         "depth; fit each transit alone")
     epochs = list(epochs) if epochs is not None else [None] * len(tables)
     if len(epochs) != len(tables):
         raise InputError("reduce_joint: give one epoch number per table")
