@@ -63,6 +63,12 @@ class ObservationSection:
     (:class:`~eclipsebench.detector.constants.ChannelConstants`). A key given
     with a named readout must agree with it (``"custom"`` takes any FN, WT and
     tick on the subarray, with the 2 s subarray's values for those unset).
+
+    ``event`` (``"eclipse"`` or ``"transit"``) is what each epoch observes:
+    with ``"transit"`` an epoch whose window holds no transit is moved by the
+    time from its eclipse to the transit before it, so the transit sits where
+    the eclipse sat (the default start times are the 2015 challenge's eclipse
+    windows); a window that already holds a transit is kept.
     """
 
     channel: int = 2
@@ -81,6 +87,7 @@ class ObservationSection:
     x0_px: float | None = None
     y0_px: float | None = None
     peakup_scatter_px: float = 0.04
+    event: Literal["eclipse", "transit"] = "eclipse"
 
     def __post_init__(self):
         if self.channel not in (1, 2):

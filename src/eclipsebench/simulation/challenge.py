@@ -39,7 +39,7 @@ from astropy.table import Table
 
 from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
-from ..astro.orbit import eclipse_time_bmjd
+from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..astro.thermal import DEFAULT_WAVELENGTH_UM
 from ..config import Config, dump_toml, to_mapping
 from ..detector.constants import (
@@ -317,7 +317,13 @@ def _load_aor_truth(out_dir: Path, aor: AORPlan) -> dict[str, np.ndarray]:
 
 def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray], lc,
                     seed: int) -> dict:
-    """One ``truth.ecsv`` row: AORKEYs, times, depth, realised centroid statistics, pointing."""
+    """One ``truth.ecsv`` row: AORKEYs, times, depth, realised centroid statistics, pointing.
+
+    With ``observation.event = "transit"`` the row adds ``rp_rs`` (the
+    planet's), ``transit_depth_ppm`` (``rp_rs^2 * 1e6``, the geometric depth
+    that ``reduce --event transit`` reports) and ``t_transit_bmjd`` (the
+    observed mid-transit in the window, NaN if none).
+    """
     x, y = frames["x_true"], frames["y_true"]
     t0 = plan.start_bmjd
     t1 = float(frames["time_bmjd"].max())
@@ -330,6 +336,11 @@ def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray],
            "y_mean": float(y.mean()), "y_sd": float(y.std()),
            "xy_cov": float(np.mean((x - x.mean()) * (y - y.mean()))),
            "n_frames": int(x.size)}
+    if cfg.observation.event == "transit":
+        transits = lc.transit_times_bmjd(t0, t1)
+        rp_rs = float(lc.system.rp_rs)
+        row.update({"rp_rs": rp_rs, "transit_depth_ppm": rp_rs * rp_rs * 1e6,
+                    "t_transit_bmjd": float(transits[0]) if transits else float("nan")})
     for a in plan.aors:
         row[f"x0_{a.label.lower()}_px"] = a.x0_px
         row[f"y0_{a.label.lower()}_px"] = a.y0_px
@@ -432,20 +443,24 @@ def challenge_plans(cfg: Config) -> list[EpochPlan]:
     the XO-3b challenge's start times, say) is planned, since a simulation
     without an eclipse has its uses (noise and pointing studies), but a warning
     names it and ``observation.start_times_jd``; its truth row has no eclipse
-    time (NaN).
+    time (NaN). With ``observation.event = "transit"`` the windows are moved to
+    the transits (:func:`.plan.transit_window_starts_bmjd`) and the warning is
+    about an epoch without a transit.
     """
     system = system_for(cfg.system)
+    event = cfg.observation.event
     plans = plan_challenge(cfg.observation, cfg.challenge.epochs, system.period_days,
-                           cfg.challenge.seed)
+                           cfg.challenge.seed, system=system)
+    when = transit_time_bmjd if event == "transit" else eclipse_time_bmjd
     for plan in plans:
         t0 = plan.start_bmjd
         t1 = t0 + plan.duration_s / SECONDS_PER_DAY
-        t_ecl = float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
-        if not t0 <= t_ecl <= t1:
-            log.warning("epoch %d (%.4f-%.4f BMJD) holds no eclipse of %s (the nearest is at "
+        t_event = float(when(system, 0.5 * (t0 + t1)))
+        if not t0 <= t_event <= t1:
+            log.warning("epoch %d (%.4f-%.4f BMJD) holds no %s of %s (the nearest is at "
                         "%.4f BMJD): set observation.start_times_jd (JD - 2455000) a few hours "
-                        "before its eclipses to simulate one", plan.epoch, t0, t1, system.name,
-                        t_ecl)
+                        "before its %ss to simulate one", plan.epoch, t0, t1, event, system.name,
+                        t_event, event)
     return plans
 
 

@@ -2,7 +2,8 @@
 
 An epoch (Section 2.2 of Ingalls et al. 2016) is a short "Pre" AOR that lets
 the pointing settle, a gap (the next PCRS peak-up), and the long "Main" AOR
-that contains the eclipse. PCRS peak-up places the star of *each* AOR at the
+that contains the eclipse (or, with ``observation.event = "transit"``, the
+transit: :func:`transit_window_starts_bmjd`). PCRS peak-up places the star of *each* AOR at the
 sweet spot ``(x0, y0)`` plus a Gaussian scatter. Times inside the simulator
 are seconds since the start of the epoch's first exposure (all pointing terms
 are phased from there, as in IRACSIM); files carry BMJD_TDB.
@@ -15,12 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..config.simulation import ObservationSection
 from ..errors import ConfigError
 from ..seeding import rng
 
 __all__ = ["AORPlan", "EpochPlan", "JD_OFFSET_BMJD", "epoch_start_times_bmjd", "plan_epoch",
-           "plan_challenge", "SECONDS_PER_DAY"]
+           "plan_challenge", "SECONDS_PER_DAY", "transit_window_starts_bmjd"]
 
 SECONDS_PER_DAY = 86400.0
 # The paper's tables give JD - 2455000; BMJD = JD - 2400000.5.
@@ -183,8 +185,58 @@ def plan_epoch(obs: ObservationSection, epoch: int, start_bmjd: float, seed: int
     return EpochPlan(epoch=epoch, start_bmjd=float(start_bmjd), aors=tuple(aors))
 
 
+def transit_window_starts_bmjd(starts_bmjd, duration_d: float, system) -> np.ndarray:
+    """Window starts moved from each window's eclipse to the transit before it.
+
+    A window ``[start, start + duration_d]`` that holds a mid-transit is kept.
+    Any other is moved by ``t_tr - t_ecl``: ``t_ecl`` the eclipse nearest the
+    window's middle, ``t_tr`` the transit before it (an eccentric orbit's
+    transit is not half a period from its eclipse), so the transit takes the
+    place in the window that the eclipse had.
+
+    Parameters
+    ----------
+    starts_bmjd : array_like
+        Window starts (BMJD_TDB), e.g. :func:`epoch_start_times_bmjd`.
+    duration_d : float
+        Window length (days).
+    system : PlanetSystem
+        The planet (its ephemeris and orbit).
+
+    Examples
+    --------
+    >>> from eclipsebench.astro.catalogue import get_system
+    >>> from eclipsebench.astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+    >>> xo3 = get_system("XO-3b (2015 challenge)")
+    >>> t_ecl = eclipse_time_bmjd(xo3, 57234.5)
+    >>> start = transit_window_starts_bmjd([t_ecl - 0.14], 0.37, xo3)[0]
+    >>> round(float(transit_time_bmjd(xo3, start) - start), 6)
+    0.14
+    """
+    out = []
+    for start in np.asarray(starts_bmjd, dtype=float):
+        mid = start + 0.5 * duration_d
+        t_tr = float(transit_time_bmjd(system, mid))
+        if start <= t_tr <= start + duration_d:
+            out.append(float(start))
+            continue
+        t_ecl = float(eclipse_time_bmjd(system, mid))
+        t_before = float(transit_time_bmjd(system, t_ecl - 0.5 * system.period_days))
+        out.append(float(start + (t_before - t_ecl)))
+    return np.array(out)
+
+
 def plan_challenge(obs: ObservationSection, n_epochs: int, period_days: float,
-                   seed: int) -> list[EpochPlan]:
-    """Plans of epochs ``1..n_epochs`` (see :func:`epoch_start_times_bmjd`)."""
+                   seed: int, *, system=None) -> list[EpochPlan]:
+    """Plans of epochs ``1..n_epochs`` (see :func:`epoch_start_times_bmjd`).
+
+    With ``obs.event = "transit"`` the windows are moved to the transits
+    (:func:`transit_window_starts_bmjd`; ``system`` is then required).
+    """
     starts = epoch_start_times_bmjd(obs.start_times_jd, n_epochs, period_days)
+    if obs.event == "transit":
+        if system is None:
+            raise ConfigError("observation.event", "a transit plan needs the planet's orbit")
+        duration_d = plan_epoch(obs, 1, 0.0, seed).duration_s / SECONDS_PER_DAY
+        starts = transit_window_starts_bmjd(starts, duration_d, system)
     return [plan_epoch(obs, e + 1, float(starts[e]), seed) for e in range(n_epochs)]
