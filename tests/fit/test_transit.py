@@ -246,3 +246,23 @@ def test_a_simulated_transit_epoch_round_trips(tmp_path):
     assert truth["rp_rs"] == SYSTEM.rp_rs and math.isnan(truth["t_ecl_bmjd"])
     assert abs(res["rp_rs"] - truth["rp_rs"]) < 4 * res["rp_rs_err"], res["rp_rs"]
     assert abs(res["t_transit_bmjd"] - truth["t_transit_bmjd"]) < 4 * res["t_transit_err_d"]
+
+
+def test_method_hooks_see_the_derivative_per_unit_depth():
+    """PLD's time-averaging error counts the transit's frames (mid-ingress to mid-egress)
+    from the derivative per unit of transit depth, which is negative in transit."""
+    from eclipsebench.decorrelate.pld import eclipse_frames
+    m = AstroModel(TIME, SYSTEM, phase="flat", event="transit")
+    theta = m.initial(t_ecl_bmjd=T_TR)
+    h = 1e-6
+    up = theta.copy()
+    up[0] += h
+    dastro = (m(up) - m(theta)) / h * m.size_per_depth(theta[0])
+    assert dastro.max() <= 0.0 and m.size_per_depth(0.1) == pytest.approx(5.0)
+    # the 2015 challenge's XO-3b transit lasts 2.98 h first to last contact
+    n = eclipse_frames(dastro)
+    assert 2.3 < n * 4.0 / 3600.0 < 2.98
+    # an eclipse's (the visible fraction) is counted as before
+    ecl = np.ones(100)
+    ecl[40:60] = 0.0
+    assert eclipse_frames(ecl) == 20

@@ -343,10 +343,14 @@ def eclipse_frames(dastro_ddepth: np.ndarray) -> int:
 
     ``dastro_ddepth`` is the visible fraction of the planet (times the phase
     curve and ramp) at each frame; the count is the eclipse's length from
-    mid-ingress to mid-egress, in frames.
+    mid-ingress to mid-egress, in frames. A transit's derivative (negative:
+    the planet takes the star's light) counts the frames where it is beyond
+    half its extreme, mid-ingress to mid-egress of the transit.
     """
     d = np.asarray(dastro_ddepth, float)
     top = np.max(np.abs(d)) if d.size else 0.0
+    if top > 0 and -d.min() == top:   # a transit
+        return int(np.count_nonzero(np.abs(d) > 0.5 * top))
     return int(np.count_nonzero(np.abs(d) < 0.5 * top)) if top > 0 else 0
 
 

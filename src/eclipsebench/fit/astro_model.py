@@ -588,6 +588,12 @@ class AstroModel:
             return float(2.0 * abs(size) * error * 1e6)
         return float(error * 1e6)
 
+    def size_per_depth(self, size: float) -> float:
+        """d size / d depth at ``size``: 1 for an eclipse, ``1 / (2 rp_rs)`` for a transit."""
+        if self.event == "transit":
+            return 1.0 / (2.0 * max(abs(float(size)), 1e-12))
+        return 1.0
+
     def depth_difference_ppm(self, lower: float, upper: float) -> float:
         """``depth(upper) - depth(lower)`` in ppm (a posterior interval's side)."""
         if self.event == "transit":

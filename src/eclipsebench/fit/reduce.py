@@ -577,10 +577,14 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
                                                                           mc.p84[i])}
 
     astro_fit, dastro = _depth_derivative(astro_model, fit)
-    separation_var = _extra_depth_variance(systematics, astro_fit, dastro)
+    # the methods' hooks see the derivative per unit of the event's depth and give depth
+    # errors; `scale` (d size / d depth: 1 for an eclipse) turns them into errors of the size
+    scale = astro_model.size_per_depth(fit.theta[0])
+    dastro = dastro * scale
+    separation_var = _extra_depth_variance(systematics, astro_fit, dastro) * scale ** 2
     shared = {"jacobian_beta": jac_depth * inflate, "prayer_bead": pb_depth,
               "mcmc": mc.error(size) if mc is not None else None}
-    own = {name: float(v) for name, v in systematics.depth_error_estimates(
+    own = {name: float(v) * scale for name, v in systematics.depth_error_estimates(
         astro_fit, dastro, fit.theta[fit.n_astro:] if len(systematics.param_names) else None
     ).items()} if errors else {}
     depth_err, err_method = _largest(shared)
