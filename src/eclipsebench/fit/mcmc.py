@@ -167,6 +167,33 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
         ``scale_start`` per parameter; ignored unless positive definite.
         Walkers that start across a narrow correlated ridge (many collinear
         linear parameters) take long to reach it.
+
+    Returns
+    -------
+    McmcResult
+
+    Examples
+    --------
+    >>> from eclipsebench.decorrelate import get_method
+    >>> from eclipsebench.decorrelate.base import EpochData
+    >>> from eclipsebench.fit.astro_model import AstroModel
+    >>> class Box:   # a 0.1-day eclipse at t_ecl
+    ...     def __init__(self, t):
+    ...         self.t = t
+    ...     def visible_fraction(self, t_ecl):
+    ...         return (np.abs(self.t - t_ecl) > 0.05).astype(float)
+    >>> g = np.random.default_rng(1)
+    >>> t = np.linspace(0.0, 0.3, 300)
+    >>> x = 15.0 + 0.05 * np.sin(40 * t)
+    >>> flux = 1e5 * (1 + 0.1 * (x - 15)) * (1 + 0.002 * Box(t).visible_fraction(0.15))
+    >>> data = EpochData(time_bmjd=t, flux=flux + 100 * g.standard_normal(300),
+    ...                  flux_err=np.full(300, 100.0), x=x, y=np.full(300, 15.0))
+    >>> method = get_method("poly2")(data, bin_frames=1)
+    >>> astro = AstroModel(t, None, phase="flat", shape=Box(t))
+    >>> mc = run_mcmc(method, astro, [0.002, 0.15], [1e-4, 1e-3], names=astro.names,
+    ...               rng=np.random.default_rng(2), n_walkers=16, max_steps=2000, move="de")
+    >>> mc.converged, mc.n_over_tau > 50, bool(abs(mc.median[0] - 0.002) < 3 * mc.error("depth"))
+    (True, True, True)
     """
     theta_start = np.asarray(theta_start, dtype=float)
     ndim = len(theta_start)
