@@ -23,7 +23,7 @@ def small_table(xo3_epoch):
 def test_mcmc_agrees_with_least_squares(polygain, small_table):
     res = reduce_epoch(small_table, polygain.name, options=MCMC, seed=7)
     mc = res.mcmc
-    assert mc["move"] == "stretch" and mc["converged"]
+    assert mc["move"] == "de" and mc["converged"]   # the default move
     assert mc["steps"] > 50 * mc["tau_max"]
     assert 0.15 < mc["acceptance"] < 0.8
     # posterior median within a fifth of a sigma of the maximum likelihood
@@ -44,16 +44,16 @@ def test_same_seed_same_chain_different_seed_different(polygain, small_table):
     assert not a.mcmc["converged"]  # 100 steps cannot be 50 tau
 
 
-def test_de_move_when_the_method_prefers_it(monkeypatch, polygain, small_table):
+def test_stretch_move_when_the_method_prefers_it(monkeypatch, polygain, small_table):
     class DePoly(polygain):
-        name: ClassVar[str] = "test-polygain-de"
-        preferred_move: ClassVar[str] = "de"
+        name: ClassVar[str] = "test-polygain-stretch"
+        preferred_move: ClassVar[str] = "stretch"
 
     monkeypatch.setitem(base._REGISTRY, DePoly.name, DePoly)
     opts = ReduceSection(phase="flat", sampler="mcmc", mcmc_walkers=16, mcmc_steps=2000,
                          mcmc_block_steps=500, prayer_bead_shifts=0)
     res = reduce_epoch(small_table, DePoly.name, options=opts, seed=1)
-    assert res.mcmc["move"] == "de"
+    assert res.mcmc["move"] == "stretch"
     assert res.depth_err_mcmc_ppm == pytest.approx(res.depth_err_jacobian_ppm, rel=0.25)
     assert np.isfinite(res.mcmc["tau_max"])
 

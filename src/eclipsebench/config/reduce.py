@@ -92,7 +92,7 @@ class ReduceSection:
     eclipse_shape: Literal["auto", "physical", "box"] = "auto"
     sampler: Literal["leastsq", "mcmc"] = "leastsq"
     mcmc_walkers: int = 32
-    mcmc_steps: int = 2000
+    mcmc_steps: int = 5000
     mcmc_block_steps: int = 250
     mcmc_tau_factor: float = 50.0
     prayer_bead_shifts: int = 16

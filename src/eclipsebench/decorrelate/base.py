@@ -310,10 +310,12 @@ class Systematics(ABC):
     #: Names of the method's own nonlinear parameters, fitted with the astrophysical ones.
     param_names: ClassVar[tuple[str, ...]] = ()
     description: ClassVar[str] = ""
-    #: The emcee move the fitter uses for this method's MCMC: "stretch" (the
-    #: affine-invariant default) or "de" (differential evolution, the DE-MC of
-    #: the BLISS team; ter Braak 2006).
-    preferred_move: ClassVar[str] = "stretch"
+    #: The emcee move the fitter uses for this method's MCMC: "de" (differential
+    #: evolution, ter Braak 2006; the DE-MC of the BLISS team, and the move that
+    #: mixes fastest here: integrated autocorrelation times of 11-14 steps against
+    #: 38-55 for the stretch move, BENCHMARKS.md "mcmc") or "stretch" (emcee's
+    #: affine-invariant move, Goodman & Weare 2010). Both sample the same posterior.
+    preferred_move: ClassVar[str] = "de"
     #: The eclipse shape the fitter uses when ``[reduce] eclipse_shape = "auto"``:
     #: "physical" (the orbit's) or "box" (the faithful default of SP(K2)).
     default_eclipse_shape: ClassVar[str] = "physical"

@@ -563,11 +563,11 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         mc = run_mcmc(systematics, astro_model, fit.theta, fit.errors, names=fit.names,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
                       block_steps=options.mcmc_block_steps, tau_factor=options.mcmc_tau_factor,
-                      noise_scale=_mcmc_noise_scale(systematics, fit))
+                      noise_scale=_mcmc_noise_scale(systematics, fit), cov_start=fit.cov)
         i = fit.names.index(size)
         mcmc_info = {"move": mc.move, "walkers": mc.n_walkers, "steps": mc.n_steps,
                      "burn_in": mc.burn_in, "tau_max": float(np.max(mc.tau)),
-                     "n_over_tau": float(getattr(mc, "n_over_tau", np.nan)),
+                     "n_over_tau": float(mc.n_over_tau),
                      "acceptance": mc.acceptance, "converged": mc.converged,
                      "noise_scale": _mcmc_noise_scale(systematics, fit),
                      "depth_median_ppm": astro_model.depth_ppm(mc.median[i]),
