@@ -61,11 +61,13 @@ class ReduceSection:
         sampler, options and reported error (``eclipsebench.fit.profiles``;
         ``docs/methods.md``, "The paper profile"), which override ``phase``,
         ``ramp``, ``eclipse_shape``, ``sampler`` and ``error_rule``.
-    error_rule : {"largest", "method"}
-        The reported depth error: the largest of the Jacobian error times
-        ``max(1, beta_red)``, the prayer bead and the MCMC width, for every
-        method alike; or the estimate each method's authors reported (its
-        ``reported_error``, e.g. PLD's time-averaging extrapolation).
+    error_rule : {"posterior", "largest", "method"}
+        The reported depth error, for every method alike: ``posterior`` (the
+        default) the MCMC posterior's 16-84 % half-width when the sampler ran,
+        else the larger of the Jacobian error times ``max(1, beta_red)`` and
+        the prayer bead; ``largest`` the largest of those three; ``method``
+        the estimate each method's authors reported (its ``reported_error``,
+        e.g. PLD's time-averaging extrapolation).
     options : dict
         Per-method options, ``[reduce.options.<method>]`` tables (the keys of
         each method's ``Options``; ``docs/methods.md``). Checked against the
@@ -103,7 +105,7 @@ class ReduceSection:
     stamp: Literal["stamp3", "stamp5"] = "stamp3"
     max_nfev: int = 200
     settling_aor: Literal["drop", "keep"] = "drop"
-    error_rule: Literal["largest", "method"] = "largest"
+    error_rule: Literal["posterior", "largest", "method"] = "posterior"
     profile: Literal["controlled", "paper"] = "controlled"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
     event: Literal["eclipse", "transit"] = "eclipse"

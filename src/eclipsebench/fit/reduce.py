@@ -591,6 +591,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     wanted = systematics.reported_error
     if reported is None and options.error_rule == "method" and wanted != "largest":
         reported = (wanted,)
+    if reported is None and options.error_rule == "posterior" and mc is not None:
+        reported = ("mcmc",)
     if errors and reported is not None:
         every = {"jacobian": jac_depth, **shared, **own}
         depth_err, err_method = _largest({k: every.get(k) for k in reported})
@@ -602,6 +604,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         err_method += "+separation"
     t_err, _ = _largest({"jacobian_beta": jac_tecl * inflate, "prayer_bead": pb_tecl,
                          "mcmc": mc.error(when) if mc is not None else None})
+    if mc is not None and err_method.split("+")[0] == "mcmc":
+        t_err = mc.error(when)
     theta_report = mc.median if mc is not None else fit.theta
     astro = astro_model(theta_report[:fit.n_astro])
     theta_s = theta_report[fit.n_astro:] if len(systematics.param_names) else None
