@@ -162,3 +162,20 @@ def test_with_flux_reuses_grid(epoch_sys):
     np.testing.assert_allclose(other.predict(epoch_sys.astro[keep]),
                                1.01 * model.predict(epoch_sys.astro[keep]))
     np.testing.assert_array_equal(model.data.flux, epoch_sys.data.flux[keep])
+
+
+def test_centroids_that_barely_move_are_refused_before_allocating():
+    """A static pointing (spacing ~1e-13 px) asked for 1e24 knots: MemoryError before."""
+    import numpy as np
+    import pytest
+
+    from eclipsebench.decorrelate import get_method
+    from eclipsebench.decorrelate.base import EpochData
+    from eclipsebench.errors import InputError
+
+    n = 2000
+    i = np.arange(n)
+    d = EpochData(time_bmjd=i / 1440, flux=np.full(n, 1e5), flux_err=np.full(n, 300.0),
+                  x=15.0 + 1e-13 * (i % 3), y=15.0 + 1e-13 * (i % 2))
+    with pytest.raises(InputError, match="knots for 2000 frames"):
+        get_method("bliss")(d)

@@ -132,12 +132,21 @@ def poet_axis_knots(v: np.ndarray, step_px: float) -> np.ndarray:
     >>> poet_axis_knots(np.array([15.02, 15.08]), 0.05)
     array([14.95, 15.  , 15.05, 15.1 , 15.15])
     """
+    centre, lo, hi, n = _axis_extent(v, step_px)
+    return centre + np.linspace(lo, hi, n)
+
+
+#: A grid with more knots than this and than frames is refused before it is allocated.
+_MAX_KNOTS = 1_000_000
+
+
+def _axis_extent(v: np.ndarray, step_px: float) -> tuple[float, float, float, int]:
+    """Centre, first and last knot offsets and knot count of :func:`poet_axis_knots`."""
     v = np.asarray(v, float)
     centre = float(np.round(np.median(v)))
     lo = np.floor(_EDGE_PER_PX * (v.min() - centre)) / _EDGE_PER_PX - step_px
     hi = np.ceil(_EDGE_PER_PX * (v.max() - centre)) / _EDGE_PER_PX + step_px
-    n = int((hi - lo) / step_px + 1)
-    return centre + np.linspace(lo, hi, max(n, 2))
+    return centre, lo, hi, max(int((hi - lo) / step_px + 1), 2)
 
 
 def bliss_setup(x: np.ndarray, y: np.ndarray, *, dx_px: float, dy_px: float,
@@ -169,6 +178,11 @@ def bliss_setup(x: np.ndarray, y: np.ndarray, *, dx_px: float, dy_px: float,
     y = np.asarray(y, float)
     if not (dx_px > 0 and dy_px > 0 and np.isfinite(dx_px) and np.isfinite(dy_px)):
         raise InputError(f"option knot_spacing_px: expected positive spacings, got ({dx_px}, {dy_px})")
+    n_grid = _axis_extent(x, dx_px)[3] * _axis_extent(y, dy_px)[3]
+    if n_grid > max(len(x), _MAX_KNOTS):  # e.g. centroids that do not move: spacing ~ 1e-13 px
+        raise InputError(f"method 'bliss': knot spacing ({dx_px:.3g}, {dy_px:.3g}) px gives "
+                         f"{n_grid:.3g} knots for {len(x)} frames (centroids that barely move); "
+                         "give a coarser knot_spacing_px")
     xk = poet_axis_knots(x, dx_px)
     yk = poet_axis_knots(y, dy_px)
     nx, ny = len(xk), len(yk)
