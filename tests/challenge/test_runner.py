@@ -158,6 +158,11 @@ def test_cli_bad_profiles_exit_2(tmp_path, capsys):
     assert not any(tmp_path.iterdir())
 
 
+def test_a_transit_run_is_refused_before_any_work(tmp_path, capsys):
+    assert main(["run", "--out", str(tmp_path / "r"), "--set", 'observation.event="transit"']) == 2
+    assert "observation.event" in capsys.readouterr().err and not (tmp_path / "r").exists()
+
+
 def test_a_method_refusing_an_epoch_is_recorded_not_fatal(tiny_run, tmp_path, monkeypatch):
     cfg, root, _, _ = tiny_run
     for name in ("simulation", "photometry", "results", "results_paper"):

@@ -94,6 +94,12 @@ def check_run_config(cfg: Config) -> None:
     if cfg.challenge.epochs < MIN_EPOCHS:
         raise ConfigError("challenge.epochs", f"the ensemble statistics of a run need at least "
                                               f"{MIN_EPOCHS} epochs, got {cfg.challenge.epochs}")
+    for key, event in (("observation.event", cfg.observation.event),
+                       ("reduce.event", cfg.reduce.event)):
+        if event != "eclipse":
+            raise ConfigError(key, "a run scores eclipse depths against the truth; simulate "
+                                   "transits with `simulate` and fit them with `reduce --event "
+                                   "transit`")
 
 
 def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
