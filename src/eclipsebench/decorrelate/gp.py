@@ -488,17 +488,22 @@ class GaussianProcess(Systematics):
         if self.sample_kernel and theta is not None and len(theta) == 5:
             offset = np.asarray(theta, dtype=float).copy()
         offset[4] += np.log(noise_scale)
-        if not np.any(offset):
-            factor = (self._cf, self._signal, self._gls_w, self._half_logdet)
-        elif self._offset_cache is not None and np.array_equal(self._offset_cache[0], offset):
-            factor = self._offset_cache[1]
-        else:
-            factor = self._factor(self.hyper + offset)
-            self._offset_cache = (offset, factor)
+        factor = self._factor_at(offset)
         w = self._whitened(astro, factor)
         n = len(w)
         return float(-0.5 * w.dot(w) - factor[3] - n * np.log(self.norm)
                      - 0.5 * n * np.log(2.0 * np.pi))
+
+    def _factor_at(self, offset: np.ndarray):
+        """The covariance factorisation at ``hyper + offset`` (the fitted one at zero offset;
+        the last other one is cached)."""
+        if not np.any(offset):
+            return (self._cf, self._signal, self._gls_w, self._half_logdet)
+        if self._offset_cache is not None and np.array_equal(self._offset_cache[0], offset):
+            return self._offset_cache[1]
+        factor = self._factor(self.hyper + offset)
+        self._offset_cache = (offset, factor)
+        return factor
 
     def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
                              noise_scale: float = 1.0) -> np.ndarray:
@@ -517,13 +522,7 @@ class GaussianProcess(Systematics):
             return super().log_likelihood_batch(astro, theta, noise_scale)
         offset = np.zeros(5)
         offset[4] += np.log(noise_scale)
-        if not np.any(offset):
-            factor = (self._cf, self._signal, self._gls_w, self._half_logdet)
-        elif self._offset_cache is not None and np.array_equal(self._offset_cache[0], offset):
-            factor = self._offset_cache[1]
-        else:
-            factor = self._factor(self.hyper + offset)
-            self._offset_cache = (offset, factor)
+        factor = self._factor_at(offset)
         cf, _, gls_w, half_logdet = factor
         yrel = self.flux_rel / astro
         r = yrel - (yrel @ gls_w)[:, None]

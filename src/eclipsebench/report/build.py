@@ -20,7 +20,7 @@ from ..stats.compare import group_by_method
 from ..stats.ensemble import normalised_residuals
 from . import figures as F
 from .paper_tables import COMPARED_KEYS, TABLE4, comparison_rows
-from .tables import display_rows, write_tables
+from .tables import anova_lines, display_rows, write_tables
 
 __all__ = ["build_report", "render_index"]
 
@@ -204,12 +204,7 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
                   f"<p>{esc(_PROFILE_WORDS.get(name, ''))}</p>",
                   _html_table(display_rows(stats, pm=" ± ", minus="−",
                                            interval="{f} +{up}/−{down}"))]
-        anova = stats.get("anova", {})
-        for label, key in (("all methods", "all"), ("t-test-consistent methods", "consistent")):
-            res = anova.get(key)
-            if res and res.get("F") is not None:
-                parts.append(f"<p>ANOVA ({esc(label)}: {esc(', '.join(res['methods']))}): "
-                             f"F = {res['F']:.2f}, p = {res['p']:.3f}</p>")
+        parts += [f"<p>{esc(line)}</p>" for line in anova_lines(stats)]
         if summary.get("truth_ppm") is not None:
             rows = comparison_rows(stats, TABLE4)
             head = ["method", "paper"] + [f"{k} {w}" for k in COMPARED_KEYS

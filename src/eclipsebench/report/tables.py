@@ -14,7 +14,7 @@ from astropy.table import Table
 
 from ..io.atomic import atomic_path, write_text
 
-__all__ = ["stats_table", "display_rows", "format_text_table", "format_markdown",
+__all__ = ["stats_table", "anova_lines", "display_rows", "format_text_table", "format_markdown",
            "write_tables", "TABLE_COLUMNS"]
 
 #: (key, heading, unit) of the displayed columns, in the order of Table 4.
@@ -134,14 +134,19 @@ def format_text_table(summary: dict) -> str:
         head.append(f"sigma_phot = {summary['sigma_phot_ppm']:.1f} ppm")
     if summary.get("truth_ppm") is not None:
         head.append(f"truth = {summary['truth_ppm']:.1f} ppm")
-    tail = []
+    return "\n".join(([" ; ".join(head)] if head else []) + lines + anova_lines(summary))
+
+
+def anova_lines(summary: dict) -> list[str]:
+    """One line per ANOVA of the summary (all methods; the t-test-consistent ones)."""
+    out = []
     anova = summary.get("anova", {})
     for label, key in (("all methods", "all"), ("t-test-consistent methods", "consistent")):
         res = anova.get(key)
         if res and res.get("F") is not None:
-            tail.append(f"ANOVA ({label}: {', '.join(res['methods'])}): F = {res['F']:.2f}, "
-                        f"p = {res['p']:.3f}")
-    return "\n".join(([" ; ".join(head)] if head else []) + lines + tail)
+            out.append(f"ANOVA ({label}: {', '.join(res['methods'])}): F = {res['F']:.2f}, "
+                       f"p = {res['p']:.3f}")
+    return out
 
 
 def format_markdown(summary: dict) -> str:
