@@ -28,7 +28,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 __all__ = ["PHASE_MODELS", "N_COEFFS", "flat", "linear", "quadratic", "sinusoid",
-           "design_matrix", "evaluate"]
+           "design_matrix", "evaluate", "harmonic_curve", "harmonic_summary", "fit_harmonics"]
 
 
 def _x(time, t_ref: float) -> np.ndarray:
@@ -93,3 +93,109 @@ def evaluate(name: str, time, coeffs: Sequence[float], *, t_ref: float = 0.0,
     if len(coeffs) != N_COEFFS[name]:
         raise ValueError(f"{name} phase model takes {N_COEFFS[name]} coefficients")
     return PHASE_MODELS[name](time, coeffs, t_ref=t_ref, period=period)
+
+
+# ---------------------------------------------------------------- whole phase curves
+def harmonic_curve(phase_rad, depth: float, harmonics: Sequence[float]) -> np.ndarray:
+    """The planet-to-star flux ratio of a harmonic phase curve at orbital phase ``phase_rad``.
+
+    ``phase_rad = 2 pi (t - t_ecl) / P`` (0 at mid-eclipse) and ``harmonics`` is
+    ``(a1, b1)`` or ``(a1, b1, a2, b2)``::
+
+        p = depth + a1 (cos phi - 1) + b1 sin phi + a2 (cos 2 phi - 1) + b2 sin 2 phi
+
+    the first (and second) harmonic of SPCA's phase curves (Bell et al. 2021,
+    Eq. 2), written so that ``p(0) = depth`` (the paper's eclipse depth).
+
+    Examples
+    --------
+    >>> harmonic_curve([0.0, math.pi], 2e-3, (5e-4, 0.0)).tolist()
+    [0.002, 0.001]
+    """
+    phi = np.asarray(phase_rad, dtype=float)
+    h = tuple(float(v) for v in harmonics)
+    if len(h) not in (2, 4):
+        raise ValueError(f"harmonics: expected (a1, b1) or (a1, b1, a2, b2), got {len(h)} values")
+    p = depth + h[0] * (np.cos(phi) - 1.0) + h[1] * np.sin(phi)
+    if len(h) == 4:
+        p = p + h[2] * (np.cos(2.0 * phi) - 1.0) + h[3] * np.sin(2.0 * phi)
+    return p
+
+
+def harmonic_summary(depth: float, harmonics: Sequence[float], *,
+                     transit_phase_rad: float = math.pi, n_grid: int = 3600) -> dict[str, float]:
+    """What the literature reports of a harmonic phase curve (:func:`harmonic_curve`).
+
+    - ``phase_amplitude``: the semi-amplitude, half of max - min over an orbit
+      (``sqrt(a1^2 + b1^2)`` for the first harmonic alone);
+    - ``phase_offset_deg``: the hotspot offset, minus the orbital phase (deg) of
+      the curve's maximum: the maximum before mid-eclipse (a hotspot east of
+      the substellar point) is positive, west is negative (Knutson et al. 2007;
+      Bell et al. 2021);
+    - ``nightside_flux``: the planet's flux at mid-transit (``transit_phase_rad``,
+      pi for a circular orbit; ``2 pi (t_tr - t_ecl) / P`` otherwise);
+    - ``planet_flux_min``: the curve's minimum over an orbit (negative is
+      unphysical).
+
+    The first harmonic alone has closed forms; with the second the maximum is
+    found on an ``n_grid`` grid refined by a parabola through its neighbours.
+
+    Examples
+    --------
+    >>> s = harmonic_summary(2e-3, (5e-4, -5e-4))   # peak 45 deg before eclipse
+    >>> round(s["phase_amplitude"] * 1e6, 3), round(s["phase_offset_deg"], 3)
+    (707.107, 45.0)
+    >>> round(s["nightside_flux"] * 1e6, 3)
+    1000.0
+    """
+    h = tuple(float(v) for v in harmonics)
+    night = float(harmonic_curve(transit_phase_rad, depth, h))
+    if len(h) == 2:
+        amp = math.hypot(h[0], h[1])
+        peak = math.atan2(h[1], h[0])
+        const = depth - h[0]
+        return {"phase_amplitude": amp, "phase_offset_deg": -math.degrees(peak),
+                "nightside_flux": night, "planet_flux_min": const - amp}
+    phi = np.linspace(-math.pi, math.pi, n_grid, endpoint=False)
+    p = harmonic_curve(phi, depth, h)
+    i = int(np.argmax(p))
+    left, mid, right = p[(i - 1) % n_grid], p[i], p[(i + 1) % n_grid]
+    curvature = left - 2.0 * mid + right
+    step = phi[1] - phi[0]
+    shift = 0.5 * (left - right) / curvature * step if curvature < 0 else 0.0
+    peak = phi[i] + shift
+    p_max = float(harmonic_curve(peak, depth, h))
+    p_min = float(p.min())
+    peak = (peak + math.pi) % (2.0 * math.pi) - math.pi
+    return {"phase_amplitude": 0.5 * (p_max - p_min), "phase_offset_deg": -math.degrees(peak),
+            "nightside_flux": night, "planet_flux_min": p_min}
+
+
+def fit_harmonics(time_bmjd, planet_flux, t_ecl_bmjd: float, period_d: float, *,
+                  n_harmonics: int = 1) -> tuple[float, tuple[float, ...]]:
+    """Least-squares ``depth`` and harmonics of :func:`harmonic_curve` to a planet flux series.
+
+    The truth of a simulated phase curve: its noiseless planet-to-star flux
+    ratio ``F(t)`` (out of eclipse and transit) fitted with one or two
+    harmonics, so that the truth and the fit define the amplitude and offset
+    the same way.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 3.0, 301)
+    >>> f = harmonic_curve(2 * math.pi * (t - 1.0) / 3.0, 2e-3, (4e-4, 1e-4))
+    >>> d, h = fit_harmonics(t, f, 1.0, 3.0)
+    >>> round(d * 1e6, 6), [round(v * 1e6, 6) for v in h]
+    (2000.0, [400.0, 100.0])
+    """
+    if n_harmonics not in (1, 2):
+        raise ValueError(f"n_harmonics: expected 1 or 2, got {n_harmonics}")
+    t = np.asarray(time_bmjd, dtype=float)
+    f = np.asarray(planet_flux, dtype=float)
+    ok = np.isfinite(t) & np.isfinite(f)
+    phi = 2.0 * math.pi * (t[ok] - t_ecl_bmjd) / period_d
+    cols = [np.ones_like(phi), np.cos(phi) - 1.0, np.sin(phi)]
+    if n_harmonics == 2:
+        cols += [np.cos(2.0 * phi) - 1.0, np.sin(2.0 * phi)]
+    coeffs = np.linalg.lstsq(np.stack(cols, axis=-1), f[ok], rcond=None)[0]
+    return float(coeffs[0]), tuple(float(c) for c in coeffs[1:])
