@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from astropy.io import fits
@@ -12,10 +14,12 @@ from eclipsebench.decorrelate.base import EpochData
 from eclipsebench.decorrelate.pmap import (
     CalibrationSet,
     GriddedPmap,
+    find_pmap_path,
     interpolate_grid,
     kernel_occupancy,
     load_calibration_table,
     load_pmap,
+    pmap_versions,
 )
 from eclipsebench.errors import DataError, InputError
 
@@ -370,3 +374,35 @@ def test_both_real_channel2_maps_load_and_cover_the_real_xo3_centroids(shared_ir
     model = _kr_pmap(data, pm)
     assert model.n_low_occupancy < n / 10
     assert np.all(np.isfinite(model.gain)) and model.n_uncovered == 0
+
+
+def test_pmap_versions_are_picked_by_the_observation_date(tmp_path):
+    _write_grid(tmp_path / "maps" / "a", suffix="early_120124.fits")
+    _write_grid(tmp_path / "maps" / "b", suffix="later_120827.fits")
+    versions = pmap_versions(tmp_path / "maps", 2)
+    assert [d.isoformat() for d, _ in versions] == ["2012-01-24", "2012-08-27"]
+    assert pmap_versions(tmp_path / "maps", 1) == []
+    meta = {"CHANNEL": 2}
+    # 2012-11-09 (the real epoch 1): the later map; 2012-03-01: the earlier one.
+    assert find_pmap_path(tmp_path / "maps", meta, 56240.74).parent.name == "b"
+    assert find_pmap_path(tmp_path / "maps", meta, 55987.0).parent.name == "a"
+    assert find_pmap_path(tmp_path / "maps", meta, 50000.0).parent.name == "a"
+    # One version's own folder is that map, whatever the date.
+    assert find_pmap_path(tmp_path / "maps" / "a", meta, 56240.74).name == "a"
+    with pytest.raises(InputError, match="observation date"):
+        find_pmap_path(tmp_path / "maps", meta)
+    # KR/Pmap given the library loads the version of the data's date.
+    late = _random_epoch(meta=meta)
+    late = EpochData(time_bmjd=late.time_bmjd + 56240.74, flux=late.flux,
+                     flux_err=late.flux_err, x=late.x, y=late.y,
+                     noise_pixels=late.noise_pixels, meta=meta)
+    picked = get_method("kr-pmap").load_resources(late, {"pmap": str(tmp_path / "maps")})
+    assert Path(picked["pmap"].source).parent.name == "b"
+
+
+@pytest.mark.shared_data
+def test_real_epoch1_date_picks_the_120827_channel2_map(shared_irac):
+    path = find_pmap_path(shared_irac, {"CHANNEL": 2}, 56240.74)   # 2012-11-09
+    assert path.name.endswith("_120827.fits")
+    assert find_pmap_path(shared_irac, {"CHANNEL": 2}, 55950.0).name.endswith("_120124.fits")
+    assert find_pmap_path(shared_irac, {"CHANNEL": 1}, 56240.74).name.endswith("_120828.fits")

@@ -71,8 +71,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="format of the time column, read as BJD_TDB without conversion of "
                         "time scale (default: bmjd = BJD_TDB - 2400000.5)")
     p.add_argument("--pmap", metavar="PATH", default=None,
-                   help="calibration set for kr-pmap (a calibration-star table or the SSC pmap); "
-                        "simulated tables find theirs through SIMDIR")
+                   help="calibration set for kr-pmap (a calibration-star table, the SSC pmap, or "
+                        "a folder of SSC map versions: the one in force at the observation's "
+                        "date is used); simulated tables find theirs through SIMDIR")
     p.add_argument("--system", metavar="NAME", default=None,
                    help="planet (default: [system] name, the 2015 challenge's "
                         "'XO-3b (2015 challenge)'; give XO-3b for real data: Wong et al. 2014)")

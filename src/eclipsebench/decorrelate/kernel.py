@@ -448,7 +448,8 @@ class KernelRegressionPmap(Systematics):
         given = sources.get("pmap")
         if isinstance(given, (CalibrationSet, GriddedPmap)):
             return {"pmap": given}
-        return {"pmap": load_pmap(find_pmap_path(given, data.meta))}
+        time = float(np.min(data.time_bmjd)) if len(data.time_bmjd) else None
+        return {"pmap": load_pmap(find_pmap_path(given, data.meta, time))}
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:

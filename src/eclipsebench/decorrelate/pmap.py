@@ -33,11 +33,25 @@ map is indexed ``gain[iy, ix]`` like an image.
 Nothing here has a default path: the user passes one, or the photometry
 table's provenance (``SIMDIR``) points to a simulation folder that has a
 calibration table.
+
+Map version by date. The SSC released its warm maps in versions named by
+their date (``..._YYMMDD.fits``: channel 2 ``120124``, then ``120827``, which
+became the correction code's channel-2 default from 2012-08 on). The code
+itself applies the one map it ships and has no date rule; what it "would
+pick" for an observation is the default in force at the observation's date.
+Given a folder that holds several versions (for example
+``../shared/data/irac/`` with ``pmap_ch2/`` and ``pmap_ch2_120827/``),
+:func:`pick_pmap_version` takes, among the maps of the data's channel, the
+latest version dated on or before the observation (the earliest when the
+observation predates them all). The real epoch 1 of the paper (2012-11-09)
+gets ``120827``.
 """
 
 from __future__ import annotations
 
+import datetime
 import os
+import re
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -53,7 +67,7 @@ from ..errors import DataError, InputError
 
 __all__ = ["CalibrationSet", "GriddedPmap", "load_calibration_table", "load_gridded_pmap",
            "load_pmap", "find_pmap_path", "CALIBRATION_RELPATH", "interpolate_grid",
-           "kernel_occupancy"]
+           "kernel_occupancy", "pmap_versions", "pick_pmap_version"]
 
 #: Where a simulated challenge keeps its calibration-star table, relative to SIMDIR.
 CALIBRATION_RELPATH = Path("calibration") / "pmap_calibration.fits"
@@ -249,8 +263,65 @@ def load_pmap(path: str | os.PathLike) -> CalibrationSet | GriddedPmap:
     raise DataError(p, "neither a calibration-star table nor a gridded pmap_*.fits image")
 
 
-def find_pmap_path(option: str | os.PathLike | None, meta: Mapping[str, Any]) -> Path:
+_VERSION = re.compile(r"^pmap_ch(\d)_.*_(\d{6})\.fits$")
+# BMJD of 2000-01-01 00:00 (MJD 51544).
+_MJD_2000 = 51544.0
+
+
+def pmap_versions(folder: str | os.PathLike, channel: int) -> list[tuple[datetime.date, Path]]:
+    """The gridded maps of ``channel`` in ``folder`` and its subfolders, by version date.
+
+    A map is a ``pmap_ch<N>_..._<YYMMDD>.fits`` file (the SSC's naming); the
+    version date is its last six digits.
+
+    Examples
+    --------
+    >>> pmap_versions("no/such/folder", 2)
+    []
+    """
+    root = Path(folder)
+    found = []
+    for f in sorted(root.glob("pmap_*.fits")) + sorted(root.glob("*/pmap_*.fits")):
+        m = _VERSION.match(f.name)
+        if m is None or int(m.group(1)) != int(channel):
+            continue
+        yymmdd = m.group(2)
+        try:
+            date = datetime.date(2000 + int(yymmdd[:2]), int(yymmdd[2:4]), int(yymmdd[4:]))
+        except ValueError:
+            continue
+        found.append((date, f))
+    return sorted(found)
+
+
+def pick_pmap_version(versions: list[tuple[datetime.date, Path]], time_bmjd: float) -> Path:
+    """The map in force at ``time_bmjd``: the latest version dated on or before it.
+
+    An observation older than every version gets the earliest one.
+
+    Examples
+    --------
+    >>> v = [(datetime.date(2012, 1, 24), Path("a")), (datetime.date(2012, 8, 27), Path("b"))]
+    >>> str(pick_pmap_version(v, 56240.7)), str(pick_pmap_version(v, 56000.0))
+    ('b', 'a')
+    >>> str(pick_pmap_version(v, 55000.0))
+    'a'
+    """
+    if not versions:
+        raise InputError("pmap: no map versions to choose from")
+    day = datetime.date(2000, 1, 1) + datetime.timedelta(days=float(time_bmjd) - _MJD_2000)
+    before = [path for date, path in versions if date <= day]
+    return before[-1] if before else versions[0][1]
+
+
+def find_pmap_path(option: str | os.PathLike | None, meta: Mapping[str, Any],
+                   time_bmjd: float | None = None) -> Path:
     """The pixel-map path for KR/Pmap: the option, else ``SIMDIR/calibration/...``.
+
+    A folder given as the option that holds more than one gridded map of the
+    data's channel (``meta["CHANNEL"]``, default 2), directly or one level
+    down, is a library of map versions: the one in force at the observation's
+    date (``time_bmjd``, the first frame) is taken (:func:`pick_pmap_version`).
 
     Parameters
     ----------
@@ -259,6 +330,8 @@ def find_pmap_path(option: str | os.PathLike | None, meta: Mapping[str, Any]) ->
     meta : mapping
         The photometry table's provenance; ``meta["SIMDIR"]`` is the simulation
         folder when the data are simulated.
+    time_bmjd : float, optional
+        The observation's time, to pick a map version by date.
 
     Raises
     ------
@@ -269,6 +342,14 @@ def find_pmap_path(option: str | os.PathLike | None, meta: Mapping[str, Any]) ->
         p = Path(option)
         if not p.exists():
             raise InputError(f"pmap {p}: no such file or folder")
+        if p.is_dir():
+            channel = int(meta.get("CHANNEL", meta.get("channel", 2)) or 2)
+            versions = pmap_versions(p, channel)
+            if len(versions) > 1 or (versions and not list(p.glob("pmap_*.fits"))):
+                if time_bmjd is None:
+                    raise InputError(f"pmap {p}: holds {len(versions)} map versions of channel "
+                                     f"{channel}; the observation date is needed to pick one")
+                return pick_pmap_version(versions, time_bmjd)
         return p
     simdir = meta.get("SIMDIR") or meta.get("simdir")
     if simdir:
