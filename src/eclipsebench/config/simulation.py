@@ -64,11 +64,21 @@ class ObservationSection:
     with a named readout must agree with it (``"custom"`` takes any FN, WT and
     tick on the subarray, with the 2 s subarray's values for those unset).
 
-    ``event`` (``"eclipse"`` or ``"transit"``) is what each epoch observes:
-    with ``"transit"`` an epoch whose window holds no transit is moved by the
-    time from its eclipse to the transit before it, so the transit sits where
-    the eclipse sat (the default start times are the 2015 challenge's eclipse
-    windows); a window that already holds a transit is kept.
+    ``event`` (``"eclipse"``, ``"transit"`` or ``"phase-curve"``) is what each
+    epoch observes: with ``"transit"`` an epoch whose window holds no transit is
+    moved by the time from its eclipse to the transit before it, so the transit
+    sits where the eclipse sat (the default start times are the 2015 challenge's
+    eclipse windows); a window that already holds a transit is kept.
+
+    With ``"phase-curve"`` an epoch is a whole phase curve, planned as IRACSIM's
+    exoplanet wrapper plans one (``exoplanet_simulate.pro``): the "Pre" AOR of
+    ``pre_cubes``, then Main AORs of at most ``max_aor_hours`` (12 h) each that
+    together last ``phase_curve_duration_d`` (unset: one orbital period; their
+    cubes are ``round(duration / cube_interval_s)``, ``main_cubes`` is not
+    used), each after a repointing of ``aor_gap_s`` with its own PCRS peak-up.
+    The first Main AOR starts ``phase_curve_lead_h`` (2 h) before the first
+    contact of the first eclipse after the configured start, so that eclipse is
+    whole (see ``docs/simulate.md``).
     """
 
     channel: int = 2
@@ -87,7 +97,10 @@ class ObservationSection:
     x0_px: float | None = None
     y0_px: float | None = None
     peakup_scatter_px: float = 0.04
-    event: Literal["eclipse", "transit"] = "eclipse"
+    event: Literal["eclipse", "transit", "phase-curve"] = "eclipse"
+    phase_curve_duration_d: float | None = None  # unset: one orbital period
+    phase_curve_lead_h: float = 2.0
+    max_aor_hours: float = 12.0
 
     def __post_init__(self):
         if self.channel not in (1, 2):
@@ -174,6 +187,16 @@ class ObservationSection:
         check(2.0 <= self.y0_px <= side - 3.0, "y0_px", f"a position on {where} (2-{side - 3} px)")
         check(0 <= self.peakup_scatter_px <= 1.0, "peakup_scatter_px",
               "a scatter between 0 and 1 px")
+        check(self.phase_curve_duration_d is None
+              or (math.isfinite(self.phase_curve_duration_d)
+                  and 0 < self.phase_curve_duration_d <= 100.0),
+              "phase_curve_duration_d", "a duration in days, 0 < d <= 100 (unset: one orbit)")
+        check(math.isfinite(self.phase_curve_lead_h) and 0 <= self.phase_curve_lead_h <= 48.0,
+              "phase_curve_lead_h", "hours before the first eclipse's ingress, 0-48")
+        cube_h = self.frames_per_cube * self.frame_interval_s / 3600.0
+        check(math.isfinite(self.max_aor_hours) and cube_h <= self.max_aor_hours <= 1000.0,
+              "max_aor_hours", f"an AOR length in hours that holds at least one cube "
+                               f"({cube_h:.3g} h) and is at most 1000 h")
 
 
 @dataclass(frozen=True)

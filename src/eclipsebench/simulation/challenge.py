@@ -40,8 +40,10 @@ from astropy.table import Table
 from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+from ..astro.phase_curves import fit_harmonics, harmonic_summary
 from ..astro.thermal import DEFAULT_WAVELENGTH_UM
-from ..config import Config, dump_toml, to_mapping
+from ..config import Config, dump_toml, from_mapping, to_mapping
+from ..config.base import load_toml
 from ..detector.constants import (
     ReadoutMode,
     channel_constants,
@@ -72,7 +74,7 @@ from .star import StarImager, make_star_imager, prf_label
 __all__ = ["simulate_challenge", "ChallengeResult", "pointing_ranges_from_config",
            "readout_from_config", "system_of", "frame_model_from_config", "STATE_DIR", "light_curve_of",
            "challenge_plans", "plan_simulate_tasks", "simulate_aor", "aor_state_path",
-           "epoch_marker_path"]
+           "epoch_marker_path", "phase_curve_truth"]
 
 STATE_DIR = ".simstate"
 TRUTH_COLUMNS = ("epoch", "aorkey_pre", "aorkey_main", "start_bmjd", "t_ecl_bmjd", "depth_ppm",
@@ -315,32 +317,99 @@ def _load_aor_truth(out_dir: Path, aor: AORPlan) -> dict[str, np.ndarray]:
         return {k: data[k] for k in data.files}
 
 
+def phase_curve_truth(time_bmjd, lc, t_ecl_bmjd: float) -> dict[str, float]:
+    """The harmonic truth of a phase curve: what the fit of ``reduce --event phase-curve`` reports.
+
+    The noiseless planet-to-star flux ratio ``F(t)`` of the light curve
+    (``lc.planet_flux``) at the frames' times, out of eclipse (``V = 1``) and
+    transit (``S = 1``), is fitted with the first harmonic and, separately,
+    the first two (:func:`~eclipsebench.astro.phase_curves.fit_harmonics`,
+    phase 0 at ``t_ecl_bmjd``), and summarised as the literature does
+    (:func:`~eclipsebench.astro.phase_curves.harmonic_summary`, the transit
+    phase ``2 pi (t_tr - t_ecl) / P`` with ``t_tr`` the first mid-transit
+    after ``t_ecl_bmjd``). The first-harmonic values are the truth
+    (``phase_amplitude_ppm``, ``phase_offset_deg``, ``nightside_flux_ppm``);
+    ``*_h2_*`` are the two-harmonic ones, and ``harmonic_depth*_ppm`` each
+    fit's ``p(t_ecl)``, to show how far the thermal model is from one
+    harmonic.
+
+    Parameters
+    ----------
+    time_bmjd : array_like
+        Frame mid-times (BMJD_TDB) of the epoch.
+    lc : LightCurve
+        The epoch's light curve L(t).
+    t_ecl_bmjd : float
+        A mid-eclipse time (phase 0).
+
+    Returns
+    -------
+    dict
+        ``phase_amplitude_ppm``, ``phase_offset_deg``, ``nightside_flux_ppm``,
+        ``planet_flux_min_ppm``, ``harmonic_depth_ppm`` and the same with
+        ``_h2`` for two harmonics, plus ``n_phase_frames`` (frames fitted).
+    """
+    t = np.asarray(time_bmjd, dtype=float)
+    period = lc.system.period_days
+    out_of_events = (lc.visible_fraction(t) >= 1.0) & (lc.stellar_flux(t) >= 1.0)
+    t_fit = t[out_of_events]
+    flux = lc.planet_flux(t_fit)
+    t_tr = lc.transit_times_bmjd(t_ecl_bmjd, t_ecl_bmjd + period)[0]
+    transit_phase = 2.0 * math.pi * (t_tr - t_ecl_bmjd) / period
+    row: dict[str, float] = {"n_phase_frames": int(t_fit.size)}
+    for n_harmonics, tag in ((1, ""), (2, "_h2")):
+        depth, harmonics = fit_harmonics(t_fit, flux, t_ecl_bmjd, period,
+                                         n_harmonics=n_harmonics)
+        summary = harmonic_summary(depth, harmonics, transit_phase_rad=transit_phase)
+        row.update({f"phase_amplitude{tag}_ppm": 1e6 * summary["phase_amplitude"],
+                    f"phase_offset{tag}_deg": summary["phase_offset_deg"],
+                    f"nightside_flux{tag}_ppm": 1e6 * summary["nightside_flux"],
+                    f"planet_flux_min{tag}_ppm": 1e6 * summary["planet_flux_min"],
+                    f"harmonic_depth{tag}_ppm": 1e6 * depth})
+    return row
+
+
 def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray], lc,
                     seed: int) -> dict:
     """One ``truth.ecsv`` row: AORKEYs, times, depth, realised centroid statistics, pointing.
 
-    With ``observation.event = "transit"`` the row adds ``rp_rs`` (the
-    planet's), ``transit_depth_ppm`` (``rp_rs^2 * 1e6``, the geometric depth
-    that ``reduce --event transit`` reports) and ``t_transit_bmjd`` (the
-    observed mid-transit in the window, NaN if none).
+    With ``observation.event = "transit"`` or ``"phase-curve"`` the row adds
+    ``rp_rs`` (the planet's), ``transit_depth_ppm`` (``rp_rs^2 * 1e6``, the
+    geometric depth that ``reduce --event transit`` reports) and
+    ``t_transit_bmjd`` (the observed mid-transit in the window, NaN if none).
+    A phase curve's row also has the harmonic truth of :func:`phase_curve_truth`
+    (phase 0 at ``t_ecl_bmjd``, or at the eclipse nearest the window's middle
+    when it holds none), ``aorkey_main`` the first Main AOR's key and
+    ``aorkey_main_last`` the last one's (the keys between are the epoch's).
     """
     x, y = frames["x_true"], frames["y_true"]
     t0 = plan.start_bmjd
     t1 = float(frames["time_bmjd"].max())
     eclipses = lc.eclipse_times_bmjd(t0, t1)
-    keys = {a.label: a.aorkey for a in plan.aors}
-    row = {"epoch": plan.epoch, "aorkey_pre": keys.get("Pre", -1),
-           "aorkey_main": keys["Main"], "start_bmjd": t0,
+    mains = [a.aorkey for a in plan.aors if a.label.startswith("Main")]
+    pre = [a.aorkey for a in plan.aors if a.label == "Pre"]
+    row = {"epoch": plan.epoch, "aorkey_pre": pre[0] if pre else -1,
+           "aorkey_main": mains[0], "start_bmjd": t0,
            "t_ecl_bmjd": float(eclipses[0]) if eclipses else float("nan"),
            "depth_ppm": float(lc.depth_ppm), "x_mean": float(x.mean()), "x_sd": float(x.std()),
            "y_mean": float(y.mean()), "y_sd": float(y.std()),
            "xy_cov": float(np.mean((x - x.mean()) * (y - y.mean()))),
            "n_frames": int(x.size)}
-    if cfg.observation.event == "transit":
+    event = cfg.observation.event
+    if event in ("transit", "phase-curve"):
         transits = lc.transit_times_bmjd(t0, t1)
         rp_rs = float(lc.system.rp_rs)
         row.update({"rp_rs": rp_rs, "transit_depth_ppm": rp_rs * rp_rs * 1e6,
                     "t_transit_bmjd": float(transits[0]) if transits else float("nan")})
+    if event == "phase-curve":
+        row["aorkey_main_last"] = mains[-1]
+        if eclipses:
+            t_ref = float(eclipses[0])
+        else:
+            p = lc.system.period_days
+            mid = 0.5 * (t0 + t1)
+            t_ref = min(lc.eclipse_times_bmjd(mid - p, mid + p), key=lambda t: abs(t - mid))
+        row.update(phase_curve_truth(frames["time_bmjd"], lc, t_ref))
     for a in plan.aors:
         row[f"x0_{a.label.lower()}_px"] = a.x0_px
         row[f"y0_{a.label.lower()}_px"] = a.y0_px
@@ -445,22 +514,26 @@ def challenge_plans(cfg: Config) -> list[EpochPlan]:
     names it and ``observation.start_times_jd``; its truth row has no eclipse
     time (NaN). With ``observation.event = "transit"`` the windows are moved to
     the transits (:func:`.plan.transit_window_starts_bmjd`) and the warning is
-    about an epoch without a transit.
+    about an epoch without a transit; a phase curve (``"phase-curve"``,
+    :func:`.plan.phase_curve_main_cubes`) is warned about when it lacks either.
     """
     system = system_for(cfg.system)
     event = cfg.observation.event
     plans = plan_challenge(cfg.observation, cfg.challenge.epochs, system.period_days,
                            cfg.challenge.seed, system=system)
-    when = transit_time_bmjd if event == "transit" else eclipse_time_bmjd
+    events = {"eclipse": (("eclipse", eclipse_time_bmjd),),
+              "transit": (("transit", transit_time_bmjd),),
+              "phase-curve": (("eclipse", eclipse_time_bmjd), ("transit", transit_time_bmjd))}
     for plan in plans:
         t0 = plan.start_bmjd
         t1 = t0 + plan.duration_s / SECONDS_PER_DAY
-        t_event = float(when(system, 0.5 * (t0 + t1)))
-        if not t0 <= t_event <= t1:
-            log.warning("epoch %d (%.4f-%.4f BMJD) holds no %s of %s (the nearest is at "
-                        "%.4f BMJD): set observation.start_times_jd (JD - 2455000) a few hours "
-                        "before its %ss to simulate one", plan.epoch, t0, t1, event, system.name,
-                        t_event, event)
+        for name, when in events[event]:
+            t_event = float(when(system, 0.5 * (t0 + t1)))
+            if not t0 <= t_event <= t1:
+                log.warning("epoch %d (%.4f-%.4f BMJD) holds no %s of %s (the nearest is at "
+                            "%.4f BMJD): set observation.start_times_jd (JD - 2455000) a few "
+                            "hours before its %ss to simulate one", plan.epoch, t0, t1, name,
+                            system.name, t_event, name)
     return plans
 
 
@@ -567,8 +640,15 @@ def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None 
     config_text = dump_toml(to_mapping(cfg))
     existing = out / "config.toml"
     if existing.is_file() and existing.read_text() != config_text:
-        raise InputError(f"--out {out}: holds a challenge simulated with a different "
-                         "configuration (see its config.toml); choose another folder")
+        # read back through the current schema: keys added since (with their
+        # defaults) are no difference
+        try:
+            stored = from_mapping(Config, load_toml(existing))
+        except InputError:
+            stored = None
+        if stored != cfg:
+            raise InputError(f"--out {out}: holds a challenge simulated with a different "
+                             "configuration (see its config.toml); choose another folder")
     write_text(existing, config_text)
     tasks = plan_simulate_tasks(cfg, out, calibration=calibration)
     report = run_tasks(tasks, workers=workers)
