@@ -7,7 +7,9 @@ prints it. Each section lives in the module of the stage that owns it.
 
 from __future__ import annotations
 
+import tomllib
 from dataclasses import dataclass, field, replace
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +31,11 @@ from .simulation import ObservationSection, SimulationSection
 from .system import SystemSection
 
 __all__ = ["Config", "load_config", "default_config", "dump_toml", "to_mapping", "check",
-           "from_mapping", "parse_override", "apply_overrides", "replace"]
+           "from_mapping", "parse_override", "apply_overrides", "replace", "builtin_config_names",
+           "resolve_config"]
+
+#: Folder of the built-in configurations (package data), one ``<name>.toml`` each.
+BUILTIN_CONFIG_DIR = "configs"
 
 
 @dataclass(frozen=True)
@@ -50,15 +56,78 @@ def default_config() -> Config:
     return Config()
 
 
+def builtin_config_names() -> list[str]:
+    """Names of the built-in configurations (``eclipsebench/data/configs/<name>.toml``).
+
+    Examples
+    --------
+    >>> "xo3b-phase-curve" in builtin_config_names()
+    True
+    """
+    folder = resources.files("eclipsebench.data").joinpath(BUILTIN_CONFIG_DIR)
+    return sorted(f.name[:-5] for f in folder.iterdir() if f.name.endswith(".toml"))
+
+
+def resolve_config(path: str | Path) -> tuple[str, str | None]:
+    """Where configuration ``path`` comes from: ``(label, text)``.
+
+    A file that exists is read by :func:`load_config` itself (``text`` is
+    None); otherwise ``path`` may name a built-in configuration
+    (:func:`builtin_config_names`), whose TOML text is returned with the
+    label ``"built-in configuration <name>"``.
+
+    Raises
+    ------
+    eclipsebench.errors.InputError
+        One line when ``path`` is neither a file nor a built-in name, listing
+        the built-in names.
+
+    Examples
+    --------
+    >>> label, text = resolve_config("xo3b-phase-curve")
+    >>> label, 'event = "phase-curve"' in text
+    ('built-in configuration xo3b-phase-curve', True)
+    """
+    p = Path(path)
+    if p.exists():
+        return str(p), None
+    names = builtin_config_names()
+    name = str(path).strip()
+    if name in names:
+        text = (resources.files("eclipsebench.data").joinpath(BUILTIN_CONFIG_DIR)
+                .joinpath(f"{name}.toml").read_text("utf-8"))
+        return f"built-in configuration {name}", text
+    raise InputError(f"{path}: no such configuration file or built-in configuration "
+                     f"(built-in: {', '.join(names)})")
+
+
 def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> Config:
     """Read ``path`` (or the defaults), apply ``--set`` overrides, validate.
+
+    ``path`` is a TOML file or the name of a built-in configuration
+    (:func:`resolve_config`; a file of that name wins).
 
     Raises
     ------
     eclipsebench.errors.InputError
         With one line naming the file or the dotted key when anything is wrong.
+
+    Examples
+    --------
+    >>> load_config("xo3b-phase-curve").observation.event
+    'phase-curve'
     """
-    mapping: dict[str, Any] = load_toml(path) if path is not None else {}
+    mapping: dict[str, Any] = {}
+    if path is not None:
+        label, text = resolve_config(path)
+        if text is None:
+            mapping = load_toml(path)
+        else:
+            try:
+                mapping = tomllib.loads(text)
+            except tomllib.TOMLDecodeError as exc:  # a packaging error, named all the same
+                raise InputError(f"{label}: not valid TOML ({exc})") from None
+            path = label
     mapping = apply_overrides(mapping, list(overrides or []))
     config = from_mapping(Config, mapping)
     _check_system(config, path, list(overrides or []))
