@@ -11,7 +11,13 @@ from ..astro.catalogue import system_for
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
-from ..fit.astro_model import ECLIPSE_SHAPES, EVENTS, PHASE_MODELS, RAMP_MODELS
+from ..fit.astro_model import (
+    ECLIPSE_SHAPES,
+    EVENTS,
+    PHASE_CURVE_MODELS,
+    PHASE_MODELS,
+    RAMP_MODELS,
+)
 from ..fit.data import TIME_FORMATS
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
@@ -37,8 +43,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", required=True, metavar="NAME",
                    help="decorrelation method: the paper's bliss, gp, ica, kr-data, kr-pmap, pld, "
                         "segpoly; SPCA's poly2-poly5, pld-aper; or a plugin's (eb.methods())")
-    p.add_argument("--phase", choices=PHASE_MODELS, default=None,
-                   help="phase-curve model (default: [reduce] phase, quadratic)")
+    p.add_argument("--phase", choices=PHASE_MODELS + PHASE_CURVE_MODELS, default=None,
+                   help="phase-curve model (default: [reduce] phase, quadratic); with "
+                        "--event phase-curve harmonic1 or harmonic2 ([reduce] "
+                        "phase_curve_model, harmonic1)")
     p.add_argument("--ramp", choices=RAMP_MODELS, default=None,
                    help="detector ramp (default: [reduce] ramp, none)")
     p.add_argument("--eclipse-shape", choices=("auto",) + ECLIPSE_SHAPES, default=None,
@@ -46,7 +54,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--event", choices=EVENTS, default=None,
                    help="event fitted (default: [reduce] event, eclipse); transit: Rp/R* and "
                         "mid-transit time with batman's quadratic limb darkening, a/R*, b, q1, "
-                        "q2 fixed to the catalogue unless [reduce] transit_free names them"),
+                        "q2 fixed to the catalogue unless [reduce] transit_free names them; "
+                        "phase-curve: a whole phase curve over several AORs (eclipses, "
+                        "transits, harmonic phase variation, an offset per AOR)"),
     p.add_argument("--profile", choices=("controlled", "paper"), default=None,
                    help="controlled: the shared [reduce] settings (default); paper: the "
                         "method's team's centroid, phase model, sampler and reported error "
@@ -136,6 +146,15 @@ def _options(args: argparse.Namespace):
                "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
                "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius,
                "profile": args.profile}
+    event = args.event or cfg.reduce.event
+    if args.phase in PHASE_CURVE_MODELS:
+        if event != "phase-curve":
+            raise InputError(f"--phase {args.phase}: a whole phase curve's model (give "
+                             "--event phase-curve)")
+        changes["phase"], changes["phase_curve_model"] = None, args.phase
+    elif args.phase is not None and event == "phase-curve":
+        raise InputError(f"--phase {args.phase}: --event phase-curve takes "
+                         f"{' or '.join(PHASE_CURVE_MODELS)}")
     options = replace(cfg.reduce, **{k: v for k, v in changes.items() if v is not None})
     try:
         options.validate()
@@ -325,6 +344,17 @@ def format_text(result: dict) -> str:
     if when == "t_transit":
         lines.insert(2, f"rp_rs         {result['rp_rs']:.5f} +- {result['rp_rs_err']:.5f} "
                         "(depth = rp_rs^2)")
+    if result.get("event") == "phase-curve":
+        lines[2:2] = [
+            f"amplitude     {result['phase_amplitude_ppm']:.1f} +- "
+            f"{result['phase_amplitude_err_ppm']:.1f} ppm (semi-amplitude)",
+            f"offset        {result['phase_offset_deg']:.1f} +- "
+            f"{result['phase_offset_err_deg']:.1f} deg (hotspot, east positive)",
+            f"night side    {result['nightside_flux_ppm']:.1f} +- "
+            f"{result['nightside_flux_err_ppm']:.1f} ppm; minimum "
+            f"{result['planet_flux_min_ppm']:.1f} ppm"
+            + (" (NEGATIVE)" if result.get("planet_flux_negative") else ""),
+            f"rp_rs         {result['rp_rs']:.5f} +- {result['rp_rs_err']:.5f}"]
     models = result.get("phase_models")
     if models:
         lines.append("phase models  (BIC picks " + models["best_bic"] + ", AIC picks "

@@ -72,10 +72,28 @@ class ReduceSection:
         Per-method options, ``[reduce.options.<method>]`` tables (the keys of
         each method's ``Options``; ``docs/methods.md``). Checked against the
         method's options when the reduce stage builds the method.
-    event : {"eclipse", "transit"}
-        The event fitted: the secondary eclipse (depth), or the transit
+    event : {"eclipse", "transit", "phase-curve"}
+        The event fitted: the secondary eclipse (depth), the transit
         (Rp/R*, batman's quadratic limb darkening; ``docs/fitting.md``,
-        "Transits").
+        "Transits"), or a whole phase curve (eclipses, transits and the
+        harmonic phase variation over several AORs; "Whole phase curves").
+    phase_curve_model : {"harmonic1", "harmonic2"}
+        A whole phase curve's phase model (``phase`` is the eclipse's and
+        transit's): the first harmonic, or the first and second (SPCA;
+        Bell et al. 2021).
+    nonnegative_planet : bool
+        A whole phase curve's prior that the planet's flux is non-negative
+        over the orbit (least squares: a penalty residual; MCMC: log-prior
+        -inf). Off: the result only flags a negative minimum.
+    systematics_per_aor : bool
+        A whole phase curve: build the method once per AOR (its own map,
+        regression, ...) instead of one systematics model over the whole
+        series; the AOR flux offsets are then left out (each AOR's
+        systematics fits its own flux level).
+    exposure_s : float
+        A whole phase curve's integration time of one table row in s; 0: the
+        table's median cadence (a binned row spans its cube). Rows longer
+        than 10 s are averaged over sub-exposures.
     transit_free : list of {"a_rs", "b", "q1", "q2"}
         The transit's parameters fitted besides Rp/R* and the mid-transit
         time; the others stay at the catalogue's values (``b``: the impact
@@ -108,7 +126,11 @@ class ReduceSection:
     error_rule: Literal["posterior", "largest", "method"] = "posterior"
     profile: Literal["controlled", "paper"] = "controlled"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
-    event: Literal["eclipse", "transit"] = "eclipse"
+    event: Literal["eclipse", "transit", "phase-curve"] = "eclipse"
+    phase_curve_model: Literal["harmonic1", "harmonic2"] = "harmonic1"
+    nonnegative_planet: bool = False
+    systematics_per_aor: bool = False
+    exposure_s: float = 0.0
     transit_free: tuple[str, ...] = ()
     transit_priors: dict[str, tuple[float, ...]] = field(default_factory=dict)
     limb_darkening_q: tuple[float, ...] = ()
@@ -128,6 +150,8 @@ class ReduceSection:
         check(self.radius_px == 0 or 0.5 <= self.radius_px <= 10.0, "radius_px",
               "0 (the table's flux column) or an aperture radius in 0.5-10 px")
         check(self.max_nfev >= 10, "max_nfev", "at least 10 evaluations")
+        check(0.0 <= self.exposure_s <= 3600.0, "exposure_s",
+              "0 (the table's cadence) or an exposure of at most 3600 s")
         free = ("a_rs", "b", "q1", "q2")   # eclipsebench.fit.astro_model.TRANSIT_FREE
         check(all(n in free for n in self.transit_free)
               and len(set(self.transit_free)) == len(self.transit_free), "transit_free",

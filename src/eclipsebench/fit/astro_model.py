@@ -65,15 +65,21 @@ from batman import _quadratic_ld, _rsky
 from numba import njit
 
 from ..astro.eclipse import EclipseShape
+from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+from ..astro.phase_curves import harmonic_curve, harmonic_summary
 from ..errors import InputError
 
-__all__ = ["AstroModel", "PHASE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES", "EVENTS",
-           "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u", "u_from_q"]
+__all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES",
+           "EVENTS", "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u",
+           "u_from_q", "integration_offsets_d", "aor_order"]
 
 PHASE_MODELS = ("flat", "linear", "quadratic", "sinusoid")
+#: The phase models of a whole phase curve (``event="phase-curve"``): the first harmonic,
+#: or the first and second (:func:`eclipsebench.astro.phase_curves.harmonic_curve`).
+PHASE_CURVE_MODELS = ("harmonic1", "harmonic2")
 RAMP_MODELS = ("none", "linear", "exponential")
 ECLIPSE_SHAPES = ("physical", "box")
-EVENTS = ("eclipse", "transit")
+EVENTS = ("eclipse", "transit", "phase-curve")
 #: The transit's optional free parameters, in the order they take in the vector.
 TRANSIT_FREE = ("a_rs", "b", "q1", "q2")
 
@@ -82,6 +88,8 @@ _PHASE_NAMES = {
     "linear": ("c1_per_day",),
     "quadratic": ("c1_per_day", "c2_per_day2"),
     "sinusoid": ("c_cos", "c_sin"),
+    "harmonic1": ("phase_a1", "phase_b1"),
+    "harmonic2": ("phase_a1", "phase_b1", "phase_a2", "phase_b2"),
 }
 _RAMP_NAMES = {
     "none": (),
@@ -93,14 +101,60 @@ _RAMP_NAMES = {
 _SCALES = {"depth": 1e-4, "t_ecl_bmjd": 1e-3, "c1_per_day": 1e-3, "c2_per_day2": 1e-3,
            "c_cos": 1e-4, "c_sin": 1e-4, "ramp_slope_per_day": 1e-3, "ramp_amplitude": 1e-3,
            "ramp_tau_days": 1e-2, "rp_rs": 1e-3, "t_transit_bmjd": 1e-3, "a_rs": 1e-2,
-           "b": 1e-2, "q1": 1e-2, "q2": 1e-2}
+           "b": 1e-2, "q1": 1e-2, "q2": 1e-2, "phase_a1": 1e-4, "phase_b1": 1e-4,
+           "phase_a2": 1e-4, "phase_b2": 1e-4, "aor_offset": 1e-4}
 #: Bounds of the transit's parameters (also the MCMC's uniform prior): q1, q2 in
 #: [0, 1] is Kipping's (2013) physically allowed triangle.
 _TRANSIT_BOUNDS = {"rp_rs": (0.0, 0.5), "a_rs": (1.5, 200.0), "b": (0.0, 1.5),
                    "q1": (0.0, 1.0), "q2": (0.0, 1.0)}
+#: Longest sub-exposure (s) over which a row's model is averaged (:func:`integration_offsets_d`).
+MAX_SUBEXPOSURE_S = 10.0
+#: Scale (planet-to-star flux ratio) of the least-squares penalty residual that keeps a
+#: phase curve's minimum non-negative (``nonnegative_planet``): -1 ppm adds 1 to chi2.
+NONNEGATIVE_SCALE = 1e-6
 #: Sky separation (stellar radii) that batman's rsky gives when the planet is behind the
 #: star; also the value outside the tabulated transit window (no overlap for rp_rs <= 0.5).
 _FAR = 100.0
+
+
+def integration_offsets_d(exposure_s: float,
+                          max_step_s: float = MAX_SUBEXPOSURE_S) -> np.ndarray:
+    """Offsets (days) from a row's mid-time at which its model is averaged over the exposure.
+
+    The midpoint rule with ``n = ceil(exposure_s / max_step_s)`` equal
+    sub-exposures: the numerical resampling of Kipping (2010, MNRAS 408, 1758,
+    Sect. 3.2) for long integrations (one row per 64-frame cube). A 2 s frame is
+    one sample at its mid-time (offset 0).
+
+    Examples
+    --------
+    >>> integration_offsets_d(2.0).tolist()
+    [0.0]
+    >>> (integration_offsets_d(30.0) * 86400.0).round(6).tolist()
+    [-10.0, 0.0, 10.0]
+    """
+    if not (math.isfinite(exposure_s) and exposure_s >= 0):
+        raise InputError(f"exposure_s {exposure_s!r}: expected a non-negative exposure in s")
+    n = max(1, int(math.ceil(exposure_s / max_step_s - 1e-9)))
+    return ((np.arange(n) + 0.5) / n - 0.5) * (exposure_s / 86400.0)
+
+
+def aor_order(time_bmjd: np.ndarray, aorkey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The AORs in the order of their first frame, and each frame's rank in that order.
+
+    Examples
+    --------
+    >>> keys, rank = aor_order(np.array([3.0, 1.0, 2.0, 4.0]), np.array([7, 9, 9, 7]))
+    >>> keys.tolist(), rank.tolist()
+    ([9, 7], [1, 0, 0, 1])
+    """
+    keys, inverse = np.unique(np.asarray(aorkey), return_inverse=True)
+    first = np.full(len(keys), np.inf)
+    np.minimum.at(first, inverse.ravel(), np.asarray(time_bmjd, dtype=float))
+    order = np.argsort(first, kind="stable")
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    return keys[order], rank[inverse.ravel()]
 
 
 class VisibleFraction(Protocol):
@@ -270,9 +324,11 @@ class AstroModel:
         Orbital period for the sinusoid (default: the system's).
     box_duration_d : float, optional
         Duration of the box eclipse (default: measured from the physical shape).
-    event : {"eclipse", "transit"}
+    event : {"eclipse", "transit", "phase-curve"}
         The event fitted. A transit needs ``system`` (its orbit) and ignores
-        ``eclipse_shape``, ``shape`` and ``box_duration_d``.
+        ``eclipse_shape``, ``shape`` and ``box_duration_d``. A whole phase
+        curve (``phase`` "harmonic1" or "harmonic2") needs ``system`` and the
+        physical eclipse shape.
     transit_free : sequence of {"a_rs", "b", "q1", "q2"}
         The transit's parameters fitted besides ``rp_rs`` and
         ``t_transit_bmjd``; the others stay at the catalogue's ``a_rs``, impact
@@ -285,6 +341,16 @@ class AstroModel:
     limb_darkening_q : (float, float), optional
         Kipping's q1, q2 (fixed values, or the start of free ones); default
         those of the catalogue's quadratic coefficients (:func:`q_from_u`).
+    aorkey : array_like, shape (n,), optional
+        A phase curve's AOR of each frame: every AOR after the first gets a
+        flux offset ``aor_offset_<k>`` (a phase curve only).
+    exposure_s : float, optional
+        A phase curve's integration time of one row (default: the median
+        cadence); rows longer than 10 s are averaged over sub-exposures
+        (:func:`integration_offsets_d`).
+    nonnegative_planet : bool
+        A phase curve's prior ``p(t) >= 0`` over the orbit (a penalty residual
+        for least squares, ``-inf`` log-prior for the MCMC).
 
     Examples
     --------
@@ -318,13 +384,20 @@ class AstroModel:
                  box_duration_d: float | None = None, event: str = "eclipse",
                  transit_free: Sequence[str] = (),
                  transit_priors: Mapping[str, Sequence[float]] | None = None,
-                 limb_darkening_q: Sequence[float] | None = None) -> None:
-        if phase not in PHASE_MODELS:
-            raise InputError(f"--phase {phase!r}: expected one of {', '.join(PHASE_MODELS)}")
-        if ramp not in RAMP_MODELS:
-            raise InputError(f"--ramp {ramp!r}: expected one of {', '.join(RAMP_MODELS)}")
+                 limb_darkening_q: Sequence[float] | None = None, aorkey=None,
+                 exposure_s: float | None = None, nonnegative_planet: bool = False) -> None:
         if event not in EVENTS:
             raise InputError(f"--event {event!r}: expected one of {', '.join(EVENTS)}")
+        phases = PHASE_CURVE_MODELS if event == "phase-curve" else PHASE_MODELS
+        if phase not in phases:
+            raise InputError(f"--phase {phase!r}: expected one of {', '.join(phases)} "
+                             f"(event '{event}')")
+        if ramp not in RAMP_MODELS:
+            raise InputError(f"--ramp {ramp!r}: expected one of {', '.join(RAMP_MODELS)}")
+        if event != "phase-curve" and (aorkey is not None or exposure_s is not None
+                                       or nonnegative_planet):
+            raise InputError("aorkey, exposure_s, nonnegative_planet: apply to event "
+                             "'phase-curve' only")
         if eclipse_shape not in ECLIPSE_SHAPES:
             raise InputError(f"eclipse_shape {eclipse_shape!r}: expected one of "
                              f"{', '.join(ECLIPSE_SHAPES)}")
@@ -341,10 +414,19 @@ class AstroModel:
         self.n_shape = 0          # the transit's free a_rs, b, q1, q2
         self.priors: dict[str, tuple[float, float]] = {}
         self.n_priors = 0
+        self.n_aor = 0            # a phase curve's AOR offsets
         self.exposure_d = float(np.median(np.diff(np.sort(self.time_bmjd))))
         if not self.exposure_d > 0:
             raise InputError("time_bmjd: the frames do not advance in time")
         self.box_duration_d = None
+        if event == "phase-curve":
+            if transit_free or transit_priors:
+                raise InputError("transit_free, transit_priors: apply to event 'transit' only "
+                                 "(a phase curve fits Rp/R* with a/R*, b and limb darkening "
+                                 "fixed)")
+            self._setup_phase_curve(system, shape, period_d, limb_darkening_q, aorkey,
+                                    exposure_s, nonnegative_planet)
+            return
         if event == "transit":
             self.shape = None
             self.period_d = period_d if period_d is not None else system_period_days(system)
@@ -416,6 +498,68 @@ class AstroModel:
                                       fixed_orbit=not {"a_rs", "b"} & set(self.transit_free))
         self._inc_fixed_deg = float(system.inc_deg)
 
+    def _setup_phase_curve(self, system: Any, shape: VisibleFraction | None,
+                           period_d: float | None, q: Sequence[float] | None, aorkey,
+                           exposure_s: float | None, nonnegative: bool) -> None:
+        """A whole phase curve: T(t) as the transit's, v(t) as the eclipse's, p(t) harmonic,
+        and the AOR offsets O(t)."""
+        if system is None:
+            raise InputError("event 'phase-curve': give the planetary system (its orbit)")
+        if self.eclipse_shape != "physical":
+            raise InputError(f"eclipse_shape {self.eclipse_shape!r}: a phase curve's eclipses "
+                             "repeat every orbit; use 'physical'")
+        self.period_d = float(period_d if period_d is not None else system_period_days(system))
+        if not self.period_d > 0:
+            raise InputError("event 'phase-curve': the orbital period is unknown (give period_d)")
+        # the transit exactly as event "transit" makes it, with Rp/R* free and a/R*, b and
+        # the limb darkening fixed (their defaults there)
+        self.transit_free = ()
+        if q is None or len(q) == 0:
+            q = q_from_u(*(float(u) for u in system.ld_quadratic))
+        if len(q) != 2 or not all(0.0 <= float(v) <= 1.0 for v in q):
+            raise InputError(f"limb_darkening_q {list(q)!r}: expected [q1, q2], each in [0, 1]")
+        self.transit_fixed = {"a_rs": float(system.a_rs), "b": float(system.impact_parameter),
+                              "q1": float(q[0]), "q2": float(q[1])}
+        self.rp_rs_catalogue = float(system.rp_rs)
+        self.ecc = float(system.ecc)
+        self.omega_deg = float(system.omega_deg)
+        self._inc_fixed_deg = float(system.inc_deg)
+        # integration over each row's exposure (binned tables: one row per 64-frame cube)
+        self.exposure_s = float(self.exposure_d * 86400.0 if exposure_s is None else exposure_s)
+        self._sub_offsets_d = integration_offsets_d(self.exposure_s)
+        n_sub = len(self._sub_offsets_d)
+        self._sub_time = (self.time_bmjd if n_sub == 1 else
+                          (self.time_bmjd[:, None] + self._sub_offsets_d[None, :]).ravel())
+        if shape is not None and n_sub > 1:
+            raise InputError("shape: a precomputed eclipse shape cannot be integrated over "
+                             f"{self.exposure_s:g} s exposures (leave it out)")
+        self.shape = shape if shape is not None else EclipseShape(self._sub_time, system)
+        self._transit = _TransitCurve(self._sub_time, system, fixed_orbit=True)
+        # the catalogue orbit's mid-transit minus mid-eclipse (observed, light travel included);
+        # the fitted eclipse time carries every transit with it (one orbit, period fixed)
+        t_e = eclipse_time_bmjd(system, self.t_start_bmjd)
+        self.transit_minus_eclipse_d = float(transit_time_bmjd(system, t_e - 0.5 * self.period_d)
+                                             - t_e)
+        self.transit_phase_rad = 2.0 * math.pi * self.transit_minus_eclipse_d / self.period_d
+        # one flux offset (1 + o_k) per AOR after the first (Bell et al. 2021, SPCA)
+        self.aor_keys: tuple = ()
+        self._aor_rank = None
+        if aorkey is not None:
+            aorkey = np.asarray(aorkey)
+            if aorkey.shape != self.time_bmjd.shape:
+                raise InputError(f"aorkey: expected {len(self.time_bmjd)} values, got "
+                                 f"{aorkey.shape}")
+            keys, self._aor_rank = aor_order(self.time_bmjd, aorkey)
+            self.aor_keys = tuple(k.item() if hasattr(k, "item") else k for k in keys)
+        self.n_aor = max(len(self.aor_keys) - 1, 0)
+        self.nonnegative_planet = bool(nonnegative)
+        self.n_priors = 1 if self.nonnegative_planet else 0
+        self.n_shape = 1   # rp_rs
+        self.n_phase = len(_PHASE_NAMES[self.phase])
+        self.n_ramp = len(_RAMP_NAMES[self.ramp])
+        self.names = ("depth", "t_ecl_bmjd", "rp_rs") + _PHASE_NAMES[self.phase] \
+            + _RAMP_NAMES[self.ramp] + tuple(f"aor_offset_{k}" for k in range(1, self.n_aor + 1))
+
     def _measure_box_duration(self, system: Any, shape: VisibleFraction) -> float | None:
         """Half-depth duration of the physical eclipse.
 
@@ -436,7 +580,8 @@ class AstroModel:
     @property
     def scales(self) -> np.ndarray:
         """Typical magnitude of each parameter (finite-difference steps, MCMC ball)."""
-        return np.array([_SCALES[n] for n in self.names])
+        return np.array([_SCALES["aor_offset" if n.startswith("aor_offset_") else n]
+                         for n in self.names])
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -446,12 +591,20 @@ class AstroModel:
         of the data; an exponential ramp has amplitude in (-0.2, 0.2) and a
         timescale between one frame and the time span. A transit's Rp/R* lies
         in [0, 0.5], its mid-time inside the data, a/R* in [1.5, 200], b in
-        [0, 1.5] and q1, q2 in [0, 1].
+        [0, 1.5] and q1, q2 in [0, 1]. A phase curve's eclipse time lies
+        within half a period of the data (its first eclipse may precede them),
+        its Rp/R* in [0, 0.5] and each AOR offset in (-0.5, 0.5).
         """
         lo = np.full(len(self.names), -np.inf)
         hi = np.full(len(self.names), np.inf)
         lo[0], hi[0] = -0.1, 0.1
         lo[1], hi[1] = self.t_start_bmjd, self.t_stop_bmjd
+        if self.event == "phase-curve":
+            lo[1] -= 0.5 * self.period_d
+            hi[1] += 0.5 * self.period_d
+            lo[2], hi[2] = _TRANSIT_BOUNDS["rp_rs"]
+            if self.n_aor:
+                lo[-self.n_aor:], hi[-self.n_aor:] = -0.5, 0.5
         if self.event == "transit":
             for i, name in enumerate(self.names[:2 + self.n_shape]):
                 if name in _TRANSIT_BOUNDS:
@@ -470,13 +623,20 @@ class AstroModel:
         - an eclipse: ``depth`` (default 1e-3) at ``t_ecl_bmjd``;
         - a transit: ``rp_rs`` (default the catalogue's) at ``t_ecl_bmjd`` (the
           event's time: mid-transit), free a_rs, b, q1, q2 at their prior
-          means or else their fixed values.
+          means or else their fixed values;
+        - a phase curve: ``depth`` at ``t_ecl_bmjd`` (an eclipse within half a
+          period of the data), the catalogue's ``rp_rs``, no phase variation,
+          AOR offsets 0.
 
         The time defaults to the middle of the data.
         """
         if t_ecl_bmjd is None:
             t_ecl_bmjd = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
-        if not self.t_start_bmjd <= t_ecl_bmjd <= self.t_stop_bmjd:
+        lo, hi = self.bounds
+        if self.event == "phase-curve" and not lo[1] <= t_ecl_bmjd <= hi[1]:
+            raise InputError(f"eclipse time {t_ecl_bmjd:.5f} BMJD lies more than half a period "
+                             f"from the data ({self.t_start_bmjd:.5f}-{self.t_stop_bmjd:.5f})")
+        if self.event != "phase-curve" and not self.t_start_bmjd <= t_ecl_bmjd <= self.t_stop_bmjd:
             raise InputError(f"{self.event} time {t_ecl_bmjd:.5f} BMJD lies outside the data "
                              f"({self.t_start_bmjd:.5f}-{self.t_stop_bmjd:.5f})")
         theta = np.zeros(len(self.names))
@@ -486,15 +646,24 @@ class AstroModel:
                 theta[2 + i] = self.priors.get(name, (self.transit_fixed[name],))[0]
         else:
             theta[0] = 1e-3 if depth is None else depth
+        if self.event == "phase-curve":
+            theta[2] = self.rp_rs_catalogue if rp_rs is None else rp_rs
         theta[1] = t_ecl_bmjd
         if self.ramp == "exponential":
-            theta[-1] = min(0.02, 0.25 * (self.t_stop_bmjd - self.t_start_bmjd))
+            theta[2 + self.n_shape + self.n_phase + 1] = min(
+                0.02, 0.25 * (self.t_stop_bmjd - self.t_start_bmjd))
         return theta
 
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
-        """v(t): 1 = planet fully visible, 0 = fully eclipsed (1 throughout a transit)."""
+        """v(t): 1 = planet fully visible, 0 = fully eclipsed (1 throughout a transit).
+
+        A phase curve's is averaged over each row's exposure.
+        """
         if self.event == "transit":
             return np.ones_like(self.time_bmjd)
+        if self.event == "phase-curve":
+            return self._integrated(np.asarray(self.shape.visible_fraction(t_ecl_bmjd),
+                                               dtype=float))
         if self.eclipse_shape == "box":
             return box_visible_fraction(self.time_bmjd, t_ecl_bmjd, self.box_duration_d,
                                         self.exposure_d)
@@ -503,10 +672,14 @@ class AstroModel:
     def planet(self, theta) -> np.ndarray:
         """p(t), the planet-to-star flux ratio; p(t_ecl) = depth for every phase model.
 
-        For a transit, the phase variation about mid-transit (0 there).
+        For a transit, the phase variation about mid-transit (0 there). For a
+        phase curve, :func:`~eclipsebench.astro.phase_curves.harmonic_curve` at
+        the rows' mid-times.
         """
         theta = np.asarray(theta, dtype=float)
         depth, t_ecl = theta[0], theta[1]
+        if self.event == "phase-curve":
+            return self._harmonic(theta, self.time_bmjd)
         if self.event == "transit":
             depth = 0.0
         k = 2 + self.n_shape
@@ -546,22 +719,84 @@ class AstroModel:
         return values
 
     def stellar_flux(self, theta) -> np.ndarray:
-        """T(t), the star's flux in transit (1 outside; a transit only)."""
-        if self.event != "transit":
+        """T(t), the star's flux in transit (1 outside; a transit or a phase curve).
+
+        A phase curve's transits follow its eclipse time (``t_ecl +
+        transit_minus_eclipse_d``, modulo the period), averaged over each row's
+        exposure.
+        """
+        if self.event == "eclipse":
             raise InputError("stellar_flux: the model is of an eclipse, not a transit")
+        if self.event == "phase-curve":
+            return self._integrated(self._stellar_sub(theta))
         v = self.transit_values(theta)
         return self._transit(float(theta[0]), float(theta[1]), v["a_rs"], v["inc_deg"],
                              v["u1"], v["u2"])
 
+    # ------------------------------------------------------------------ whole phase curves
+    def _integrated(self, values: np.ndarray) -> np.ndarray:
+        """The mean over each row's sub-exposures of values at ``_sub_time`` (a phase curve)."""
+        n_sub = len(self._sub_offsets_d)
+        return values if n_sub == 1 else values.reshape(-1, n_sub).mean(axis=1)
+
+    def _harmonic(self, theta: np.ndarray, time: np.ndarray) -> np.ndarray:
+        """p(t) of a phase curve at ``time``: the lead's harmonic curve, phi = 2 pi (t - t_ecl) / P."""
+        k = 2 + self.n_shape
+        phase_rad = (2.0 * np.pi / self.period_d) * (time - theta[1])
+        return harmonic_curve(phase_rad, theta[0], theta[k:k + self.n_phase])
+
+    def _stellar_sub(self, theta: np.ndarray) -> np.ndarray:
+        """T(t) of a phase curve at the sub-exposure times (Rp/R* is ``theta[2]``)."""
+        v = self.transit_values(theta)
+        return self._transit(float(theta[2]), float(theta[1]) + self.transit_minus_eclipse_d,
+                             v["a_rs"], v["inc_deg"], v["u1"], v["u2"])
+
+    def aor_factor(self, theta) -> np.ndarray:
+        """O(t): ``1`` in the first AOR, ``1 + aor_offset_k`` in the k-th after it."""
+        if not self.n_aor:
+            return np.ones_like(self.time_bmjd)
+        theta = np.asarray(theta, dtype=float)
+        levels = np.concatenate([[1.0], 1.0 + theta[len(self.names) - self.n_aor:]])
+        return levels[self._aor_rank]
+
+    def phase_summary(self, theta) -> dict[str, float]:
+        """What the literature reports of the fitted phase curve (a phase curve only).
+
+        :func:`~eclipsebench.astro.phase_curves.harmonic_summary` of the depth and
+        harmonics, the night side at this orbit's mid-transit phase: keys
+        ``phase_amplitude``, ``phase_offset_deg`` (east positive),
+        ``nightside_flux``, ``planet_flux_min`` (fractions of the star's flux).
+        """
+        if self.event != "phase-curve":
+            raise InputError("phase_summary: the model is not a whole phase curve")
+        theta = np.asarray(theta, dtype=float)
+        k = 2 + self.n_shape
+        return harmonic_summary(float(theta[0]), theta[k:k + self.n_phase],
+                                transit_phase_rad=self.transit_phase_rad)
+
+    def _phase_curve(self, theta: np.ndarray) -> np.ndarray:
+        """A(t) = R(t) O(t) [T(t) + v(t) p(t)], T, v and p averaged over each exposure."""
+        v = np.asarray(self.shape.visible_fraction(theta[1]), dtype=float)
+        flux = self._integrated(self._stellar_sub(theta) + v * self._harmonic(theta,
+                                                                              self._sub_time))
+        if self.ramp != "none":
+            flux *= self.ramp_factor(theta)
+        if self.n_aor:
+            flux *= self.aor_factor(theta)
+        return flux
+
     def __call__(self, theta) -> np.ndarray:
         """A(t) = R(t) [1 + v(t) p(t)], normalised to 1 = the star alone.
 
-        A transit: A(t) = R(t) [T(t) + p(t)].
+        A transit: A(t) = R(t) [T(t) + p(t)]. A phase curve: A(t) = R(t) O(t)
+        [T(t) + v(t) p(t)].
         """
         theta = np.asarray(theta, dtype=float)
         if len(theta) != len(self.names):
             raise ValueError(f"expected {len(self.names)} parameters {self.names}, "
                              f"got {len(theta)}")
+        if self.event == "phase-curve":
+            return self._phase_curve(theta)
         if self.event == "transit":
             flux = self.stellar_flux(theta)
             if self.phase != "flat":
@@ -602,15 +837,34 @@ class AstroModel:
 
     # ------------------------------------------------------------------ priors
     def prior_residuals(self, theta) -> np.ndarray:
-        """``(value - mean) / sigma`` of each Gaussian prior (empty without priors)."""
+        """``(value - mean) / sigma`` of each Gaussian prior (empty without priors).
+
+        A phase curve with ``nonnegative_planet``: one penalty residual,
+        ``min(p_min, 0) / NONNEGATIVE_SCALE`` (0 while the planet's flux stays
+        non-negative over the orbit).
+        """
         theta = np.asarray(theta, dtype=float)
+        if self.event == "phase-curve":
+            if not self.nonnegative_planet:
+                return np.zeros(0)
+            p_min = self.phase_summary(theta)["planet_flux_min"]
+            return np.array([min(p_min, 0.0) / NONNEGATIVE_SCALE])
         return np.array([(theta[self.names.index(n)] - mu) / sigma
                          for n, (mu, sigma) in self.priors.items()])
 
     def log_prior_batch(self, thetas) -> np.ndarray:
-        """``-0.5 sum(prior residuals^2)`` of every row (0 without priors)."""
+        """``-0.5 sum(prior residuals^2)`` of every row (0 without priors).
+
+        A phase curve with ``nonnegative_planet``: ``-inf`` where the planet's
+        flux goes negative somewhere in the orbit, else 0.
+        """
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         out = np.zeros(len(thetas))
+        if self.event == "phase-curve":
+            if self.nonnegative_planet:
+                p_min = np.array([self.phase_summary(t)["planet_flux_min"] for t in thetas])
+                out[p_min < 0.0] = -np.inf
+            return out
         for n, (mu, sigma) in self.priors.items():
             out -= 0.5 * ((thetas[:, self.names.index(n)] - mu) / sigma) ** 2
         return out
@@ -624,7 +878,7 @@ class AstroModel:
         arrays), the physical eclipse with :func:`numpy.interp`'s formula on
         the shape's table but an O(1) search; the sinusoid and the exponential
         ramp are broadcast with numpy (their ``sin``, ``cos``, ``exp`` stay
-        numpy's). A transit is evaluated row by row (:meth:`__call__`).
+        numpy's). A transit or a phase curve is evaluated row by row (:meth:`__call__`).
 
         Parameters
         ----------
@@ -645,7 +899,7 @@ class AstroModel:
         if thetas.ndim != 2 or thetas.shape[1] != len(self.names):
             raise ValueError(f"expected rows of {len(self.names)} parameters {self.names}, "
                              f"got shape {thetas.shape}")
-        if self.event == "transit":   # batman's routines per row: each row is self(theta)
+        if self.event != "eclipse":   # batman's routines per row: each row is self(theta)
             return np.stack([self(theta) for theta in thetas])
         fused = self._fused_arguments(thetas)
         if fused is not None:
@@ -771,6 +1025,14 @@ class AstroModel:
                         "transit_priors": {k: list(v) for k, v in self.priors.items()},
                         "transit_fixed": dict(self.transit_fixed),
                         "conjunction_minus_mid_transit_s": self._transit.offset_d * 86400.0})
+        if self.event == "phase-curve":
+            out.update({"event": "phase-curve", "transit_fixed": dict(self.transit_fixed),
+                        "transit_minus_eclipse_d": self.transit_minus_eclipse_d,
+                        "transit_phase_deg": math.degrees(self.transit_phase_rad),
+                        "exposure_s": self.exposure_s,
+                        "n_subexposures": len(self._sub_offsets_d),
+                        "aorkeys": list(self.aor_keys),
+                        "nonnegative_planet": self.nonnegative_planet})
         return out
 
 

@@ -32,7 +32,7 @@ from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path
 from ..photometry.table import read_table
-from .astro_model import PHASE_MODELS, AstroModel
+from .astro_model import PHASE_CURVE_MODELS, PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table, median_cadence_s, standardise_table
 from .frames import settling_aor
 from .leastsq import (
@@ -50,7 +50,7 @@ from .profiles import PROFILES, PaperProfile, centroid_columns, paper_profile
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
            "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options",
-           "check_method_options", "resolve_profile"]
+           "check_method_options", "resolve_profile", "phase_curve_detail"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
 _DEFAULT_OPTIONS = ReduceSection()
@@ -88,8 +88,18 @@ def resolve_system(system: Any):
 def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
                            event: str = "eclipse") -> float:
     """The catalogue ephemeris's eclipse (or transit) nearest the data; InputError if it is
-    outside them."""
+    outside them.
+
+    A whole phase curve (``event="phase-curve"``): the first eclipse whose
+    centre lies in the data, else (no eclipse centre inside) the one nearest
+    their middle; the others follow from the period.
+    """
     t0, t1 = float(np.min(time_bmjd)), float(np.max(time_bmjd))
+    if event == "phase-curve":
+        period = float(system.period_days)
+        first = float(eclipse_time_bmjd(system, t0))
+        first += period * np.ceil((t0 - first) / period - 1e-12)   # first at or after t0
+        return first if first <= t1 else float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
     when = transit_time_bmjd if event == "transit" else eclipse_time_bmjd
     t_ecl = float(when(system, 0.5 * (t0 + t1)))
     if not t0 <= t_ecl <= t1:
@@ -133,6 +143,18 @@ class PreparedEpoch:
     def astro_model(self, options: ReduceSection, *, phase: str | None = None) -> AstroModel:
         """The shared astrophysical model at the method's data times."""
         shape = options.eclipse_shape
+        if options.event == "phase-curve":
+            # a whole phase curve: its own phase models, the physical eclipse repeated each
+            # orbit, an offset per AOR unless each AOR has its own systematics
+            data = self.systematics.data
+            return AstroModel(
+                data.time_bmjd, self.system, event="phase-curve",
+                phase=phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model,
+                ramp=options.ramp, eclipse_shape="physical" if shape == "auto" else shape,
+                limb_darkening_q=options.limb_darkening_q,
+                aorkey=None if options.systematics_per_aor else data.aorkey,
+                exposure_s=options.exposure_s or None,
+                nonnegative_planet=options.nonnegative_planet)
         if shape == "auto":
             shape = getattr(self.systematics, "default_eclipse_shape", "physical")
         return AstroModel(self.systematics.data.time_bmjd, self.system,
@@ -348,9 +370,10 @@ class EpochResult:
         out.update({f"depth_err_{k}_ppm": v for k, v in self.depth_err_own_ppm.items()})
         out["options"] = dict(self.options)
         out["diagnostics"] = dict(self.diagnostics)
-        if self.event_detail:   # a transit: its times under their own names
+        if self.event_detail.get("event") == "transit":   # its times under their own names
             for key in ("t_ecl_bmjd", "t_ecl_err_d", "t_ecl_predicted_bmjd"):
                 del out[key]
+        if self.event_detail:
             out.update(_jsonable(self.event_detail))
         return out
 
@@ -623,12 +646,14 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     def ppm(err):   # an error of the size parameter as a depth error (ppm)
         return astro_model.depth_error_ppm(value, err)
 
-    detail = {} if astro_model.event == "eclipse" else {
+    detail = {} if astro_model.event != "transit" else {
         "event": astro_model.event, "rp_rs": value, "rp_rs_err": depth_err,
         "transit_depth_ppm": astro_model.depth_ppm(value), "transit_depth_err_ppm": ppm(depth_err),
         "transit_depth_definition": "rp_rs^2 (geometric)", "t_transit_bmjd": params[when],
         "t_transit_err_d": t_err, "t_transit_predicted_bmjd": prep.t_ecl_predicted_bmjd,
         "transit_model": astro_model.describe()}
+    if astro_model.event == "phase-curve":
+        detail = phase_curve_detail(astro_model, fit, mc, inflate)
     return EpochResult(
         method=method, epoch=prep.epoch,
         depth_ppm=astro_model.depth_ppm(value), depth_err_ppm=ppm(depth_err),
@@ -652,6 +677,92 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         chain=None if mc is None else {"names": np.asarray(mc.names),
                                        "samples": np.asarray(mc.samples)},
         event_detail=detail)
+
+
+def _wrap_deg(angle):
+    """Angles (deg) into [-180, 180)."""
+    return (np.asarray(angle, dtype=float) + 180.0) % 360.0 - 180.0
+
+
+def phase_curve_detail(astro_model: AstroModel, fit: FitResult, mc: McmcResult | None,
+                       inflate: float = 1.0) -> dict[str, Any]:
+    """A whole phase curve's result keys: amplitude, hotspot offset, night side, Rp/R*, offsets.
+
+    The summary is :meth:`AstroModel.phase_summary` (the lead's
+    :func:`~eclipsebench.astro.phase_curves.harmonic_summary`) of the reported
+    parameters. Errors (``phase_errors_from``): with MCMC samples, the 16-84 %
+    half-width of the summary of every sample (the offset's differences from
+    the median wrapped into +-180 deg); otherwise the delta method, ``g^T C g``
+    with ``g`` the central-difference gradient of each summary value and ``C``
+    the least-squares covariance times ``max(1, beta_red)^2`` (the depth's
+    Jacobian rule). ``planet_flux_negative`` flags a minimum below zero.
+    """
+    names = astro_model.names
+    n_astro = len(names)
+    theta = np.asarray(mc.median if mc is not None else fit.theta, dtype=float)[:n_astro]
+    keys = ("phase_amplitude", "phase_offset_deg", "nightside_flux", "planet_flux_min")
+    best = astro_model.phase_summary(theta)
+    errors: dict[str, float] = {}
+    if mc is not None:
+        samples = np.asarray(mc.samples, dtype=float)[:, :n_astro]
+        if len(samples) > 4000:   # a thinned, evenly spaced subset keeps the summary quick
+            samples = samples[np.linspace(0, len(samples) - 1, 4000).astype(int)]
+        rows = [astro_model.phase_summary(t) for t in samples]
+        for key in keys:
+            vals = np.array([r[key] for r in rows])
+            if key == "phase_offset_deg":
+                vals = _wrap_deg(vals - best[key])
+            lo, hi = np.percentile(vals, [16.0, 84.0])
+            errors[key] = float(0.5 * (hi - lo))
+        source = "mcmc samples (16-84 % half-width)"
+    else:
+        free = [i for i, n in enumerate(names) if n == "depth" or n.startswith("phase_")]
+        cov = np.asarray(fit.cov, dtype=float)[np.ix_(free, free)] * inflate ** 2
+        grads = np.zeros((len(keys), len(free)))
+        for j, i in enumerate(free):
+            h = 1e-3 * astro_model.scales[i]
+            up, down = theta.copy(), theta.copy()
+            up[i] += h
+            down[i] -= h
+            s_up, s_down = astro_model.phase_summary(up), astro_model.phase_summary(down)
+            for k, key in enumerate(keys):
+                diff = s_up[key] - s_down[key]
+                if key == "phase_offset_deg":
+                    diff = float(_wrap_deg(diff))
+                grads[k, j] = diff / (2.0 * h)
+        for k, key in enumerate(keys):
+            errors[key] = float(np.sqrt(max(grads[k] @ cov @ grads[k], 0.0)))
+        source = "delta method (least-squares covariance x max(1, beta_red)^2)"
+
+    def err(name):
+        i = names.index(name)
+        if mc is not None:
+            return float(mc.error(name))
+        return float(fit.errors[i] * inflate)
+
+    offsets = [{"aorkey": key, "offset": 0.0, "offset_err": 0.0, "reference": True}
+               for key in astro_model.aor_keys[:1]]
+    for k, key in enumerate(astro_model.aor_keys[1:], start=1):
+        offsets.append({"aorkey": key, "offset": float(theta[names.index(f"aor_offset_{k}")]),
+                        "offset_err": err(f"aor_offset_{k}"), "reference": False})
+    return {
+        "event": "phase-curve",
+        "phase_amplitude_ppm": best["phase_amplitude"] * 1e6,
+        "phase_amplitude_err_ppm": errors["phase_amplitude"] * 1e6,
+        "phase_offset_deg": best["phase_offset_deg"],
+        "phase_offset_err_deg": errors["phase_offset_deg"],
+        "phase_offset_convention": "hotspot offset: minus the orbital phase of the maximum "
+                                   "from mid-eclipse; east of the substellar point positive",
+        "nightside_flux_ppm": best["nightside_flux"] * 1e6,
+        "nightside_flux_err_ppm": errors["nightside_flux"] * 1e6,
+        "planet_flux_min_ppm": best["planet_flux_min"] * 1e6,
+        "planet_flux_min_err_ppm": errors["planet_flux_min"] * 1e6,
+        "planet_flux_negative": bool(best["planet_flux_min"] < 0.0),
+        "rp_rs": float(theta[names.index("rp_rs")]), "rp_rs_err": err("rp_rs"),
+        "aor_offsets": offsets,
+        "phase_errors_from": source,
+        "phase_curve_model": astro_model.describe(),
+    }
 
 
 def _jsonable(obj: Any) -> Any:
@@ -706,6 +817,8 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format)
+    if options.event == "phase-curve" and phases == PHASE_MODELS:
+        phases = PHASE_CURVE_MODELS
     rows = []
     for phase in phases:
         res = fit_prepared(prep, method, options=options, seed=seed, phase=phase, errors=False)
