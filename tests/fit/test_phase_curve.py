@@ -241,3 +241,69 @@ def test_reduce_command_fits_a_phase_curve(tmp_path, polygain, kit, capsys):
     assert main(["reduce", str(path), "--method", polygain.name, "--phase", "harmonic1"]) == 2
     assert main(["reduce", str(path), "--method", polygain.name, "--event", "phase-curve",
                  "--phase", "quadratic"]) == 2
+
+
+def test_one_systematics_model_per_aor(polygain, kit):
+    """[reduce] systematics_per_aor: each AOR its own method (and flux level), no offsets."""
+    time = _times(16.0)
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time))
+    theta = _truth(model, (4e-4, -1.5e-4), offsets=(2e-4, -3e-4, 1e-4, 4e-4, -1e-4, 2.5e-4))
+    table = _table(model, theta, noise=0.0, seed=3, kit=kit)
+    opts = replace(OPTIONS, systematics_per_aor=True, settling_aor="keep")
+    res = reduce_epoch(table, polygain.name, options=opts, system=SYSTEM).to_dict()
+    truth = model.phase_summary(theta)
+    assert res["aor_offsets"] == [] and not any(k.startswith("aor_offset_") for k in res)
+    assert [d["aorkey"] for d in res["diagnostics"]["systematics_per_aor"]] == list(
+        range(70000, 70007))
+    assert res["k"] == 5 + 7 * 6   # depth, time, rp_rs, a1, b1 and six coefficients per AOR
+    assert res["phase_amplitude_ppm"] == pytest.approx(truth["phase_amplitude"] * 1e6, abs=1e-3)
+    assert res["phase_offset_deg"] == pytest.approx(truth["phase_offset_deg"], abs=1e-4)
+    assert res["depth_ppm"] == pytest.approx(theta[0] * 1e6, abs=1e-3)
+    with pytest.raises(ConfigError, match="systematics_per_aor"):
+        replace(ReduceSection(), systematics_per_aor=True).validate()
+
+
+@pytest.mark.parametrize("method", ["bliss", "kr-data"])
+def test_map_and_neighbour_methods_fit_a_binned_phase_curve(method, kit):
+    """One row per 64-frame cube: BLISS's knots and KR's neighbours work on the cubes."""
+    time = _times(128.0)
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time))
+    theta = _truth(model, (4e-4, -1.5e-4))
+    table = _table(model, theta, noise=5e-4, seed=7, kit=kit)
+    table["noise_pixels"] = np.full(len(table), 7.0)
+    res = reduce_epoch(table, method, options=OPTIONS, system=SYSTEM).to_dict()
+    truth = model.phase_summary(theta)
+    assert res["cadence_s"] == pytest.approx(128.0, abs=0.01)
+    assert res["n_frames"] > 0.9 * len(table)
+    for key, unit in (("phase_amplitude", "ppm"), ("phase_offset", "deg")):
+        scale = 1e6 if unit == "ppm" else 1.0
+        err = res[f"{key}_err_{unit}"]
+        assert 0 < err and abs(res[f"{key}_{unit}"] - truth[key if unit == "ppm" else
+                                                               "phase_offset_deg"] * scale) < 4 * err
+
+
+def test_per_aor_systematics_batch_and_refits_equal_their_parts(kit):
+    from eclipsebench.decorrelate import get_method
+    from eclipsebench.fit.data import epoch_data_from_table
+    from eclipsebench.fit.frames import PerAorSystematics, per_aor_systematics
+
+    time = _times(300.0)
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve")
+    table = _table(model, _truth(model, (4e-4, 0.0)), noise=1e-3, seed=4, kit=kit)
+    data = epoch_data_from_table(table)
+    joined = per_aor_systematics(data, lambda part: get_method("bliss")(part))
+    assert isinstance(joined, PerAorSystematics) and len(joined.parts) == 7
+    astro = np.vstack([model(_truth(model, (a, 0.0))) for a in (3e-4, 4e-4, 5e-4)])
+    astro = astro[:, np.searchsorted(time, joined.data.time_bmjd)]
+    loop = [joined.log_likelihood(a) for a in astro]
+    assert np.allclose(joined.log_likelihood_batch(astro), loop, rtol=1e-12, atol=0)
+    # the prayer bead's refit: each part rebuilt on its own rows equals a fresh build
+    def poly(part):
+        return get_method("poly2")(part, bin_frames=1)
+
+    flux = data.flux * (1.0 + 1e-3 * np.sin(np.arange(len(data))))
+    fresh = per_aor_systematics(replace(data, flux=flux), poly)
+    refit = per_aor_systematics(data, poly).with_flux(flux)
+    a = model(_truth(model, (4e-4, 0.0)))
+    assert np.allclose(refit.predict(a), fresh.predict(a), rtol=1e-12, atol=0)
+    assert np.array_equal(refit.data.flux, flux)

@@ -152,6 +152,9 @@ class ReduceSection:
         check(self.max_nfev >= 10, "max_nfev", "at least 10 evaluations")
         check(0.0 <= self.exposure_s <= 3600.0, "exposure_s",
               "0 (the table's cadence) or an exposure of at most 3600 s")
+        for key in ("systematics_per_aor", "nonnegative_planet"):
+            check(not getattr(self, key) or self.event == "phase-curve", key,
+                  "true only with event = 'phase-curve'")
         free = ("a_rs", "b", "q1", "q2")   # eclipsebench.fit.astro_model.TRANSIT_FREE
         check(all(n in free for n in self.transit_free)
               and len(set(self.transit_free)) == len(self.transit_free), "transit_free",

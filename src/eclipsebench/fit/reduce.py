@@ -34,7 +34,7 @@ from ..io.atomic import atomic_path
 from ..photometry.table import read_table
 from .astro_model import PHASE_CURVE_MODELS, PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table, median_cadence_s, standardise_table
-from .frames import settling_aor
+from .frames import per_aor_systematics, settling_aor
 from .leastsq import (
     FitResult,
     _covariance,
@@ -251,8 +251,15 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     # eclipse's signature in its own decomposition (ICA's eclipse component).
     data = replace(data, meta={**data.meta, "t_ecl_predicted_bmjd": t_pred})
     epoch_number = _epoch_number(table, epoch)
-    systematics = cls.build(data, method_opts, seed=seed, epoch=epoch_number or 0,
-                            resources=resources)
+
+    def build(frames):
+        return cls.build(frames, method_opts, seed=seed, epoch=epoch_number or 0,
+                         resources=resources)
+
+    if options.systematics_per_aor:   # a whole phase curve: one method per AOR
+        systematics = per_aor_systematics(data, build)
+    else:
+        systematics = build(data)
     dropped.update({k: int(v) for k, v in systematics.dropped_frames().items()})
     return PreparedEpoch(table=table, systematics=systematics, system=system,
                          epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
