@@ -3,6 +3,9 @@
 The defaults of every section are the built-in XO-3b data challenge, so an
 empty file (or no file) is that challenge; ``eclipsebench config --show``
 prints it. Each section lives in the module of the stage that owns it.
+Built-in configurations (``eclipsebench/data/configs/<name>.toml``, e.g.
+``xo3b-phase-curve``) are taken by name wherever a file is
+(:func:`resolve_config`).
 """
 
 from __future__ import annotations
