@@ -52,6 +52,26 @@ and the second its mid-time, so that code reading ``names[0]`` and
 ``names[1]`` handles both events; :meth:`AstroModel.depth_ppm` turns the size
 into the event's depth (the transit's is ``rp_rs^2``, geometric: not the
 limb-darkened flux drop at mid-transit).
+
+Whole phase curves (``event="phase-curve"``) put both events and the
+planet's phase variation in one model over several AORs::
+
+    A(t) = R(t) O(t) [T(t) + v(t) p(t)]
+
+- ``T(t)`` is the transit's stellar flux as above (``rp_rs`` free; a_rs, b
+  and limb darkening fixed), its mid-transit at ``t_ecl`` plus the catalogue
+  orbit's transit-minus-eclipse time; ``v(t)`` the eclipse's physical shape,
+  which repeats every period;
+- ``p(t)`` the harmonic phase curve of :func:`eclipsebench.astro.phase_curves.harmonic_curve`
+  (``harmonic1``: ``D + a1 (cos phi - 1) + b1 sin phi``; ``harmonic2`` adds
+  ``a2 (cos 2 phi - 1) + b2 sin 2 phi``; ``phi = 2 pi (t - t_ecl) / P``), the
+  first and second harmonic of SPCA (Bell et al. 2021, MNRAS 504, 3316);
+- ``O(t)`` a flux offset ``1 + o_k`` for each AOR after the first (the step
+  at each repointing, as SPCA fits it), from the table's ``aorkey``.
+
+Its parameter vector is ``[depth, t_ecl_bmjd, rp_rs, phase_a1, phase_b1,
+(phase_a2, phase_b2), ramp..., aor_offset_1, ...]``; each row is averaged
+over its exposure (binned tables; :func:`integration_offsets_d`).
 """
 
 from __future__ import annotations
@@ -122,9 +142,9 @@ def integration_offsets_d(exposure_s: float,
     """Offsets (days) from a row's mid-time at which its model is averaged over the exposure.
 
     The midpoint rule with ``n = ceil(exposure_s / max_step_s)`` equal
-    sub-exposures: the numerical resampling of Kipping (2010, MNRAS 408, 1758,
-    Sect. 3.2) for long integrations (one row per 64-frame cube). A 2 s frame is
-    one sample at its mid-time (offset 0).
+    sub-exposures: the numerical resampling ("supersampling") of Kipping (2010,
+    MNRAS 408, 1758) for long integrations (one row per 64-frame cube). A 2 s
+    frame is one sample at its mid-time (offset 0).
 
     Examples
     --------
