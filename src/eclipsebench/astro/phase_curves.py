@@ -28,7 +28,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 __all__ = ["PHASE_MODELS", "N_COEFFS", "flat", "linear", "quadratic", "sinusoid",
-           "design_matrix", "evaluate", "harmonic_curve", "harmonic_summary", "fit_harmonics"]
+           "design_matrix", "evaluate", "harmonic_curve", "harmonic_summary", "fit_harmonics",
+           "fit_harmonic_light_curve"]
 
 
 def _x(time, t_ref: float) -> np.ndarray:
@@ -199,3 +200,61 @@ def fit_harmonics(time_bmjd, planet_flux, t_ecl_bmjd: float, period_d: float, *,
         cols += [np.cos(2.0 * phi) - 1.0, np.sin(2.0 * phi)]
     coeffs = np.linalg.lstsq(np.stack(cols, axis=-1), f[ok], rcond=None)[0]
     return float(coeffs[0]), tuple(float(c) for c in coeffs[1:])
+
+
+def fit_harmonic_light_curve(time_bmjd, flux, visible, stellar, t_ecl_bmjd: float,
+                             period_d: float, *, n_harmonics: int = 1,
+                             segments=None) -> tuple[float, tuple[float, ...]]:
+    """Least-squares harmonic phase curve of a whole light curve, eclipses and transits included.
+
+    ``flux ~ F0 [S(t) + V(t) p(t)]`` with ``p`` of :func:`harmonic_curve`,
+    ``S`` the stellar flux (transits) and ``V`` the planet's visible fraction
+    (eclipses) held at their true values: the model of ``reduce --event
+    phase-curve`` without systematics, linear in ``(F0, F0 depth, F0 a1, ...)``
+    as the paper's Section 4.2 fit of an eclipse (:mod:`.bias`). On a
+    simulated phase curve's noiseless ``L(t)`` it gives what a perfect fit of
+    that model reports, so the truth and the fit share one definition also
+    when the planet's phase curve is not a harmonic series.
+
+    ``segments`` (one label per sample, e.g. the AORKEY) gives each segment
+    its own normalisation ``F0_k``, as the reducer's flux offset per AOR
+    (to first order in ``p``: ``F0_k V p`` is taken as ``F0 V p``, an error
+    of ``(F0_k / F0 - 1) p``, about 1e-6 of the star for offsets of 1e-3).
+
+    Returns
+    -------
+    depth : float
+        ``p(t_ecl)``, the model's eclipse depth (fraction).
+    harmonics : tuple of float
+        ``(a1, b1)`` or ``(a1, b1, a2, b2)``.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 3.0, 3001)
+    >>> v = np.where(np.abs(t - 1.0) < 0.05, 0.0, 1.0)
+    >>> s = np.where(np.abs(t - 2.5) < 0.05, 0.99, 1.0)
+    >>> p = harmonic_curve(2 * math.pi * (t - 1.0) / 3.0, 2e-3, (4e-4, 1e-4))
+    >>> d, h = fit_harmonic_light_curve(t, 1.7 * (s + v * p), v, s, 1.0, 3.0)
+    >>> round(d * 1e6, 6), [round(x * 1e6, 6) for x in h]
+    (2000.0, [400.0, 100.0])
+    """
+    if n_harmonics not in (1, 2):
+        raise ValueError(f"n_harmonics: expected 1 or 2, got {n_harmonics}")
+    t = np.asarray(time_bmjd, dtype=float)
+    v = np.asarray(visible, dtype=float)
+    phi = 2.0 * math.pi * (t - t_ecl_bmjd) / period_d
+    stellar = np.asarray(stellar, dtype=float)
+    labels = np.zeros(t.shape, dtype=int) if segments is None else np.asarray(segments)
+    keys = np.unique(labels)
+    norm = [stellar * (labels == k) for k in keys]
+    cols = [v, v * (np.cos(phi) - 1.0), v * np.sin(phi)]
+    if n_harmonics == 2:
+        cols += [v * (np.cos(2.0 * phi) - 1.0), v * np.sin(2.0 * phi)]
+    a = np.stack(norm + cols, axis=-1)
+    f = np.asarray(flux, dtype=float)
+    ok = np.all(np.isfinite(a), axis=1) & np.isfinite(f)
+    coeffs = np.linalg.lstsq(a[ok], f[ok], rcond=None)[0]
+    f0 = float(np.sum(coeffs[:len(keys)] * np.bincount(np.searchsorted(keys, labels[ok]),
+                                                       minlength=len(keys))) / np.sum(ok))
+    planet = coeffs[len(keys):] / f0
+    return float(planet[0]), tuple(float(c) for c in planet[1:])

@@ -40,7 +40,7 @@ from astropy.table import Table
 from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
-from ..astro.phase_curves import fit_harmonics, harmonic_summary
+from ..astro.phase_curves import fit_harmonic_light_curve, fit_harmonics, harmonic_summary
 from ..astro.thermal import DEFAULT_WAVELENGTH_UM
 from ..config import Config, dump_toml, from_mapping, to_mapping
 from ..config.base import load_toml
@@ -317,21 +317,27 @@ def _load_aor_truth(out_dir: Path, aor: AORPlan) -> dict[str, np.ndarray]:
         return {k: data[k] for k in data.files}
 
 
-def phase_curve_truth(time_bmjd, lc, t_ecl_bmjd: float) -> dict[str, float]:
-    """The harmonic truth of a phase curve: what the fit of ``reduce --event phase-curve`` reports.
+def phase_curve_truth(time_bmjd, lc, t_ecl_bmjd: float, aorkey=None) -> dict[str, float]:
+    """The harmonic truth of a phase curve: what a perfect fit of ``reduce --event phase-curve`` reports.
 
-    The noiseless planet-to-star flux ratio ``F(t)`` of the light curve
-    (``lc.planet_flux``) at the frames' times, out of eclipse (``V = 1``) and
-    transit (``S = 1``), is fitted with the first harmonic and, separately,
-    the first two (:func:`~eclipsebench.astro.phase_curves.fit_harmonics`,
-    phase 0 at ``t_ecl_bmjd``), and summarised as the literature does
+    The noiseless light curve ``L(t)`` at the frames' times is fitted with the
+    reducer's astrophysical model without systematics, ``F0 [S(t) + V(t)
+    p(t)]`` (``S``, ``V`` the true transit and eclipse;
+    :func:`~eclipsebench.astro.phase_curves.fit_harmonic_light_curve`, one
+    ``F0`` per AOR when ``aorkey`` is given, as the reducer's offsets), with
+    the first harmonic and, separately, the first two (phase 0 at
+    ``t_ecl_bmjd``), and summarised as the literature does
     (:func:`~eclipsebench.astro.phase_curves.harmonic_summary`, the transit
     phase ``2 pi (t_tr - t_ecl) / P`` with ``t_tr`` the first mid-transit
     after ``t_ecl_bmjd``). The first-harmonic values are the truth
     (``phase_amplitude_ppm``, ``phase_offset_deg``, ``nightside_flux_ppm``);
     ``*_h2_*`` are the two-harmonic ones, and ``harmonic_depth*_ppm`` each
-    fit's ``p(t_ecl)``, to show how far the thermal model is from one
-    harmonic.
+    fit's ``p(t_ecl)``. When the planet's phase curve is not a harmonic series
+    (the eccentric XO-3b's thermal curve has two maxima), these differ from
+    the planet's own curve; ``planet_harmonic_*`` give the harmonic fit to the
+    planet flux alone, out of eclipse and transit
+    (:func:`~eclipsebench.astro.phase_curves.fit_harmonics`), to show by how
+    much.
 
     Parameters
     ----------
@@ -341,31 +347,41 @@ def phase_curve_truth(time_bmjd, lc, t_ecl_bmjd: float) -> dict[str, float]:
         The epoch's light curve L(t).
     t_ecl_bmjd : float
         A mid-eclipse time (phase 0).
+    aorkey : array_like, optional
+        The AOR of each frame (a normalisation per AOR).
 
     Returns
     -------
     dict
         ``phase_amplitude_ppm``, ``phase_offset_deg``, ``nightside_flux_ppm``,
-        ``planet_flux_min_ppm``, ``harmonic_depth_ppm`` and the same with
-        ``_h2`` for two harmonics, plus ``n_phase_frames`` (frames fitted).
+        ``planet_flux_min_ppm``, ``harmonic_depth_ppm``, the same with ``_h2``
+        for two harmonics, ``planet_harmonic_amplitude_ppm``,
+        ``planet_harmonic_offset_deg``, ``planet_harmonic_depth_ppm`` and
+        ``n_phase_frames`` (frames out of eclipse and transit).
     """
     t = np.asarray(time_bmjd, dtype=float)
     period = lc.system.period_days
-    out_of_events = (lc.visible_fraction(t) >= 1.0) & (lc.stellar_flux(t) >= 1.0)
-    t_fit = t[out_of_events]
-    flux = lc.planet_flux(t_fit)
+    visible, stellar = lc.visible_fraction(t), lc.stellar_flux(t)
     t_tr = lc.transit_times_bmjd(t_ecl_bmjd, t_ecl_bmjd + period)[0]
     transit_phase = 2.0 * math.pi * (t_tr - t_ecl_bmjd) / period
-    row: dict[str, float] = {"n_phase_frames": int(t_fit.size)}
+    out_of_events = (visible >= 1.0) & (stellar >= 1.0)
+    row: dict[str, float] = {"n_phase_frames": int(np.sum(out_of_events))}
     for n_harmonics, tag in ((1, ""), (2, "_h2")):
-        depth, harmonics = fit_harmonics(t_fit, flux, t_ecl_bmjd, period,
-                                         n_harmonics=n_harmonics)
+        depth, harmonics = fit_harmonic_light_curve(t, lc(t), visible, stellar, t_ecl_bmjd,
+                                                    period, n_harmonics=n_harmonics,
+                                                    segments=aorkey)
         summary = harmonic_summary(depth, harmonics, transit_phase_rad=transit_phase)
         row.update({f"phase_amplitude{tag}_ppm": 1e6 * summary["phase_amplitude"],
                     f"phase_offset{tag}_deg": summary["phase_offset_deg"],
                     f"nightside_flux{tag}_ppm": 1e6 * summary["nightside_flux"],
                     f"planet_flux_min{tag}_ppm": 1e6 * summary["planet_flux_min"],
                     f"harmonic_depth{tag}_ppm": 1e6 * depth})
+    t_fit = t[out_of_events]
+    depth, harmonics = fit_harmonics(t_fit, lc.planet_flux(t_fit), t_ecl_bmjd, period)
+    summary = harmonic_summary(depth, harmonics, transit_phase_rad=transit_phase)
+    row.update({"planet_harmonic_amplitude_ppm": 1e6 * summary["phase_amplitude"],
+                "planet_harmonic_offset_deg": summary["phase_offset_deg"],
+                "planet_harmonic_depth_ppm": 1e6 * depth})
     return row
 
 
@@ -409,7 +425,10 @@ def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray],
             p = lc.system.period_days
             mid = 0.5 * (t0 + t1)
             t_ref = min(lc.eclipse_times_bmjd(mid - p, mid + p), key=lambda t: abs(t - mid))
-        row.update(phase_curve_truth(frames["time_bmjd"], lc, t_ref))
+        # The frames the reducer fits: the Main AORs (the settling rule drops the Pre AOR).
+        fitted = np.isin(frames["aorkey"], mains)
+        row.update(phase_curve_truth(frames["time_bmjd"][fitted], lc, t_ref,
+                                     aorkey=frames["aorkey"][fitted]))
     for a in plan.aors:
         row[f"x0_{a.label.lower()}_px"] = a.x0_px
         row[f"y0_{a.label.lower()}_px"] = a.y0_px
