@@ -91,15 +91,15 @@ def photon_limit_method(cfg: Config, methods: list[str]) -> str:
 
 def check_run_config(cfg: Config) -> None:
     """What makes a run pointless, refused before any work."""
-    if cfg.challenge.epochs < MIN_EPOCHS:
-        raise ConfigError("challenge.epochs", f"the ensemble statistics of a run need at least "
-                                              f"{MIN_EPOCHS} epochs, got {cfg.challenge.epochs}")
     for key, event in (("observation.event", cfg.observation.event),
                        ("reduce.event", cfg.reduce.event)):
         if event != "eclipse":
-            raise ConfigError(key, "a run scores eclipse depths against the truth; simulate "
-                                   "transits with `simulate` and fit them with `reduce --event "
-                                   "transit`")
+            raise ConfigError(key, f"a run scores eclipse depths against the truth, not "
+                                   f"{event}s; simulate them with `simulate` and fit them with "
+                                   f"`reduce --event {event}`")
+    if cfg.challenge.epochs < MIN_EPOCHS:
+        raise ConfigError("challenge.epochs", f"the ensemble statistics of a run need at least "
+                                              f"{MIN_EPOCHS} epochs, got {cfg.challenge.epochs}")
 
 
 def build_tasks(cfg: Config, root: str | Path) -> list[Task]:

@@ -15,7 +15,7 @@ from ..astro.catalogue import (
     system_for,
     system_from_pairs,
 )
-from ..config import load_config
+from ..config import builtin_config_names, load_config
 from ..errors import InputError
 from ..io.paths import check_output_path
 
@@ -94,7 +94,9 @@ def add_config_options(parser: argparse.ArgumentParser, *, config_positional: bo
     """CONFIG and ``--set section.key=value``, shared by commands that read a config."""
     if config_positional:
         parser.add_argument("config", nargs="?", metavar="CONFIG",
-                            help="challenge configuration (TOML); default: the built-in XO-3b challenge")
+                            help="challenge configuration: a TOML file or a built-in name ("
+                                 + ", ".join(builtin_config_names())
+                                 + "); default: the built-in XO-3b challenge")
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="SECTION.KEY=VALUE",
                         help="override one configuration value (repeatable), e.g. "
