@@ -61,9 +61,19 @@ def format_text(result: dict) -> str:
              f"truth      {result['out_dir']}/truth.ecsv ({result['truth_rows']} rows)"]
     if result["calibration"]:
         lines.append(f"calibration {result['calibration']}")
-    lines.append("epoch  aorkeys            t_ecl_bmjd      x_sd    y_sd    xy_cov(1e-4)")
+    lines.append("epoch  aorkeys                     event time (BMJD)   x_sd    y_sd    "
+                 "xy_cov(1e-4)")
     for r in result["truth"]:
-        lines.append(f"{r['epoch']:>5}  {r['aorkey_pre']}/{r['aorkey_main']}  "
-                     f"{r['t_ecl_bmjd']:.5f}  {r['x_sd']:.4f}  {r['y_sd']:.4f}  "
+        keys = f"{r['aorkey_pre']}/{r['aorkey_main']}"
+        if r.get("aorkey_main_last", r["aorkey_main"]) != r["aorkey_main"]:
+            keys += f"-{r['aorkey_main_last']}"
+        t_ecl = r.get("t_ecl_bmjd", float("nan"))
+        t_tr = r.get("t_transit_bmjd", float("nan"))
+        when = f"ecl {t_ecl:.5f}" if t_ecl == t_ecl or not t_tr == t_tr else f"tr  {t_tr:.5f}"
+        lines.append(f"{r['epoch']:>5}  {keys:<26}  {when}  {r['x_sd']:.4f}  {r['y_sd']:.4f}  "
                      f"{1e4 * r['xy_cov']:8.2f}")
+        if "phase_amplitude_ppm" in r:
+            lines.append(f"       phase curve truth: amplitude {r['phase_amplitude_ppm']:.1f} ppm, "
+                         f"offset {r['phase_offset_deg']:+.1f} deg, night side "
+                         f"{r['nightside_flux_ppm']:.1f} ppm (first harmonic)")
     return "\n".join(lines)
