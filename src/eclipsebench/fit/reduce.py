@@ -954,7 +954,7 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         raise InputError("reduce_joint: no photometry tables given")
     if options.event != "eclipse":
         raise InputError(f"reduce_joint: event '{options.event}': joint fits share an eclipse "
-                         "depth; fit each transit alone")
+                         "depth; fit each transit alone (and each phase curve)")
     epochs = list(epochs) if epochs is not None else [None] * len(tables)
     if len(epochs) != len(tables):
         raise InputError("reduce_joint: give one epoch number per table")
