@@ -172,6 +172,16 @@ def harmonic_summary(depth: float, harmonics: Sequence[float], *,
             "nightside_flux": night, "planet_flux_min": p_min}
 
 
+def _harmonic_basis(phi: np.ndarray, n_harmonics: int) -> list[np.ndarray]:
+    """The columns of :func:`harmonic_curve`: 1, cos phi - 1, sin phi (, cos 2 phi - 1, sin 2 phi)."""
+    if n_harmonics not in (1, 2):
+        raise ValueError(f"n_harmonics: expected 1 or 2, got {n_harmonics}")
+    cols = [np.ones_like(phi), np.cos(phi) - 1.0, np.sin(phi)]
+    if n_harmonics == 2:
+        cols += [np.cos(2.0 * phi) - 1.0, np.sin(2.0 * phi)]
+    return cols
+
+
 def fit_harmonics(time_bmjd, planet_flux, t_ecl_bmjd: float, period_d: float, *,
                   n_harmonics: int = 1) -> tuple[float, tuple[float, ...]]:
     """Least-squares ``depth`` and harmonics of :func:`harmonic_curve` to a planet flux series.
@@ -189,15 +199,10 @@ def fit_harmonics(time_bmjd, planet_flux, t_ecl_bmjd: float, period_d: float, *,
     >>> round(d * 1e6, 6), [round(v * 1e6, 6) for v in h]
     (2000.0, [400.0, 100.0])
     """
-    if n_harmonics not in (1, 2):
-        raise ValueError(f"n_harmonics: expected 1 or 2, got {n_harmonics}")
     t = np.asarray(time_bmjd, dtype=float)
     f = np.asarray(planet_flux, dtype=float)
     ok = np.isfinite(t) & np.isfinite(f)
-    phi = 2.0 * math.pi * (t[ok] - t_ecl_bmjd) / period_d
-    cols = [np.ones_like(phi), np.cos(phi) - 1.0, np.sin(phi)]
-    if n_harmonics == 2:
-        cols += [np.cos(2.0 * phi) - 1.0, np.sin(2.0 * phi)]
+    cols = _harmonic_basis(2.0 * math.pi * (t[ok] - t_ecl_bmjd) / period_d, n_harmonics)
     coeffs = np.linalg.lstsq(np.stack(cols, axis=-1), f[ok], rcond=None)[0]
     return float(coeffs[0]), tuple(float(c) for c in coeffs[1:])
 
@@ -238,19 +243,14 @@ def fit_harmonic_light_curve(time_bmjd, flux, visible, stellar, t_ecl_bmjd: floa
     >>> round(d * 1e6, 6), [round(x * 1e6, 6) for x in h]
     (2000.0, [400.0, 100.0])
     """
-    if n_harmonics not in (1, 2):
-        raise ValueError(f"n_harmonics: expected 1 or 2, got {n_harmonics}")
     t = np.asarray(time_bmjd, dtype=float)
     v = np.asarray(visible, dtype=float)
-    phi = 2.0 * math.pi * (t - t_ecl_bmjd) / period_d
+    basis = _harmonic_basis(2.0 * math.pi * (t - t_ecl_bmjd) / period_d, n_harmonics)
     stellar = np.asarray(stellar, dtype=float)
     labels = np.zeros(t.shape, dtype=int) if segments is None else np.asarray(segments)
     keys = np.unique(labels)
     norm = [stellar * (labels == k) for k in keys]
-    cols = [v, v * (np.cos(phi) - 1.0), v * np.sin(phi)]
-    if n_harmonics == 2:
-        cols += [v * (np.cos(2.0 * phi) - 1.0), v * np.sin(2.0 * phi)]
-    a = np.stack(norm + cols, axis=-1)
+    a = np.stack(norm + [v * c for c in basis], axis=-1)
     f = np.asarray(flux, dtype=float)
     ok = np.all(np.isfinite(a), axis=1) & np.isfinite(f)
     coeffs = np.linalg.lstsq(a[ok], f[ok], rcond=None)[0]
