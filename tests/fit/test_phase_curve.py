@@ -261,6 +261,10 @@ def test_one_systematics_model_per_aor(polygain, kit):
     assert res["depth_ppm"] == pytest.approx(theta[0] * 1e6, abs=1e-3)
     with pytest.raises(ConfigError, match="systematics_per_aor"):
         replace(ReduceSection(), systematics_per_aor=True).validate()
+    # one systematics model and no offsets ([reduce] aor_offsets = false)
+    plain = reduce_epoch(table, polygain.name, system=SYSTEM,
+                         options=replace(OPTIONS, aor_offsets=False, settling_aor="keep"))
+    assert plain.to_dict()["aor_offsets"] == [] and plain.k == 5 + 6
 
 
 @pytest.mark.parametrize("method", ["bliss", "kr-data"])

@@ -90,6 +90,10 @@ class ReduceSection:
         regression, ...) instead of one systematics model over the whole
         series; the AOR flux offsets are then left out (each AOR's
         systematics fits its own flux level).
+    aor_offsets : bool
+        A whole phase curve with one systematics model: a flux offset for
+        each AOR after the first (SPCA). False leaves them out (a map-based
+        method whose AORs sit on different knots is degenerate with them).
     exposure_s : float
         A whole phase curve's integration time of one table row in s; 0: the
         table's median cadence (a binned row spans its cube). Rows longer
@@ -130,6 +134,7 @@ class ReduceSection:
     phase_curve_model: Literal["harmonic1", "harmonic2"] = "harmonic1"
     nonnegative_planet: bool = False
     systematics_per_aor: bool = False
+    aor_offsets: bool = True
     exposure_s: float = 0.0
     transit_free: tuple[str, ...] = ()
     transit_priors: dict[str, tuple[float, ...]] = field(default_factory=dict)

@@ -152,7 +152,8 @@ class PreparedEpoch:
                 phase=phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model,
                 ramp=options.ramp, eclipse_shape="physical" if shape == "auto" else shape,
                 limb_darkening_q=options.limb_darkening_q,
-                aorkey=None if options.systematics_per_aor else data.aorkey,
+                aorkey=(data.aorkey if options.aor_offsets and not options.systematics_per_aor
+                        else None),
                 exposure_s=options.exposure_s or None,
                 nonnegative_planet=options.nonnegative_planet)
         if shape == "auto":
