@@ -311,3 +311,20 @@ def test_per_aor_systematics_batch_and_refits_equal_their_parts(kit):
     a = model(_truth(model, (4e-4, 0.0)))
     assert np.allclose(refit.predict(a), fresh.predict(a), rtol=1e-12, atol=0)
     assert np.array_equal(refit.data.flux, flux)
+
+
+def test_errors_from_mcmc_samples_agree_with_the_delta_method(polygain, kit):
+    time = _times(900.0)   # instantaneous rows (exposure 1 s): one sample each, a quick model
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time),
+                       exposure_s=1.0)
+    table = _table(model, _truth(model, (4e-4, -1.5e-4)), noise=5e-4, seed=9, kit=kit)
+    options = replace(OPTIONS, exposure_s=1.0)
+    delta = reduce_epoch(table, polygain.name, options=options, system=SYSTEM).to_dict()
+    opts = replace(options, sampler="mcmc", mcmc_steps=400, mcmc_walkers=16)
+    mc = reduce_epoch(table, polygain.name, options=opts, system=SYSTEM).to_dict()
+    assert delta["phase_errors_from"].startswith("delta method")
+    assert mc["phase_errors_from"].startswith("mcmc samples")
+    for key in ("phase_amplitude_err_ppm", "phase_offset_err_deg", "nightside_flux_err_ppm"):
+        assert 0.5 < mc[key] / delta[key] < 2.0, (key, mc[key], delta[key])
+    assert abs(mc["phase_amplitude_ppm"] - delta["phase_amplitude_ppm"]) \
+        < delta["phase_amplitude_err_ppm"]
