@@ -34,7 +34,8 @@ SYSTEM = get_system(SystemSection().name)   # the 2015 challenge's XO-3b (e = 0.
 PERIOD = SYSTEM.period_days
 T_ECL = eclipse_time_bmjd(SYSTEM, 57234.0)
 F0 = 2.0e5
-OPTIONS = replace(ReduceSection(), event="phase-curve", prayer_bead_shifts=0)
+OPTIONS = replace(ReduceSection(), event="phase-curve", prayer_bead_shifts=0,
+                  phase_curve_model="harmonic1")
 
 
 def _times(cadence_s: float, start: float = -0.08, span: float = PERIOD + 0.16) -> np.ndarray:
@@ -328,3 +329,19 @@ def test_errors_from_mcmc_samples_agree_with_the_delta_method(polygain, kit):
         assert 0.5 < mc[key] / delta[key] < 2.0, (key, mc[key], delta[key])
     assert abs(mc["phase_amplitude_ppm"] - delta["phase_amplitude_ppm"]) \
         < delta["phase_amplitude_err_ppm"]
+
+
+def test_the_harmonic_order_is_chosen_by_bic(polygain, kit):
+    """phase_curve_model = "bic" (the default): the order of least BIC, both BICs reported."""
+    time = _times(64.0)
+    for harmonics, expected in (((4e-4, -1.5e-4), "harmonic1"),
+                                ((4e-4, -1.5e-4, 3e-4, 2e-4), "harmonic2")):
+        phase = "harmonic2" if len(harmonics) == 4 else "harmonic1"
+        model = AstroModel(time, SYSTEM, phase=phase, event="phase-curve", aorkey=_aors(time))
+        table = _table(model, _truth(model, harmonics), noise=5e-4, seed=4, kit=kit)
+        res = reduce_epoch(table, polygain.name, system=SYSTEM,
+                           options=replace(OPTIONS, phase_curve_model="bic")).to_dict()
+        bic = res["phase_curve_bic"]
+        assert set(bic) == {"harmonic1", "harmonic2"} and min(bic, key=bic.get) == expected
+        assert res["phase_curve_model"]["phase"] == expected
+    assert ReduceSection().phase_curve_model == "bic"

@@ -43,10 +43,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", required=True, metavar="NAME",
                    help="decorrelation method: the paper's bliss, gp, ica, kr-data, kr-pmap, pld, "
                         "segpoly; SPCA's poly2-poly5, pld-aper; or a plugin's (eb.methods())")
-    p.add_argument("--phase", choices=PHASE_MODELS + PHASE_CURVE_MODELS, default=None,
+    p.add_argument("--phase", choices=PHASE_MODELS + PHASE_CURVE_MODELS + ("bic",),
+                   default=None,
                    help="phase-curve model (default: [reduce] phase, quadratic); with "
-                        "--event phase-curve harmonic1 or harmonic2 ([reduce] "
-                        "phase_curve_model, harmonic1)")
+                        "--event phase-curve harmonic1, harmonic2 or bic (both fitted, the "
+                        "least BIC reported; [reduce] phase_curve_model, default bic)")
     p.add_argument("--ramp", choices=RAMP_MODELS, default=None,
                    help="detector ramp (default: [reduce] ramp, none)")
     p.add_argument("--eclipse-shape", choices=("auto",) + ECLIPSE_SHAPES, default=None,
@@ -147,14 +148,14 @@ def _options(args: argparse.Namespace):
                "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius,
                "profile": args.profile}
     event = args.event or cfg.reduce.event
-    if args.phase in PHASE_CURVE_MODELS:
+    if args.phase in PHASE_CURVE_MODELS + ("bic",):
         if event != "phase-curve":
             raise InputError(f"--phase {args.phase}: a whole phase curve's model (give "
                              "--event phase-curve)")
         changes["phase"], changes["phase_curve_model"] = None, args.phase
     elif args.phase is not None and event == "phase-curve":
         raise InputError(f"--phase {args.phase}: --event phase-curve takes "
-                         f"{' or '.join(PHASE_CURVE_MODELS)}")
+                         f"{', '.join(PHASE_CURVE_MODELS)} or bic")
     options = replace(cfg.reduce, **{k: v for k, v in changes.items() if v is not None})
     try:
         options.validate()

@@ -77,10 +77,11 @@ class ReduceSection:
         (Rp/R*, batman's quadratic limb darkening; ``docs/fitting.md``,
         "Transits"), or a whole phase curve (eclipses, transits and the
         harmonic phase variation over several AORs; "Whole phase curves").
-    phase_curve_model : {"harmonic1", "harmonic2"}
+    phase_curve_model : {"bic", "harmonic1", "harmonic2"}
         A whole phase curve's phase model (``phase`` is the eclipse's and
         transit's): the first harmonic, or the first and second (SPCA;
-        Bell et al. 2021).
+        Bell et al. 2021), or ``"bic"`` (the default): both are fitted and the
+        one of least BIC is reported (``phase_curve_bic`` in the result).
     nonnegative_planet : bool
         A whole phase curve's prior that the planet's flux is non-negative
         over the orbit (least squares: a penalty residual; MCMC: log-prior
@@ -131,7 +132,7 @@ class ReduceSection:
     profile: Literal["controlled", "paper"] = "controlled"
     options: dict[str, dict[str, Any]] = field(default_factory=dict)
     event: Literal["eclipse", "transit", "phase-curve"] = "eclipse"
-    phase_curve_model: Literal["harmonic1", "harmonic2"] = "harmonic1"
+    phase_curve_model: Literal["bic", "harmonic1", "harmonic2"] = "bic"
     nonnegative_planet: bool = False
     systematics_per_aor: bool = False
     aor_offsets: bool = True

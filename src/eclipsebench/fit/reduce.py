@@ -497,10 +497,31 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
                          centroid=None if team is None else team.centroid)
+    options, bic = _phase_curve_choice(prep, method, options, seed)
     if team is None:
-        return replace(fit_prepared(prep, method, options=options, seed=seed),
-                       profile="controlled")
-    return _fit_paper_profile(prep, method, team, options=options, seed=seed)
+        result = replace(fit_prepared(prep, method, options=options, seed=seed),
+                         profile="controlled")
+    else:
+        result = _fit_paper_profile(prep, method, team, options=options, seed=seed)
+    if bic:
+        result = replace(result, event_detail={**result.event_detail, "phase_curve_bic": bic})
+    return result
+
+
+def _phase_curve_choice(prep: PreparedEpoch, method: str, options: ReduceSection,
+                        seed: int) -> tuple[ReduceSection, dict[str, float]]:
+    """A whole phase curve with ``phase_curve_model = "bic"``: the harmonic order of least BIC.
+
+    Both orders are fitted by least squares (no errors) and the options come
+    back with the chosen one; the BIC of each is returned for the result.
+    Any other event or model: the options unchanged and no BIC.
+    """
+    if options.event != "phase-curve" or options.phase_curve_model != "bic":
+        return options, {}
+    bic = {phase: float(fit_prepared(prep, method, options=options, seed=seed, phase=phase,
+                                     errors=False).bic)
+           for phase in PHASE_CURVE_MODELS}
+    return replace(options, phase_curve_model=min(bic, key=bic.get)), bic
 
 
 def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
