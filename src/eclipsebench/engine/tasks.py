@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import cloudpickle
 import numba
 from threadpoolctl import threadpool_limits
 
@@ -256,6 +257,18 @@ def _order(by_key: dict[str, Task]) -> list[str]:
     return out
 
 
+def _call_pickled(func_bytes: bytes, args: tuple) -> tuple[float, float, str]:
+    """:func:`_call` of a function shipped as cloudpickle bytes.
+
+    Dask pickles a callable by reference whenever the standard pickle can, so
+    a function of a module registered for pickling by value (a test module
+    that workers cannot import) would reach the workers as a name they cannot
+    resolve, and the task would wait forever; cloudpickle honours the
+    registration.
+    """
+    return _call(cloudpickle.loads(func_bytes), args)
+
+
 def _call(func: Callable[..., object], args: tuple) -> tuple[float, float, str]:
     # Every task runs single-threaded wherever it runs (in this process, a local
     # worker or a remote scheduler's): multi-threaded BLAS splits sums differently,
@@ -446,7 +459,8 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, hashes, *, workers,
                     waiting.remove(key)
                     # no retries: a task that raises would raise again; a task whose
                     # worker died is rescheduled by Dask itself (allowed-failures)
-                    fut = client.submit(_call, task.func, task.args, key=f"{key}#{time.time_ns()}",
+                    fut = client.submit(_call_pickled, cloudpickle.dumps(task.func), task.args,
+                                        key=f"{key}#{time.time_ns()}",
                                         pure=False)
                     futures[fut.key] = key
                     ac.add(fut)
