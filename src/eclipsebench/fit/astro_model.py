@@ -318,6 +318,16 @@ class _TransitCurve:
         return _quadratic_ld._quadratic_ld(sep, abs(rp_rs), u1, u2, 1)
 
 
+def _transit_fixed_values(system: Any, q: Sequence[float] | None) -> dict[str, float]:
+    """The transit's a_rs, b (catalogue) and Kipping's q1, q2 (given, else the catalogue's)."""
+    if q is None or len(q) == 0:
+        q = q_from_u(*(float(u) for u in system.ld_quadratic))
+    if len(q) != 2 or not all(0.0 <= float(v) <= 1.0 for v in q):
+        raise InputError(f"limb_darkening_q {list(q)!r}: expected [q1, q2], each in [0, 1]")
+    return {"a_rs": float(system.a_rs), "b": float(system.impact_parameter),
+            "q1": float(q[0]), "q2": float(q[1])}
+
+
 class AstroModel:
     """The eclipse, phase-curve and ramp model at fixed times.
 
@@ -495,13 +505,8 @@ class AstroModel:
                              f"{', '.join(TRANSIT_FREE)}")
         self.transit_free = tuple(n for n in TRANSIT_FREE if n in free)
         self.n_shape = len(self.transit_free)
-        if q is None or len(q) == 0:
-            q = q_from_u(*(float(u) for u in system.ld_quadratic))
-        if len(q) != 2 or not all(0.0 <= float(v) <= 1.0 for v in q):
-            raise InputError(f"limb_darkening_q {list(q)!r}: expected [q1, q2], each in [0, 1]")
         #: The transit's values when fixed (and the start when free).
-        self.transit_fixed = {"a_rs": float(system.a_rs), "b": float(system.impact_parameter),
-                              "q1": float(q[0]), "q2": float(q[1])}
+        self.transit_fixed = _transit_fixed_values(system, q)
         for name, pair in dict(priors or {}).items():
             if name not in self.transit_free:
                 raise InputError(f"transit_priors.{name}: a prior needs a free parameter "
@@ -534,12 +539,7 @@ class AstroModel:
         # the transit exactly as event "transit" makes it, with Rp/R* free and a/R*, b and
         # the limb darkening fixed (their defaults there)
         self.transit_free = ()
-        if q is None or len(q) == 0:
-            q = q_from_u(*(float(u) for u in system.ld_quadratic))
-        if len(q) != 2 or not all(0.0 <= float(v) <= 1.0 for v in q):
-            raise InputError(f"limb_darkening_q {list(q)!r}: expected [q1, q2], each in [0, 1]")
-        self.transit_fixed = {"a_rs": float(system.a_rs), "b": float(system.impact_parameter),
-                              "q1": float(q[0]), "q2": float(q[1])}
+        self.transit_fixed = _transit_fixed_values(system, q)
         self.rp_rs_catalogue = float(system.rp_rs)
         self.ecc = float(system.ecc)
         self.omega_deg = float(system.omega_deg)
