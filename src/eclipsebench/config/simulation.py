@@ -216,9 +216,10 @@ class SimulationSection:
 
     ``noise_model``: ``"physical"`` (independent Poisson increments per tick),
     ``"iracsim2015"`` (the 2015 challenge's frames: IRACSIM's compounding
-    Poisson noise, 16.8 e per read, and the background level of the public
-    2015 cube, ``background_e_per_px`` being the sky it put under its PRFs;
-    see ``docs/simulate.md``) or ``"none"`` (noise-free frames: no photon,
+    Poisson noise, 16.8 e per read, both scaled by ``noise_factor``, IRACSIM's
+    ``NOISE_FACTOR``, 0.907 unless set, from the public 2015 cube's aperture
+    scatter; and the background level of that cube, ``background_e_per_px``
+    being the sky it put under its PRFs; see ``docs/simulate.md``) or ``"none"`` (noise-free frames: no photon,
     read or background noise; pointing, gain and eclipse kept).
     """
 
@@ -229,6 +230,7 @@ class SimulationSection:
     background_reference: Literal["annulus", "sky"] = "annulus"
     background_slope_per_day: float = 0.0
     read_noise_e: float | None = None  # unset: the channel's RONOISE (physical) / IRACSIM's
+    noise_factor: float | None = None  # iracsim2015 only; unset: the public 2015 cube's 0.907
     gain_e_per_dn: float | None = None  # unset: the channel's header GAIN (3.71 / 3.7)
     fluxconv: float | None = None  # unset: the channel's warm FLUXCONV (0.1469 / 0.1253)
     subsamples: int = 10
@@ -252,6 +254,11 @@ class SimulationSection:
               "background_slope_per_day", "a fractional slope per day with |slope| < 10")
         check(self.read_noise_e is None or self.read_noise_e >= 0, "read_noise_e",
               "a non-negative read noise in electrons")
+        check(self.noise_factor is None or (math.isfinite(self.noise_factor)
+                                            and 0 < self.noise_factor <= 10), "noise_factor",
+              "a positive factor on IRACSIM's noise (at most 10)")
+        check(self.noise_factor is None or self.noise_model == "iracsim2015", "noise_factor",
+              "no value unless noise_model = 'iracsim2015' (IRACSIM's NOISE_FACTOR)")
         check(self.gain_e_per_dn is None or self.gain_e_per_dn > 0, "gain_e_per_dn",
               "a positive gain")
         check(self.fluxconv is None or self.fluxconv > 0, "fluxconv", "a positive FLUXCONV")

@@ -29,7 +29,9 @@ Physical model (default)
     does not show in the public 2015 cube, whose level was set by a flux
     density: the mean charge is the true one; docs/simulate.md.) Its variance is about
     ``(FN+1)(2FN+1)/(6 FN)`` = 3.19 times the signal for FN = 8 to leading
-    order (3.31 exactly for WT = 184). Read noise 16.8 e per read.
+    order (3.31 exactly for WT = 184). Read noise 16.8 e per read. Both
+    scaled by IRACSIM's ``NOISE_FACTOR`` (0.907 for the public 2015 cube's
+    pixels; ``detector.constants.NOISE_FACTOR_IRACSIM2015``).
 """
 
 from __future__ import annotations
@@ -220,7 +222,7 @@ def fowler_sample_grouped(groups, mode: ReadoutMode, rng: np.random.Generator,
 
 
 def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator,
-                              read_noise_e: float) -> np.ndarray:
+                              read_noise_e: float, *, noise_factor: float = 1.0) -> np.ndarray:
     """IRACSIM's compounding noise model from the mean cumulative charge at each read.
 
     Parameters
@@ -228,6 +230,9 @@ def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator
     reads : array, shape (2 FN, ...)
         Mean cumulative charge at ``P_1 .. P_FN, S_1 .. S_FN``
         (:func:`read_charges` of the tick charges).
+    noise_factor : float
+        IRACSIM's ``NOISE_FACTOR``: multiplies each Poisson deviate and the
+        read noise, as ``prf_make_dce.pro`` does (variance ``factor**2`` times).
 
     Notes
     -----
@@ -250,10 +255,10 @@ def fowler_sample_iracsim2015(reads, mode: ReadoutMode, rng: np.random.Generator
         positive = f > 0
         rounded = np.where(positive, np.rint(f), 0.0)
         # as prf_make_dce.pro: Poisson(round(F) > 1) - round(F) (mean +1 when round(F) = 0)
-        dev = rng.poisson(np.maximum(rounded, 1.0)) - rounded
+        dev = noise_factor * (rng.poisson(np.maximum(rounded, 1.0)) - rounded)
         noise = noise + np.where(positive, dev, 0.0)
         values[r] = m[r] + noise
-    values = values + rng.normal(0.0, read_noise_e, size=m.shape)
+    values = values + rng.normal(0.0, noise_factor * read_noise_e, size=m.shape)
     return (values[fn:] - values[:fn]).sum(axis=0) / fn
 
 

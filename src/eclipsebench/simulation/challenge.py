@@ -49,6 +49,7 @@ from ..detector.constants import (
     channel_constants,
     fluxconv_of,
     gain_of,
+    noise_factor_of,
     read_noise_of,
 )
 from ..detector.fowler import bunc_mjysr, electrons_to_mjysr
@@ -112,7 +113,8 @@ def frame_model_from_config(cfg: Config) -> FrameModel:
     sim = cfg.simulation
     mode = readout_from_config(cfg)
     return FrameModel(mode=mode, noise_model=sim.noise_model,
-                      read_noise_e=read_noise_of(cfg), subsamples=sim.subsamples,
+                      read_noise_e=read_noise_of(cfg), noise_factor=noise_factor_of(cfg),
+                      subsamples=sim.subsamples,
                       stamp_px=sim.stamp_px, shape=mode.shape)
 
 

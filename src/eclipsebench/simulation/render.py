@@ -73,6 +73,9 @@ class FrameModel:
     noise_model : {"physical", "iracsim2015", "none"}
     read_noise_e : float
         Gaussian read noise per read (electrons).
+    noise_factor : float
+        IRACSIM's ``NOISE_FACTOR`` on the Poisson deviates and the read noise
+        (``iracsim2015`` only; 1 leaves the noise as drawn).
     subsamples : int
         Pointing sub-samples per tick ``n``.
     stamp_px : int
@@ -84,6 +87,7 @@ class FrameModel:
     mode: ReadoutMode
     noise_model: str = "physical"
     read_noise_e: float = READ_NOISE_E
+    noise_factor: float = 1.0
     subsamples: int = 10
     stamp_px: int = 13
     shape: tuple[int, int] = (32, 32)
@@ -343,9 +347,11 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
         inc = star_group_charges(basis, im, star_e_per_tick)             # (2FN, nf, s*s)
         inc += (im[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
         reads = np.cumsum(inc, axis=0)
-        frames[:, stamp_cols] = fowler_sample_iracsim2015(reads, mode, rng_photon, 0.0)
+        frames[:, stamp_cols] = fowler_sample_iracsim2015(reads, mode, rng_photon, 0.0,
+                                                          noise_factor=model.noise_factor)
         reads_out = np.cumsum(im[:, :, 0].T, axis=0)[:, :, None] * rate_out[None, :, :]
-        frames[:, out_cols] = fowler_sample_iracsim2015(reads_out, mode, rng_photon, 0.0)
+        frames[:, out_cols] = fowler_sample_iracsim2015(reads_out, mode, rng_photon, 0.0,
+                                                        noise_factor=model.noise_factor)
         fn = mode.fowler
         expected[:, stamp_cols] = (reads[fn:] - reads[:fn]).sum(axis=0) / fn
     w_sum = (fowler_weights(mode)[None, :] * m0).sum(axis=1) / mode.fowler
@@ -354,6 +360,6 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
         frames[:] = expected
         return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
     # Read noise: 2 FN reads per pixel; their sum in sum_i (S_i - P_i) / FN is one Gaussian.
-    frames += rng_read.standard_normal(size=frames.shape) * (model.read_noise_e
-                                                             * np.sqrt(2.0 / mode.fowler))
+    read_sd = model.read_noise_e * (model.noise_factor if model.noise_model == "iracsim2015" else 1.0)
+    frames += rng_read.standard_normal(size=frames.shape) * (read_sd * np.sqrt(2.0 / mode.fowler))
     return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
