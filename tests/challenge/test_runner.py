@@ -111,6 +111,19 @@ def test_two_workers_give_the_same_summary(tiny_run, tmp_path):
     assert (tmp_path / "summary.json").read_bytes() == (root / "summary.json").read_bytes()
 
 
+def test_a_paper_only_run_reports_the_paper_profile(tiny_run, tmp_path):
+    """``--profiles paper``: the report reads the paper profile's depths (it once read the
+    controlled profile's, which such a run never writes, and failed at the last task)."""
+    cfg, root, _, _ = tiny_run
+    for folder in ("simulation", "photometry"):
+        shutil.copytree(root / folder, tmp_path / folder)
+    paper = load_config(None, [*TINY, 'run.profiles=["paper"]', "run.report=true"])
+    summary, report = run_challenge(paper, tmp_path, workers=1)
+    assert not (tmp_path / "depths.ecsv").exists() and (tmp_path / "depths_paper.ecsv").is_file()
+    assert set(summary["profiles"]) == {"paper"}
+    assert (tmp_path / "report" / "index.html").is_file() and "report" in report.ran
+
+
 def test_a_folder_of_another_run_is_refused(tiny_run):
     _, root, _, _ = tiny_run
     other = load_config(None, [*TINY, "challenge.seed=99"])

@@ -12,7 +12,7 @@ from eclipsebench.fit.reduce import reduce_epoch, reduce_joint, select_phase_mod
 CONTRACT_KEYS = {"method", "epoch", "depth_ppm", "depth_err_ppm", "t_ecl_bmjd", "t_ecl_err_d",
                  "bic", "aic", "rms_ppm", "beta_red", "n_frames", "phase", "sampler", "chi2_red",
                  "c1_per_day", "c2_per_day2", "converged", "depth_err_method"}
-FAST = ReduceSection(prayer_bead_shifts=4)
+FAST = ReduceSection(prayer_bead_shifts=4, sampler="leastsq")
 
 
 def test_noiseless_epoch_gives_the_injected_depth_exactly(kit, polygain, xo3_epoch):
@@ -21,6 +21,28 @@ def test_noiseless_epoch_gives_the_injected_depth_exactly(kit, polygain, xo3_epo
     assert res.depth_ppm == pytest.approx(kit.TRUE_DEPTH * 1e6, abs=0.5)
     assert res.t_ecl_bmjd == pytest.approx(xo3_epoch["t_true"], abs=2e-6)
     assert res.params["c2_per_day2"] == pytest.approx(kit.TRUE_C2, rel=1e-3)
+
+
+def test_default_reports_the_least_squares_depth_with_the_posterior_width(kit, polygain,
+                                                                        xo3_epoch):
+    """Issue 14 point 3: ``sampler = "auto"`` samples an eclipse; the controlled profile
+    reports the least-squares depth and the posterior's 16-84 % half-width, with the
+    red-noise factor in the likelihood's flux errors."""
+    table = xo3_epoch["table"](seed=5)[::2]
+    res = reduce_epoch(table, polygain.name, options=ReduceSection(prayer_bead_shifts=0))
+    lsq = reduce_epoch(table, polygain.name,
+                       options=ReduceSection(prayer_bead_shifts=0, sampler="leastsq"))
+    d = res.to_dict()
+    assert d["sampler"] == "mcmc" and d["depth_err_method"] == "mcmc"
+    assert res.depth_ppm == pytest.approx(lsq.depth_ppm, abs=1e-9)
+    lo, hi = d["depth_err_lo_ppm"], d["depth_err_hi_ppm"]
+    assert res.depth_err_ppm == pytest.approx(0.5 * (lo + hi))
+    assert d["mcmc_converged"] and d["mcmc_n_over_tau"] >= 50
+    assert d["mcmc_noise_scale"] == pytest.approx(np.sqrt(res.chi2_red) * max(1.0, res.beta_red))
+    # the posterior's width is the Jacobian error times the same red-noise factor, to sampling
+    assert res.depth_err_ppm == pytest.approx(lsq.depth_err_jacobian_ppm * max(1.0, res.beta_red),
+                                              rel=0.15)
+    assert res.chain is not None and res.chain["samples"].shape[1] == len(res.params)
 
 
 def test_recovers_depth_within_its_error(kit, polygain, xo3_epoch):
@@ -115,7 +137,7 @@ def test_method_hooks_extra_variance_and_hyperparameters(monkeypatch, polygain, 
 
     monkeypatch.setitem(base._REGISTRY, Hooked.name, Hooked)
     table = xo3_epoch["table"](seed=8)[::2]
-    opts = ReduceSection(prayer_bead_shifts=0)
+    opts = ReduceSection(prayer_bead_shifts=0, sampler="leastsq")
     plain = reduce_epoch(table, polygain.name, options=opts)
     hooked = reduce_epoch(table, Hooked.name, options=opts)
     assert hooked.depth_err_separation_ppm == pytest.approx(50.0)
@@ -137,7 +159,8 @@ def test_method_can_opt_out_of_the_prayer_bead(monkeypatch, polygain, xo3_epoch)
 
     monkeypatch.setitem(base._REGISTRY, NoBead.name, NoBead)
     table = xo3_epoch["table"](seed=9)[::4]
-    res = reduce_epoch(table, NoBead.name, options=ReduceSection(prayer_bead_shifts=4))
+    res = reduce_epoch(table, NoBead.name,
+                       options=ReduceSection(prayer_bead_shifts=4, sampler="leastsq"))
     assert res.depth_err_prayer_bead_ppm is None
     assert res.depth_err_method == "jacobian_beta"
     with_bead = reduce_epoch(table, polygain.name, options=ReduceSection(prayer_bead_shifts=4))

@@ -69,7 +69,7 @@ def test_paper_profile_takes_the_team_choices(polygain, xo3_epoch, monkeypatch):
     assert res.depth_err_prayer_bead_ppm is None   # not reported by the team: not computed
     ctrl = reduce_epoch(table, polygain.name, options=ReduceSection(phase="flat"))
     assert ctrl.profile == "controlled" and ctrl.phase == "flat"
-    assert ctrl.depth_err_method in ("jacobian_beta", "prayer_bead")
+    assert ctrl.depth_err_method == "mcmc" and ctrl.sampler == "mcmc"   # the shared rule
     assert np.isfinite(res.to_dict()["profile_detail"]["bic"]["flat/none"])
 
 

@@ -62,14 +62,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="controlled: the shared [reduce] settings (default); paper: the "
                         "method's team's centroid, phase model, sampler and reported error "
                         "(docs/methods.md, 'The paper profile')")
-    p.add_argument("--sampler", choices=("leastsq", "mcmc"), default=None,
-                   help="least squares only, or least squares then emcee (default: leastsq)")
+    p.add_argument("--sampler", choices=("auto", "mcmc", "leastsq"), default=None,
+                   help="mcmc: least squares then emcee, the posterior's error reported; "
+                        "leastsq: least squares only, for speed; auto (default): mcmc for "
+                        "an eclipse or transit, leastsq for a whole phase curve")
     p.add_argument("--prayer-bead", type=positive_int(minimum=0), default=None, metavar="N",
                    help="cyclic residual shifts for the prayer-bead error (0: none; default 16)")
     p.add_argument("--walkers", type=positive_int(minimum=4), default=None, metavar="N",
                    help="MCMC walkers (even; default 32)")
     p.add_argument("--steps", type=positive_int(minimum=100), default=None, metavar="N",
-                   help="MCMC step cap (default 2000)")
+                   help="MCMC step cap (default 5000)")
     p.add_argument("--radius", type=positive_float(), default=None, metavar="PX",
                    help="aperture radius whose flux column is fitted (default: the table's flux)")
     p.add_argument("--columns", dest="columns", action="append", default=[],

@@ -25,8 +25,14 @@ class ReduceSection:
     eclipse_shape : {"auto", "physical", "box"}
         "auto" takes the method's ``default_eclipse_shape`` (the box for
         ``segpoly``, the orbit's physical shape for the others).
-    sampler : {"leastsq", "mcmc"}
-        Least squares only, or least squares followed by emcee.
+    sampler : {"auto", "mcmc", "leastsq"}
+        Least squares followed by emcee (``mcmc``), or least squares only
+        (``leastsq``, for speed). ``auto`` (the default) samples the posterior
+        where it costs seconds: an eclipse or a transit (2-15 s for 15,000
+        frames with the DE move, BENCHMARKS.md "mcmc"); a whole phase curve is
+        least squares (its MCMC evaluates the model walker by walker, about
+        100 s for 2,000 steps on 1,000 rows). :meth:`resolved_sampler` says
+        which.
     mcmc_walkers, mcmc_steps, mcmc_block_steps, mcmc_tau_factor
         Ensemble size, step cap, steps between autocorrelation checks, and the
         chain length (in autocorrelation times) that counts as converged.
@@ -115,7 +121,7 @@ class ReduceSection:
     phase: Literal["flat", "linear", "quadratic", "sinusoid"] = "quadratic"
     ramp: Literal["none", "linear", "exponential"] = "none"
     eclipse_shape: Literal["auto", "physical", "box"] = "auto"
-    sampler: Literal["leastsq", "mcmc"] = "leastsq"
+    sampler: Literal["auto", "mcmc", "leastsq"] = "auto"
     mcmc_walkers: int = 32
     mcmc_steps: int = 5000
     mcmc_block_steps: int = 250
@@ -140,6 +146,18 @@ class ReduceSection:
     transit_free: tuple[str, ...] = ()
     transit_priors: dict[str, tuple[float, ...]] = field(default_factory=dict)
     limb_darkening_q: tuple[float, ...] = ()
+
+    def resolved_sampler(self) -> str:
+        """``"mcmc"`` or ``"leastsq"``: the sampler ``auto`` stands for with this event.
+
+        Examples
+        --------
+        >>> ReduceSection().resolved_sampler(), ReduceSection(event="phase-curve").resolved_sampler()
+        ('mcmc', 'leastsq')
+        """
+        if self.sampler != "auto":
+            return self.sampler
+        return "leastsq" if self.event == "phase-curve" else "mcmc"
 
     def validate(self) -> None:
         check(self.mcmc_walkers >= 4 and self.mcmc_walkers % 2 == 0, "mcmc_walkers",

@@ -250,11 +250,13 @@ def _autocorrelation(chain: np.ndarray) -> tuple[np.ndarray, int, float]:
     estimated gives burn-in of half the chain and ``n_over_tau = 0``.
     """
     n = chain.shape[0]
-    tau = emcee.autocorr.integrated_time(chain, tol=0)
+    with np.errstate(divide="ignore", invalid="ignore"):   # a parameter that never moved
+        tau = emcee.autocorr.integrated_time(chain, tol=0)
     if not np.all(np.isfinite(tau)):
         return tau, n // 2, 0.0
     burn_in = min(int(np.ceil(2.0 * np.max(tau))), n // 2)
-    tau = emcee.autocorr.integrated_time(chain[burn_in:], tol=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = emcee.autocorr.integrated_time(chain[burn_in:], tol=0)
     if not np.all(np.isfinite(tau)) or np.max(tau) <= 0:
         return tau, burn_in, 0.0
     return tau, burn_in, float((n - burn_in) / np.max(tau))

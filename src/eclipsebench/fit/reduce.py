@@ -610,7 +610,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
 
     mc: McmcResult | None = None
     mcmc_info = None
-    if errors and options.sampler == "mcmc":
+    # Noise-free residuals (a synthetic exact model) leave no posterior width to sample.
+    if errors and options.resolved_sampler() == "mcmc" and fit.rms_ppm > 1e-6:
         stream = systematics.context.stream("mcmc")   # rng(seed, "reduce", epoch, method, "mcmc")
         mc = run_mcmc(systematics, astro_model, fit.theta, fit.errors, names=fit.names,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
@@ -658,7 +659,10 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
                          "mcmc": mc.error(when) if mc is not None else None})
     if mc is not None and err_method.split("+")[0] == "mcmc":
         t_err = mc.error(when)
-    theta_report = mc.median if mc is not None else fit.theta
+    # The reported parameters: the paper profile's MCMC teams quoted posterior medians; the
+    # controlled profile quotes every method's least-squares best fit (one estimator for all,
+    # sampled or not), with the posterior's width as its error (docs/fitting.md).
+    theta_report = mc.median if mc is not None and options.profile == "paper" else fit.theta
     astro = astro_model(theta_report[:fit.n_astro])
     theta_s = theta_report[fit.n_astro:] if len(systematics.param_names) else None
     corrected = systematics.correct(astro, theta_s)
@@ -699,7 +703,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         n_frames=prep.n_frames, n_frames_dropped=dict(prep.n_frames_dropped),
         n_points=len(systematics.data.time_bmjd),
         phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
-        sampler=options.sampler, converged=converged, params=params, param_errors=param_err,
+        sampler="mcmc" if mc is not None else "leastsq", converged=converged,
+        params=params, param_errors=param_err,
         mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
         options=systematics.options.to_dict(), diagnostics=_jsonable(systematics.diagnostics()),
         depth_err_own_ppm={k: ppm(v) for k, v in own.items()}, lightcurve=lightcurve,

@@ -67,7 +67,8 @@ def report_task(cfg: Config, root: str, methods: list[str], epochs: list[int]) -
 
     layout = Layout(Path(root))
     summary = json.loads(layout.summary.read_text())
-    depths = Table.read(layout.depths, format="ascii.ecsv")
+    profile = cfg.run.profiles[0]   # the summary's top level (a run may ask for the paper one only)
+    depths = Table.read(layout.depths_of(profile), format="ascii.ecsv")
     system = system_for(cfg.system)
     photometry = {}
     for e in epochs:
@@ -78,7 +79,7 @@ def report_task(cfg: Config, root: str, methods: list[str], epochs: list[int]) -
     lc_epoch = min(cfg.run.lightcurve_epoch, max(epochs))
     curves = {}
     for m in methods:
-        path = layout.result_lightcurve(m, lc_epoch)
+        path = layout.result_lightcurve(m, lc_epoch, profile=profile)
         if path.is_file():
             lc = Table.read(path, format="ascii.ecsv")
             curves[m] = {"phase": centred_phase(lc["time_bmjd"], system),
