@@ -43,6 +43,12 @@ def test_default_reports_the_least_squares_depth_with_the_posterior_width(kit, p
     assert res.depth_err_ppm == pytest.approx(lsq.depth_err_jacobian_ppm * max(1.0, res.beta_red),
                                               rel=0.15)
     assert res.chain is not None and res.chain["samples"].shape[1] == len(res.params)
+    # the bead is not computed beside the posterior this rule reports; "largest" brings it back
+    assert reduce_epoch(table, polygain.name,
+                        options=ReduceSection(prayer_bead_shifts=4)).depth_err_prayer_bead_ppm is None
+    largest = reduce_epoch(table, polygain.name,
+                           options=ReduceSection(prayer_bead_shifts=4, error_rule="largest"))
+    assert largest.depth_err_prayer_bead_ppm > 0 and largest.depth_err_mcmc_ppm > 0
 
 
 def test_recovers_depth_within_its_error(kit, polygain, xo3_epoch):
@@ -163,5 +169,6 @@ def test_method_can_opt_out_of_the_prayer_bead(monkeypatch, polygain, xo3_epoch)
                        options=ReduceSection(prayer_bead_shifts=4, sampler="leastsq"))
     assert res.depth_err_prayer_bead_ppm is None
     assert res.depth_err_method == "jacobian_beta"
-    with_bead = reduce_epoch(table, polygain.name, options=ReduceSection(prayer_bead_shifts=4))
+    with_bead = reduce_epoch(table, polygain.name,
+                             options=ReduceSection(prayer_bead_shifts=4, sampler="leastsq"))
     assert with_bead.depth_err_prayer_bead_ppm > 0

@@ -89,5 +89,5 @@ def test_prayer_bead_all_cycles_every_stride(kit, polygain, xo3_epoch):
     assert np.all(np.isfinite(beads)) and np.ptp(beads[:, 0]) > 0
     res = reduce_epoch(xo3_epoch["table"](noise=3e-4), polygain.name,
                        options=ReduceSection(phase="flat", prayer_bead_mode="all",
-                                             prayer_bead_stride=n // 5))
+                                             prayer_bead_stride=n // 5, sampler="leastsq"))
     assert res.depth_err_prayer_bead_ppm > 0

@@ -69,7 +69,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--prayer-bead", type=positive_int(minimum=0), default=None, metavar="N",
                    help="cyclic residual shifts for the prayer-bead error (0: none; default 16)")
     p.add_argument("--walkers", type=positive_int(minimum=4), default=None, metavar="N",
-                   help="MCMC walkers (even; default 32)")
+                   help="MCMC walkers (even; default 16)")
     p.add_argument("--steps", type=positive_int(minimum=100), default=None, metavar="N",
                    help="MCMC step cap (default 5000)")
     p.add_argument("--radius", type=positive_float(), default=None, metavar="PX",

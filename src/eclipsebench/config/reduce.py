@@ -36,10 +36,16 @@ class ReduceSection:
     mcmc_walkers, mcmc_steps, mcmc_block_steps, mcmc_tau_factor
         Ensemble size, step cap, steps between autocorrelation checks, and the
         chain length (in autocorrelation times) that counts as converged.
+        16 walkers: ter Braak (2006) runs DE-MC with N >= 2d chains, the
+        autocorrelation time per step is the same as with 32 (11-14 steps),
+        so half the walkers cost half (BENCHMARKS.md "mcmc"); the sampler
+        raises it to 2 d + 2 for a model of more parameters.
     prayer_bead_shifts : int
         Cyclic residual shifts refitted for the prayer-bead error (0: none),
         spread evenly over the series, each refit capped at 50 evaluations
-        (``prayer_bead_mode = "spread"``).
+        (``prayer_bead_mode = "spread"``). The bead is computed where a rule
+        can report it: not beside a sampled posterior that the default
+        ``error_rule = "posterior"`` reports.
     prayer_bead_mode : {"spread", "all"}
         ``spread``: ``prayer_bead_shifts`` shifts (a quick estimate).
         ``all``: every cyclic shift in steps of ``prayer_bead_stride`` points,
@@ -122,7 +128,7 @@ class ReduceSection:
     ramp: Literal["none", "linear", "exponential"] = "none"
     eclipse_shape: Literal["auto", "physical", "box"] = "auto"
     sampler: Literal["auto", "mcmc", "leastsq"] = "auto"
-    mcmc_walkers: int = 32
+    mcmc_walkers: int = 16
     mcmc_steps: int = 5000
     mcmc_block_steps: int = 250
     mcmc_tau_factor: float = 50.0

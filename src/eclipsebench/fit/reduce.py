@@ -597,9 +597,15 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     jac_depth = fit.error(size)
     jac_tecl = fit.error(when)
 
+    # Noise-free residuals (a synthetic exact model) leave no posterior width to sample.
+    sample = errors and options.resolved_sampler() == "mcmc" and fit.rms_ppm > 1e-6
+    # The prayer bead is computed where a rule can report it: not beside a posterior
+    # that the default rule reports (error_rule = "largest" or "leastsq" bring it back).
+    bead_wanted = ("prayer_bead" in reported if reported is not None
+                   else not (sample and options.error_rule == "posterior"))
     pb_depth = pb_tecl = None
     if (errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True)
-            and (reported is None or "prayer_bead" in reported)):
+            and bead_wanted):
         if options.prayer_bead_mode == "all":
             beads = prayer_bead(systematics, astro_model, fit, n_shifts=None,
                                 stride=options.prayer_bead_stride, max_nfev=options.max_nfev)
@@ -610,8 +616,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
 
     mc: McmcResult | None = None
     mcmc_info = None
-    # Noise-free residuals (a synthetic exact model) leave no posterior width to sample.
-    if errors and options.resolved_sampler() == "mcmc" and fit.rms_ppm > 1e-6:
+    if sample:
         stream = systematics.context.stream("mcmc")   # rng(seed, "reduce", epoch, method, "mcmc")
         mc = run_mcmc(systematics, astro_model, fit.theta, fit.errors, names=fit.names,
                       rng=stream, n_walkers=options.mcmc_walkers, max_steps=options.mcmc_steps,
