@@ -10,7 +10,7 @@ For every registered method, on two 15,000-frame epochs:
   KR/Pmap uses the SSC map ``../shared/data/irac/pmap_ch2``.
 
 Each method is reduced as ``eclipsebench reduce`` does, with the default
-``[reduce]`` settings (quadratic phase, 32 walkers) except the step cap
+``[reduce]`` settings (quadratic phase, 16 walkers) except the step cap
 (``--max-steps``, 20,000, so that a chain can reach 50 tau): once with
 ``sampler = "leastsq"`` (the least squares with its errors: Jacobian x
 beta_red and the 16-shift prayer bead), once with ``sampler = "mcmc"`` and no
