@@ -113,7 +113,8 @@ def bench_method(table, name, *, repeats, max_steps, move, resources):
             "tau_max": float(np.max(mc.tau)), "n_over_tau": mc.n_over_tau,
             "converged": mc.converged, "acceptance": mc.acceptance,
             "depth_lsq": lsq.depth_ppm, "err_lsq": lsq.depth_err_ppm,
-            "err_lsq_from": lsq.depth_err_method, "depth_mcmc": res.depth_ppm,
+            "err_lsq_from": lsq.depth_err_method,
+            "depth_mcmc": res.mcmc["depth_median_ppm"],   # the posterior median
             "err_mcmc": res.depth_err_mcmc_ppm, "n_points": res.n_points}
 
 
@@ -162,7 +163,7 @@ def main(argv=None) -> int:
             print(f"\n{label}\n")
             print("| method | least squares with errors (s) | MCMC (s) | move | steps | walkers "
                   "| burn-in | tau_max | N/tau | acceptance | least squares depth (ppm) "
-                  "| MCMC depth (ppm) |")
+                  "| MCMC median +- half-width (ppm) |")
             print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
             for name in methods:
                 resources = {"pmap": pmap} if pmap and name == "kr-pmap" else None

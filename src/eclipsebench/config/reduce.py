@@ -36,9 +36,9 @@ class ReduceSection:
     mcmc_walkers, mcmc_steps, mcmc_block_steps, mcmc_tau_factor
         Ensemble size, step cap, steps between autocorrelation checks, and the
         chain length (in autocorrelation times) that counts as converged.
-        16 walkers: ter Braak (2006) runs DE-MC with N >= 2d chains, the
-        autocorrelation time per step is the same as with 32 (11-14 steps),
-        so half the walkers cost half (BENCHMARKS.md "mcmc"); the sampler
+        16 walkers: ter Braak (2006) runs DE-MC with N >= 2d chains; the
+        autocorrelation time is 10-19 steps against 11-14 with 32, so half
+        the walkers cost about half (BENCHMARKS.md "mcmc"); the sampler
         raises it to 2 d + 2 for a model of more parameters.
     prayer_bead_shifts : int
         Cyclic residual shifts refitted for the prayer-bead error (0: none),
