@@ -219,8 +219,9 @@ class SimulationSection:
     Poisson noise, 16.8 e per read, both scaled by ``noise_factor``, IRACSIM's
     ``NOISE_FACTOR``, 0.907 unless set, from the public 2015 cube's aperture
     scatter; and the background level of that cube, ``background_e_per_px``
-    being the sky it put under its PRFs; see ``docs/simulate.md``) or ``"none"`` (noise-free frames: no photon,
-    read or background noise; pointing, gain and eclipse kept).
+    being the sky it put under its PRFs; see ``docs/simulate.md``) or
+    ``"none"`` (noise-free frames: no photon, read or background noise;
+    pointing, gain and eclipse kept).
     """
 
     noise_model: Literal["physical", "iracsim2015", "none"] = "physical"
