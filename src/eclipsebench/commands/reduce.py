@@ -367,8 +367,9 @@ def format_text(result: dict) -> str:
                          f"{row['depth_err_ppm']:5.1f} ppm  dBIC {row['delta_bic']:7.1f}  "
                          f"dAIC {row['delta_aic']:7.1f}")
     if result.get("mcmc_steps"):
-        lines.insert(2, f"posterior     -{result['depth_err_lo_ppm']:.1f} / "
-                        f"+{result['depth_err_hi_ppm']:.1f} ppm ({result['mcmc_move']}, "
+        lines.insert(2, f"posterior     median {result['mcmc_depth_median_ppm']:.1f} "
+                        f"-{result['mcmc_depth_err_lo_ppm']:.1f} / "
+                        f"+{result['mcmc_depth_err_hi_ppm']:.1f} ppm ({result['mcmc_move']}, "
                         f"{result['mcmc_walkers']} walkers x {result['mcmc_steps']} steps, "
                         f"N/tau {result.get('mcmc_n_over_tau') or float('nan'):.0f})")
     wrote = [result["result_file"], result["lightcurve_file"]] + [
