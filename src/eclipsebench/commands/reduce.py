@@ -67,7 +67,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "leastsq: least squares only, for speed; auto (default): mcmc for "
                         "an eclipse or transit, leastsq for a whole phase curve")
     p.add_argument("--prayer-bead", type=positive_int(minimum=0), default=None, metavar="N",
-                   help="cyclic residual shifts for the prayer-bead error (0: none; default 16)")
+                   help="cyclic residual shifts for the prayer-bead error (0: none; default "
+                        "16; computed where the error rule can report it: with --sampler "
+                        "leastsq, error_rule largest, or a team that used it)")
     p.add_argument("--walkers", type=positive_int(minimum=4), default=None, metavar="N",
                    help="MCMC walkers (even; default 16)")
     p.add_argument("--steps", type=positive_int(minimum=100), default=None, metavar="N",

@@ -28,7 +28,7 @@ class ReduceSection:
     sampler : {"auto", "mcmc", "leastsq"}
         Least squares followed by emcee (``mcmc``), or least squares only
         (``leastsq``, for speed). ``auto`` (the default) samples the posterior
-        where it costs seconds: an eclipse or a transit (2-15 s for 15,000
+        where it costs seconds: an eclipse or a transit (1-9 s for 15,000
         frames with the DE move, BENCHMARKS.md "mcmc"); a whole phase curve is
         least squares (its MCMC evaluates the model walker by walker, about
         100 s for 2,000 steps on 1,000 rows). :meth:`resolved_sampler` says

@@ -92,6 +92,11 @@ class FrameModel:
     stamp_px: int = 13
     shape: tuple[int, int] = (32, 32)
 
+    def __post_init__(self):
+        if self.noise_factor != 1.0 and self.noise_model != "iracsim2015":
+            raise InputError(f"noise_factor: IRACSIM's NOISE_FACTOR applies to noise_model "
+                             f"'iracsim2015' only, got {self.noise_factor} with {self.noise_model!r}")
+
     @property
     def subsamples_per_tick(self) -> int:
         """Sub-samples summed into one tick (``n + 1`` for ``iracsim2015``)."""
@@ -360,6 +365,6 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
         frames[:] = expected
         return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
     # Read noise: 2 FN reads per pixel; their sum in sum_i (S_i - P_i) / FN is one Gaussian.
-    read_sd = model.read_noise_e * (model.noise_factor if model.noise_model == "iracsim2015" else 1.0)
+    read_sd = model.read_noise_e * model.noise_factor
     frames += rng_read.standard_normal(size=frames.shape) * (read_sd * np.sqrt(2.0 / mode.fowler))
     return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
