@@ -49,7 +49,8 @@ from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 
 __all__ = ["normalised_pixels", "central_stamp", "time_basis", "PldDesign", "pld_solve",
-           "pld_binned_residuals", "residual_scatter_curve", "scatter_slope",
+           "pld_binned_residuals", "pld_log_likelihood", "pld_log_likelihood_batch",
+           "residual_scatter_curve", "scatter_slope",
            "eclipse_frames", "time_averaging_error", "PixelLevelDecorrelation"]
 
 #: The rms of N-frame means is kept in the slope fit while there are at least
@@ -268,6 +269,40 @@ def _pld_solve_batch(design: PldDesign, astro: np.ndarray
     a = np.matmul(gw.transpose(0, 2, 1), gw)
     b = design.b_target @ gw
     return _solve_batch(a, b), gw
+
+
+def pld_log_likelihood(design: PldDesign, residuals: np.ndarray,
+                       noise_scale: float = 1.0) -> float:
+    """Gaussian log-likelihood of the fitted points from their normalised residuals.
+
+    ``residuals`` are :func:`pld_binned_residuals` (one per bin, or per frame
+    when unbinned); each point's sigma is the bin's error times ``noise_scale``.
+    """
+    r = np.asarray(residuals, float) / noise_scale
+    sigma = noise_scale / design.b_ivar_sqrt
+    return float(-0.5 * np.dot(r, r) - np.sum(np.log(sigma)) - 0.5 * len(r) * np.log(2 * np.pi))
+
+
+def pld_log_likelihood_batch(design: PldDesign, astro: np.ndarray,
+                             noise_scale: float = 1.0) -> np.ndarray | None:
+    """:func:`pld_log_likelihood` of the fit of every row of ``astro`` (m, n), or None.
+
+    The coefficients of all rows are solved together (:func:`_pld_solve_batch`);
+    None where no batched form is kept (the caller then loops).
+    """
+    solved = _pld_solve_batch(design, astro)
+    if solved is None:
+        return None
+    coef, gw = solved
+    astro = np.atleast_2d(np.asarray(astro, float))
+    if gw is None:
+        r = (design.b_flux - astro * (coef @ design.design.T)) * design.b_ivar_sqrt
+    else:
+        r = design.b_target - np.matmul(gw, coef[:, :, None])[:, :, 0]
+    r = r / noise_scale
+    sigma = noise_scale / design.b_ivar_sqrt
+    return (-0.5 * np.einsum("ij,ij->i", r, r) - np.sum(np.log(sigma))
+            - 0.5 * r.shape[1] * np.log(2 * np.pi))
 
 
 def residual_scatter_curve(residual: np.ndarray, *, min_bins: int = SLOPE_MIN_BINS
@@ -514,31 +549,15 @@ class PixelLevelDecorrelation(Systematics):
     def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
                        noise_scale: float = 1.0) -> float:
         """Gaussian log-likelihood of the binned points the fit is made on."""
-        r = self.residuals(astro, theta) / noise_scale
-        sigma = noise_scale / self.design.b_ivar_sqrt
-        return float(-0.5 * np.dot(r, r) - np.sum(np.log(sigma))
-                     - 0.5 * len(r) * np.log(2 * np.pi))
+        return pld_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
 
     def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
                              noise_scale: float = 1.0) -> np.ndarray:
         """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)): the binned
         normal equations of all rows are built and solved together."""
-        solved = (_pld_solve_batch(self.design, astro)
-                  if self._batch_is_exact(PixelLevelDecorrelation) else None)
-        if solved is None:
-            return super().log_likelihood_batch(astro, theta, noise_scale)
-        coef, gw = solved
-        d = self.design
-        astro = np.atleast_2d(np.asarray(astro, float))
-        if gw is None:
-            model = astro * (coef @ d.design.T)
-            r = (d.b_flux - model) * d.b_ivar_sqrt
-        else:
-            r = d.b_target - np.matmul(gw, coef[:, :, None])[:, :, 0]
-        r = r / noise_scale
-        sigma = noise_scale / d.b_ivar_sqrt
-        return (-0.5 * np.einsum("ij,ij->i", r, r) - np.sum(np.log(sigma))
-                - 0.5 * r.shape[1] * np.log(2 * np.pi))
+        out = (pld_log_likelihood_batch(self.design, astro, noise_scale)
+               if self._batch_is_exact(PixelLevelDecorrelation) else None)
+        return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out
 
     def relative_residuals(self, astro: np.ndarray) -> np.ndarray:
         """``flux / model - 1`` of the unbinned frames, in time order."""

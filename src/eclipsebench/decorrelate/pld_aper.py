@@ -18,9 +18,9 @@ SPCA passes the normalised pixels through a PCA and prepends a constant
 (``Decorrelation.py``); since the normalised pixels sum to 1 this spans the
 same space, so the least-squares model is unchanged (here the columns are
 likewise rotated onto the weighted design's singular vectors, for
-conditioning only). As the polynomial models, the coefficients are fitted on
-means of ``bin_frames`` consecutive frames (default 64: SPCA fits
-64-frame data cubes) and applied to every frame.
+conditioning only). As the polynomial models, the whole fit is made on means
+of ``bin_frames`` consecutive frames (default 64: SPCA fits 64-frame data
+cubes), and the coefficients are applied to every frame.
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ class PldAperture(LinearDetectorModel):
     stamp : int, 3 or 5, default 3
         Side of the stamp (a 5x5 table stamp is cut to 3x3 when 3).
     bin_frames : int, default 64
-        Fit the coefficients on means of this many consecutive frames.
+        Fit on means of this many consecutive frames.
     psf_width : bool, default False
         Multiply by SPCA's PSF-width term (needs ``width_x``, ``width_y``).
     """

@@ -29,10 +29,12 @@ largest carry no information and are left out (counted in ``diagnostics``).
 
 Binning. SPCA fits photometry median-binned per 64-frame data cube
 (``Decorrelation.py``: ``nFrames = 64``; ``helpers.get_data`` reads the binned
-files). Here the coefficients are fitted on means of ``bin_frames``
-consecutive frames (default 64; design and flux binned alike, so the binned
-fit is the fit of the binned model), then applied to every frame, as
-:mod:`eclipsebench.decorrelate.pld` does.
+files). Here the whole fit is made on means of ``bin_frames`` consecutive
+frames (default 64; design and flux binned alike, so the binned fit is the
+fit of the binned model): the coefficients, the residuals and the likelihood
+the astrophysical parameters are fitted or sampled on are those of the bins,
+as :mod:`eclipsebench.decorrelate.pld` does. The coefficients are then applied
+to every frame for the corrected light curve.
 """
 
 from __future__ import annotations
@@ -47,7 +49,8 @@ from numpy.polynomial import legendre
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .pld import PldDesign, _pld_solve_batch, pld_solve
+from .pld import (PldDesign, pld_binned_residuals, pld_log_likelihood,
+                  pld_log_likelihood_batch, pld_solve)
 
 __all__ = ["polynomial_terms", "legendre_design", "scaled_coordinate", "psf_width_columns",
            "whitened_basis", "LinearDetectorModel", "PolyOptions", "Poly2", "Poly3", "Poly4",
@@ -189,11 +192,25 @@ class LinearDetectorModel(Systematics):
         scaled = self._gain_astro(astro, theta)
         return scaled * np.einsum("nk,k->n", self.design.design, pld_solve(self.design, scaled))
 
+    def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """Normalised residuals of the fitted points (one per bin; per frame when unbinned).
+
+        The whole fit is made on the bins, as SPCA fits its binned photometry:
+        the coefficients minimise these residuals, and so does the outer fit.
+        """
+        scaled = self._gain_astro(astro, theta)
+        return pld_binned_residuals(self.design, scaled, pld_solve(self.design, scaled))
+
+    def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                       noise_scale: float = 1.0) -> float:
+        """Gaussian log-likelihood of the binned points the fit is made on."""
+        return pld_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
+
     def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
                              noise_scale: float = 1.0) -> np.ndarray:
         """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)) and of ``theta``
         (shape (m, 2) with the PSF-width term): the binned normal equations of all rows
-        are built and solved together, the coefficients applied to every frame."""
+        are built and solved together."""
         astro = np.atleast_2d(np.asarray(astro, float))
         if self.widths is not None:
             theta = np.zeros((len(astro), 2)) if theta is None else np.atleast_2d(theta)
@@ -201,12 +218,9 @@ class LinearDetectorModel(Systematics):
                               + self.widths[:, 1] * theta[:, 1:2])
         else:
             scaled = astro
-        solved = (_pld_solve_batch(self.design, scaled)
-                  if self._batch_is_exact(LinearDetectorModel) else None)
-        if solved is None:
-            return super().log_likelihood_batch(astro, theta, noise_scale)
-        model = scaled * (solved[0] @ self.design.design.T)
-        return self._white_log_likelihood_batch(model, noise_scale)
+        out = (pld_log_likelihood_batch(self.design, scaled, noise_scale)
+               if self._batch_is_exact(LinearDetectorModel) else None)
+        return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out
 
     def with_flux(self, flux: np.ndarray) -> LinearDetectorModel:
         """The same design on new fluxes (equal to a fresh build)."""
