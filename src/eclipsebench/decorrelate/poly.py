@@ -49,8 +49,13 @@ from numpy.polynomial import legendre
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .pld import (PldDesign, pld_binned_residuals, pld_log_likelihood,
-                  pld_log_likelihood_batch, pld_solve)
+from .pld import (
+    PldDesign,
+    pld_binned_residuals,
+    pld_log_likelihood,
+    pld_log_likelihood_batch,
+    pld_solve,
+)
 
 __all__ = ["polynomial_terms", "legendre_design", "scaled_coordinate", "psf_width_columns",
            "whitened_basis", "LinearDetectorModel", "PolyOptions", "Poly2", "Poly3", "Poly4",
