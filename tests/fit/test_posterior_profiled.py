@@ -90,7 +90,8 @@ class Explicit(Systematics):
     """Test-only: a method's model with its linear parameters as explicit chain parameters.
 
     ``kind`` says which likelihood: ``"frames"`` (white noise per frame, model
-    ``astro * (X c)``), ``"bins"`` (PLD: white noise on bins, model ``Bin(X astro) c``)
+    ``astro * (X c)``), ``"bins"`` (PLD and the SPCA models: white noise on bins, model
+    ``Bin(X astro) c``)
     or ``"gp"`` (the GP's covariance with the mean ``F0`` sampled).
     """
 
@@ -167,7 +168,8 @@ CASES = {
     "pld": ({"bin_frames": 4}, "bins", lambda m: m.design.design),
     "pld-aper": ({"bin_frames": 1}, "frames", lambda m: m.design.design),
     "bliss": ({"knot_spacing_px": 0.05}, "frames", _bliss_interpolation),
-    "poly3": ({"bin_frames": 1}, "frames", lambda m: m.design.design),
+    # the SPCA models' default path: the whole fit on bins, as PLD's
+    "poly3": ({"bin_frames": 4}, "bins", lambda m: m.design.design),
 }
 FAST = ("kr-pmap", "segpoly", "poly2", "gp")
 
