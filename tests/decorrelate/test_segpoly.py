@@ -115,9 +115,14 @@ def test_final_series_is_the_framewise_median_of_the_ten_detrendings(epoch_small
     np.testing.assert_allclose(final / np.mean(final), median / np.mean(median), rtol=1e-12)
 
 
-def test_box_eclipse_is_the_faithful_default():
-    assert SegmentedPolynomial.default_eclipse_shape == "box"
+def test_the_box_eclipse_is_the_paper_profile_s_not_the_controlled_one():
+    """The team fitted a box (App. B.6); the controlled profile shares one shape."""
+    from eclipsebench.fit.profiles import paper_profile
+    from eclipsebench.fit.reduce import resolve_profile
     assert get_method("segpoly") is SegmentedPolynomial
+    assert paper_profile("segpoly").eclipse_shape == "box"
+    assert resolve_profile("segpoly", profile="paper")[0].eclipse_shape == "box"
+    assert resolve_profile("segpoly", profile="controlled")[0].eclipse_shape == "physical"
 
 
 def test_default_is_blind_and_the_options_say_so(epoch_small):

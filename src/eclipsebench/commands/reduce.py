@@ -50,8 +50,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "least BIC reported; [reduce] phase_curve_model, default bic)")
     p.add_argument("--ramp", choices=RAMP_MODELS, default=None,
                    help="detector ramp (default: [reduce] ramp, none)")
-    p.add_argument("--eclipse-shape", choices=("auto",) + ECLIPSE_SHAPES, default=None,
-                   help="eclipse shape; auto = the method's default (box for segpoly)")
+    p.add_argument("--eclipse-shape", choices=ECLIPSE_SHAPES, default=None,
+                   help="eclipse shape (default: [reduce] eclipse_shape, physical; the paper "
+                        "profile takes each team's, the box for segpoly)")
     p.add_argument("--event", choices=EVENTS, default=None,
                    help="event fitted (default: [reduce] event, eclipse); transit: Rp/R* and "
                         "mid-transit time with batman's quadratic limb darkening, a/R*, b, q1, "

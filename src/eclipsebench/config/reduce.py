@@ -22,9 +22,10 @@ class ReduceSection:
         Out-of-eclipse phase-curve model (paper Section 4.2).
     ramp : {"none", "linear", "exponential"}
         Multiplicative detector ramp.
-    eclipse_shape : {"auto", "physical", "box"}
-        "auto" takes the method's ``default_eclipse_shape`` (the box for
-        ``segpoly``, the orbit's physical shape for the others).
+    eclipse_shape : {"physical", "box"}
+        The orbit's physical shape (default) or a box of the half-depth
+        duration. Shared by every method in the controlled profile; the paper
+        profile takes each team's (the box for ``segpoly``, paper App. B.6).
     sampler : {"auto", "mcmc", "leastsq"}
         Least squares followed by emcee (``mcmc``), or least squares only
         (``leastsq``, for speed). ``auto`` (the default) samples the posterior
@@ -126,7 +127,7 @@ class ReduceSection:
 
     phase: Literal["flat", "linear", "quadratic", "sinusoid"] = "quadratic"
     ramp: Literal["none", "linear", "exponential"] = "none"
-    eclipse_shape: Literal["auto", "physical", "box"] = "auto"
+    eclipse_shape: Literal["physical", "box"] = "physical"
     sampler: Literal["auto", "mcmc", "leastsq"] = "auto"
     mcmc_walkers: int = 16
     mcmc_steps: int = 5000

@@ -316,9 +316,6 @@ class Systematics(ABC):
     #: 38-55 for the stretch move, BENCHMARKS.md "mcmc") or "stretch" (emcee's
     #: affine-invariant move, Goodman & Weare 2010). Both sample the same posterior.
     preferred_move: ClassVar[str] = "de"
-    #: The eclipse shape the fitter uses when ``[reduce] eclipse_shape = "auto"``:
-    #: "physical" (the orbit's) or "box" (the faithful default of SP(K2)).
-    default_eclipse_shape: ClassVar[str] = "physical"
     #: Whether the fitter's prayer-bead error applies to this method. A method
     #: whose model follows the correlated noise itself (a GP's conditional
     #: mean) leaves residuals that are not the noise the bead should shift,

@@ -47,8 +47,9 @@ Named options that are *not* the K2 pipeline, off by default: ``mask_eclipse``
 ``flux / astro`` for the fitted ``astro``).
 
 :meth:`SegmentedPolynomial.predict` returns ``F0 * astro * trend`` with ``F0``
-solved linearly; the team fitted a box eclipse, so
-:attr:`SegmentedPolynomial.default_eclipse_shape` is ``"box"``.
+solved linearly. The team fitted a box eclipse: the paper profile does too
+(``fit/profiles.py``); the controlled profile gives SP(K2) the shape every
+method shares.
 """
 
 from __future__ import annotations
@@ -449,8 +450,6 @@ class SegmentedPolynomial(Systematics):
     description: ClassVar[str] = ("SP(K2): iterated cubic (x, y) polynomial, then ten segmented "
                                   "detrendings combined by the median, blind to the eclipse "
                                   "(Buzasi et al. 2015)")
-    #: The SP(K2) team fitted a box eclipse (paper B.6); the fitter may use the shared model instead.
-    default_eclipse_shape: ClassVar[str] = "box"
     #: The prayer bead's refits keep the detrend of the original data (see with_flux).
     with_flux_rebuilds: ClassVar[bool] = False
 

@@ -114,7 +114,7 @@ class PerAorSystematics(Systematics):
         self.name = first.name
         self.options = first.options
         self.context = first.context
-        for attr in ("preferred_move", "default_eclipse_shape", "use_prayer_bead",
+        for attr in ("preferred_move", "use_prayer_bead",
                      "likelihood_models_noise", "reported_error", "stochastic"):
             setattr(self, attr, getattr(first, attr))
         self.param_names = tuple(f"aor{k}_{n}" for k, p in enumerate(parts)

@@ -150,14 +150,12 @@ class PreparedEpoch:
             return AstroModel(
                 data.time_bmjd, self.system, event="phase-curve",
                 phase=phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model,
-                ramp=options.ramp, eclipse_shape="physical" if shape == "auto" else shape,
+                ramp=options.ramp, eclipse_shape=shape,
                 limb_darkening_q=options.limb_darkening_q,
                 aorkey=(data.aorkey if options.aor_offsets and not options.systematics_per_aor
                         else None),
                 exposure_s=options.exposure_s or None,
                 nonnegative_planet=options.nonnegative_planet)
-        if shape == "auto":
-            shape = getattr(self.systematics, "default_eclipse_shape", "physical")
         return AstroModel(self.systematics.data.time_bmjd, self.system,
                           phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape,
                           event=options.event, transit_free=options.transit_free,
