@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -83,8 +84,7 @@ def test_the_controlled_profile_gives_every_method_one_eclipse_shape(kit, xo3_ep
     table = xo3_epoch["table"](noise=0.0, systematics=False)
     fast = ReduceSection(sampler="leastsq", prayer_bead_shifts=0)
     ctrl = reduce_epoch(table, "segpoly", options=fast)
-    box = reduce_epoch(table, "segpoly", options=ReduceSection(
-        sampler="leastsq", prayer_bead_shifts=0, eclipse_shape="box"))
+    box = reduce_epoch(table, "segpoly", options=replace(fast, eclipse_shape="box"))
     paper = reduce_epoch(table, "segpoly", profile="paper")
     assert (ctrl.eclipse_shape, box.eclipse_shape, paper.eclipse_shape) == (
         "physical", "box", "box")
