@@ -14,10 +14,12 @@ the first epoch fitted and dropped by reason, and the median wall seconds
 of a fit.
 
 Usage: ``python bench/bench_noise_free.py [--epochs N] [--workdir DIR]
-[--methods bliss pld] [--option kr-data.use_noise_pixels=true ...]``
-(``--workdir`` keeps the simulation and photometry for a second run; a
-workdir made with fewer epochs is simulated again; ``--option`` sets a
-method's option, the value read as TOML).
+[--methods bliss pld] [--option kr-data.use_noise_pixels=true ...]
+[--set 'simulation.pointing_ranges=["a_j_px=C:0"]' ...]`` (``--workdir``
+keeps the simulation and photometry for a second run, so give each
+``--set`` its own workdir; a workdir made with fewer epochs is simulated
+again; ``--option`` sets a method's option, the value read as TOML; ``--set``
+changes the simulation's configuration beside the noise model).
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ from pathlib import Path
 WITHIN_PPM = 20.0
 
 
-def prepare(workdir: Path, epochs: int) -> tuple[list[Path], list[float]]:
+def prepare(workdir: Path, epochs: int,
+            overrides: tuple[str, ...] = ()) -> tuple[list[Path], list[float]]:
     """Simulate and measure the noise-free epochs once; their tables and true depths."""
     from astropy.table import Table
 
@@ -41,7 +44,7 @@ def prepare(workdir: Path, epochs: int) -> tuple[list[Path], list[float]]:
     truth_file = workdir / "sim" / "truth.ecsv"
     if not (truth_file.is_file() and len(Table.read(truth_file)) >= epochs
             and all(t.is_file() for t in tables)):
-        cfg = eb.load_config(overrides=["simulation.noise_model=\"none\""])
+        cfg = eb.load_config(overrides=["simulation.noise_model=\"none\"", *overrides])
         eb.simulate(workdir / "sim", config=cfg, seed=2015, epochs=epochs, workers=1)
         eb.measure(workdir / "sim", workdir / "phot", config=cfg)
     truth = Table.read(truth_file)
@@ -70,6 +73,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--workdir", type=Path, default=None)
     parser.add_argument("--methods", nargs="*", default=None)
     parser.add_argument("--option", action="append", default=[])
+    parser.add_argument("--set", action="append", default=[], dest="overrides")
     args = parser.parse_args(argv)
     options = method_options(args.option)
     if not 1 <= args.epochs <= 10:
@@ -81,7 +85,7 @@ def main(argv: list[str]) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         workdir = args.workdir or Path(tmp)
         workdir.mkdir(parents=True, exist_ok=True)
-        tables, truths = prepare(workdir, args.epochs)
+        tables, truths = prepare(workdir, args.epochs, tuple(args.overrides))
         heads = " | ".join(f"epoch {e}" for e in range(1, args.epochs + 1))
         print(f"| method | depth minus truth (ppm): {heads} | largest miss (ppm) | "
               "frames fitted (epoch 1) | dropped (epoch 1) | median seconds |")
