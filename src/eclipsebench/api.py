@@ -26,6 +26,7 @@ from .decorrelate.base import MethodOptions, Systematics, available_methods, get
 from .engine import RunReport
 from .errors import InputError
 from .fit.reduce import EpochResult, reduce_epoch
+from .fit.target import names_a_system
 from .photometry.pipeline import photometry_tables, replace_options
 from .photometry.table import write_photometry
 from .simulation.challenge import ChallengeResult, simulate_challenge
@@ -159,9 +160,10 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     method : str
         A name from :func:`methods`.
     system : str, mapping or PlanetSystem, optional
-        The planet (default: the configuration's, the built-in challenge's
-        ``"XO-3b (2015 challenge)"``; ``"XO-3b"`` has Wong et al. 2014's
-        elements, for real data): a name (searched in the configuration's
+        The planet (default: the one ``config`` names, else the one the table
+        names: a simulation's ``SYSTEM``, or the archive's ``OBJECT`` looked
+        up in the catalogue, ``"XO-3 ch2 peak-up"`` -> ``"XO-3b"``; a table
+        naming none raises InputError asking for it): a name (searched in the configuration's
         ``[system] catalogue``, then the built-in one), a
         :class:`~eclipsebench.astro.catalogue.PlanetSystem`, or a mapping of
         a planet in no catalogue, ``{"name": ..., "period_days": ..., ...}``
@@ -198,8 +200,10 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     if reduce_options:
         section = replace(section, **reduce_options)
         section.validate()
-    system = system_for(cfg.system) if system is None else as_system(
-        system, cfg.system.catalogue or None)
+    if system is not None:
+        system = as_system(system, cfg.system.catalogue or None)
+    elif names_a_system(cfg.system):
+        system = system_for(cfg.system)
     return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
                         method_options=options, resources=resources, columns=columns,
                         time_column=time_column, time_format=time_format)

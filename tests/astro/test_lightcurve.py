@@ -204,12 +204,21 @@ def test_phase_curve_design_matrices_match_the_functions():
         phase_curves.evaluate("cubic", t, [1.0])
 
 
-def test_cli_json_has_the_challenge_numbers(capsys):
+def test_cli_json_of_the_real_planet_is_its_own_model_depth(capsys):
+    """Issue 26: XO-3b (Wong et al. 2014's elements) gets its thermal model's depth, never the
+    challenge's fixed 1875 ppm; the challenge's planet keeps the challenge's depth."""
     assert main(["lightcurve", "XO-3b", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["eclipse_depth_ppm"] == pytest.approx(1875.0)
-    assert out["depth_fixed"] is True
+    assert out["depth_fixed"] is False
+    assert out["eclipse_depth_ppm"] == pytest.approx(out["model_depth_ppm"])
     assert out["model_depth_ppm"] == pytest.approx(1138.1, abs=1.0)
+    assert main(["lightcurve", "--json"]) == 0
+    challenge = json.loads(capsys.readouterr().out)
+    assert challenge["system"] == "XO-3b (2015 challenge)" and challenge["depth_fixed"] is True
+    assert challenge["eclipse_depth_ppm"] == pytest.approx(1875.0)
+    assert main(["lightcurve", "XO-3b", "--fix-depth", "1875", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["depth_fixed"] is True and out["eclipse_depth_ppm"] == pytest.approx(1875.0)
     assert out["model_depth_instantaneous_ppm"] == pytest.approx(1762.4, abs=1.0)
     assert out["t_transit_bjd"] - 2400000.5 == pytest.approx(out["t_transit_bmjd"])
     assert out["start_bmjd"] == pytest.approx(57234.3406)

@@ -115,7 +115,7 @@ def xo3_table(path: Path, *, noise: float = 1e-3, seed: int = 0) -> Path:
            "flux_err": np.full(n, 200.0), "flag": np.zeros(n, dtype=np.int32),
            "stamp3": np.broadcast_to(flux[:, None, None] / 9, (n, 3, 3)).copy(),
            "stamp5": np.broadcast_to(flux[:, None, None] / 25, (n, 5, 5)).copy()},
-          meta={"EPOCH": 1}).write(path)
+          meta={"EPOCH": 1, "SYSTEM": "XO-3b (2015 challenge)"}).write(path)
     return path
 
 

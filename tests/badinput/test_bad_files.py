@@ -162,7 +162,8 @@ def test_a_full_disk_names_the_file_and_leaves_nothing(command, tmp_path, cli, b
         Table({"time_bmjd": [1.0]}).write(tmp_path / "t.ecsv", format="ascii.ecsv")
         _fake_reduce(monkeypatch)
         monkeypatch.setattr(atomic.Path, "write_bytes", full)
-        argv = ["reduce", tmp_path / "t.ecsv", "--method", "pld", "--out", out]
+        argv = ["reduce", tmp_path / "t.ecsv", "--method", "pld", "--out", out,
+                "--system", "XO-3b"]
     before = bad.snapshot(tmp_path)
     code, _, err = cli(*argv, "--quiet")
     bad.assert_one_line(code, err, str(out), "no space left")

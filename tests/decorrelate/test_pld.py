@@ -218,6 +218,7 @@ def _xo3_pld_table(synth, n_frames=3000, noise=3e-4, seed=7):
                    "flag": np.zeros(n, dtype=np.int32), "stamp3": stamps[:, 2:5, 2:5],
                    "stamp5": stamps[:, 1:6, 1:6]})
     table.meta["EPOCH"] = 1
+    table.meta["SYSTEM"] = "XO-3b (2015 challenge)"
     return table
 
 

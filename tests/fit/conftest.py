@@ -105,6 +105,7 @@ def make_epoch_table(*, t_ecl, visible, time, noise=1e-3, seed=1, systematics=Tr
                "flux_err": np.full(n, F0 * max(noise, 1e-4)), "flag": np.zeros(n, dtype=np.int32),
                "stamp3": stamp, "stamp5": stamp5})
     t.meta["EPOCH"] = 3
+    t.meta["SYSTEM"] = "XO-3b (2015 challenge)"  # the planet this synthetic epoch simulates
     return t
 
 

@@ -233,7 +233,8 @@ def test_reduce_command_fits_a_phase_curve(tmp_path, polygain, kit, capsys):
     table.write(path)
     out = tmp_path / "pc.json"
     code = main(["reduce", str(path), "--method", polygain.name, "--event", "phase-curve",
-                 "--phase", "harmonic2", "--prayer-bead", "0", "--out", str(out)])
+                 "--phase", "harmonic2", "--prayer-bead", "0", "--out", str(out),
+                 "--system", SYSTEM.name])
     assert code == 0
     res = json.loads(out.read_text())
     assert res["phase"] == "harmonic2" and "phase_b2" in res

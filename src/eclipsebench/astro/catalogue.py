@@ -25,6 +25,7 @@ Examples
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
@@ -38,6 +39,7 @@ from .orbit import BMJD_OFFSET, OrbitClock
 
 __all__ = ["PlanetSystem", "get_system", "list_systems", "load_catalogue", "system_from_mapping",
            "planet_table_from_pairs", "system_from_pairs", "system_for", "as_system",
+           "host_star", "system_for_object", "system_from_meta",
            "PLANET_KEYS", "REQUIRED_KEYS"]
 
 _REQUIRED = ("period_days", "t_transit_bjd", "ecc", "omega_deg", "inc_deg", "a_rs", "rp_rs",
@@ -405,3 +407,93 @@ def as_system(system: Any, catalogue: str | Path | None = None) -> PlanetSystem:
         return system_from_mapping(name, table, source="system")
     raise InputError(f"system: expected a planet name, a mapping of its values or a "
                      f"PlanetSystem, got {type(system).__name__}")
+
+
+# ------------------------------------------------------------------ the planet of the data
+_PLANET_LETTER = re.compile(r"^(?P<host>.*?\S)[\s-]*(?P<letter>[b-z])$")
+
+
+def host_star(planet_name: str) -> str | None:
+    """The host star of a planet name (``"XO-3b"`` -> ``"XO-3"``, ``"55 Cnc e"`` -> ``"55 Cnc"``).
+
+    None for a name that does not end in a planet letter, such as the challenge's
+    ``"XO-3b (2015 challenge)"``: a qualified row is never found by its star.
+
+    Examples
+    --------
+    >>> host_star("HD 189733b"), host_star("55 Cnc e"), host_star("XO-3b (2015 challenge)")
+    ('HD 189733', '55 Cnc', None)
+    """
+    m = _PLANET_LETTER.match(planet_name.strip())
+    return m["host"] if m else None
+
+
+def _starts_with_star(text: str, star: str) -> bool:
+    """``text`` (normalised) begins with ``star`` (normalised) and no digit follows it
+    (``XO-3 ch2`` is XO-3, ``XO-31`` is not)."""
+    rest = text[len(star):] if text.startswith(star) else None
+    return rest is not None and not rest[:1].isdigit()
+
+
+def system_for_object(object_name: str, catalogue: str | Path | None = None
+                      ) -> PlanetSystem | None:
+    """The catalogue planet a header's ``OBJECT`` names, or None.
+
+    ``OBJECT`` is free text written by the observer (``"XO-3 ch2 peak-up"``):
+    it names a planet when, spaces, hyphens and case ignored, it begins with
+    the planet's name or its host star's and no digit follows
+    (``"XO-3 ch2 peak-up"`` -> XO-3b). A user catalogue is searched first; a
+    star with several planets in the catalogue names none of them.
+
+    Examples
+    --------
+    >>> system_for_object("XO-3 ch2 peak-up").name
+    'XO-3b'
+    >>> system_for_object("XO-31") is None
+    True
+    """
+    text = _normalise(object_name)
+    if not text:
+        return None
+    sources = ([(str(catalogue), load_catalogue(catalogue))] if catalogue not in (None, "")
+               else []) + [("", load_catalogue(None))]
+    for source, tables in sources:
+        found = []
+        for name in tables:
+            star = host_star(name)
+            keys = [_normalise(name)] + ([_normalise(star)] if star else [])
+            if star is not None and any(_starts_with_star(text, k) for k in keys):
+                found.append(name)
+        if len(found) == 1:
+            return system_from_mapping(found[0], tables[found[0]], source=source)
+        if len(found) > 1:
+            return None
+    return None
+
+
+def system_from_meta(meta: Mapping[str, Any], catalogue: str | Path | None = None
+                     ) -> tuple[PlanetSystem | None, str]:
+    """The planet a photometry table's metadata names, and where that came from.
+
+    A simulation's tables carry ``SYSTEM`` (the catalogue planet it rendered);
+    archive data carry the observer's ``OBJECT`` (:func:`system_for_object`).
+    Returns ``(None, why)`` when neither names a planet the catalogue knows.
+
+    Examples
+    --------
+    >>> system, source = system_from_meta({"OBJECT": "XO-3 ch2 peak-up"})
+    >>> system.name, source
+    ('XO-3b', "OBJECT 'XO-3 ch2 peak-up'")
+    >>> system_from_meta({})[1]
+    'the table names no object'
+    """
+    simulated = str(meta.get("SYSTEM", "") or "").strip()
+    if simulated:
+        return get_system(simulated, catalogue), f"SYSTEM {simulated!r}"
+    obj = str(meta.get("OBJECT", "") or "").strip()
+    if not obj:
+        return None, "the table names no object"
+    system = system_for_object(obj, catalogue)
+    if system is None:
+        return None, f"OBJECT {obj!r} names no planet of the catalogue"
+    return system, f"OBJECT {obj!r}"

@@ -17,7 +17,7 @@ from ..astro.catalogue import system_for
 from ..astro.lightcurve import light_curve_function
 from ..astro.orbit import BMJD_OFFSET
 from ..config import Config
-from ..config.system import CHALLENGE_SYSTEM
+from ..config.system import CHALLENGE_SYSTEM, SystemSection
 from ..errors import InputError
 from ..io.atomic import atomic_path
 from ..io.paths import check_plot_path
@@ -65,8 +65,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="ratio of blackbodies at --wavelength, or averaged over 4.0-5.0 um")
     p.add_argument("--wavelength", type=positive_float(), default=4.5095, metavar="UM",
                    help="wavelength of the monochromatic flux ratio, micron")
-    p.add_argument("--fix-depth", type=nonnegative_float(), default=1875.0, metavar="PPM",
-                   help="scale the planet's flux so the eclipse depth is this (0: the model's own)")
+    p.add_argument("--fix-depth", type=nonnegative_float(), default=None, metavar="PPM",
+                   help="scale the planet's flux so the eclipse depth is this (0: the model's "
+                        "own; default: the challenge's 1875 ppm for the challenge's planet, the "
+                        "model's own for any other)")
     p.add_argument("--quadrature", choices=("gauss", "iracsim2015"), default="gauss",
                    help="surface sum of the thermal model (iracsim2015 reproduces the challenge's)")
     p.add_argument("--out", metavar="FILE.ecsv", help="write time_bmjd, flux and its components")
@@ -114,6 +116,14 @@ def challenge_epoch_times_bmjd(epoch: int, cfg: Config | None = None) -> np.ndar
                            for a in plan.aors])
 
 
+def _fixed_depth_ppm(args: argparse.Namespace, system) -> float:
+    """``--fix-depth``, else the challenge's fixed depth for the challenge's planet only: a
+    real planet's depth is its own thermal model's (its elements, star and albedo)."""
+    if args.fix_depth is not None:
+        return float(args.fix_depth)
+    return SystemSection().fix_depth_ppm if system.name == CHALLENGE_SYSTEM else 0.0
+
+
 def _light_curve_options(args: argparse.Namespace) -> dict:
     if not 0.0 <= args.albedo < 1.0:
         raise InputError(f"--albedo: expected 0 <= A < 1, got {args.albedo}")
@@ -132,7 +142,7 @@ def _run_phase_bias(args: argparse.Namespace) -> dict:
     epoch = PHASE_BIAS_EPOCH if args.epoch is None else args.epoch
     time = challenge_epoch_times_bmjd(epoch)
     system = planet_from_args(args, args.system)
-    lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **_light_curve_options(args))
+    lc = light_curve_function(system, fix_depth_ppm=_fixed_depth_ppm(args, system), **_light_curve_options(args))
     t0, t1 = float(time[0]), float(time[-1])
     inside = lc.eclipse_times_bmjd(t0, t1)
     if not inside:
@@ -168,7 +178,7 @@ def run(args: argparse.Namespace) -> dict:
         check_plot_path(args.plot, "--plot")
     options = _light_curve_options(args)
     system = planet_from_args(args, args.system)
-    lc = light_curve_function(system, fix_depth_ppm=args.fix_depth, **options)
+    lc = light_curve_function(system, fix_depth_ppm=_fixed_depth_ppm(args, system), **options)
     instantaneous = lc if args.tau_rad == 0 else light_curve_function(
         system, fix_depth_ppm=0.0, **{**options, "tau_rad_days": 0.0})
     n = int(np.floor(args.hours * 3600.0 / args.cadence_s)) + 1
@@ -187,7 +197,7 @@ def run(args: argparse.Namespace) -> dict:
         "eclipse_depth_ppm": lc.depth_ppm,
         "model_depth_ppm": lc.model_depth_ppm,
         "model_depth_instantaneous_ppm": instantaneous.model_depth_ppm,
-        "depth_fixed": args.fix_depth > 0,
+        "depth_fixed": _fixed_depth_ppm(args, system) > 0,
         "t_transit_bjd": t_tr + BMJD_OFFSET,
         "t_eclipse_bjd": t_ecl + BMJD_OFFSET,
         "t_transit_bmjd": t_tr,

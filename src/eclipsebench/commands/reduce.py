@@ -7,7 +7,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-from ..astro.catalogue import system_for
+from ..astro.catalogue import PlanetSystem, system_for
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
@@ -19,6 +19,7 @@ from ..fit.astro_model import (
     RAMP_MODELS,
 )
 from ..fit.data import TIME_FORMATS
+from ..fit.target import system_of_table
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
 from .options import (
@@ -91,8 +92,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "a folder of SSC map versions: the one in force at the observation's "
                         "date is used); simulated tables find theirs through SIMDIR")
     p.add_argument("--system", metavar="NAME", default=None,
-                   help="planet (default: [system] name, the 2015 challenge's "
-                        "'XO-3b (2015 challenge)'; give XO-3b for real data: Wong et al. 2014)")
+                   help="planet (default: the one the table names: a simulation's SYSTEM, or "
+                        "the archive header's OBJECT looked up in the catalogue, e.g. XO-3 -> "
+                        "XO-3b; a table that names none needs --system)")
     add_planet_options(p)
     p.add_argument("--epoch", type=positive_int(minimum=0), default=None, metavar="N",
                    help="epoch number (default: the table's EPOCH)")
@@ -166,7 +168,15 @@ def _options(args: argparse.Namespace):
         options.validate()
     except InputError as exc:
         raise InputError(str(exc).replace("config key '", "option '")) from None
-    return options, system_for(cfg.system)
+    return options, cfg.system
+
+
+def _system(args: argparse.Namespace, section, table, source) -> PlanetSystem:
+    """The planet asked for (``--system``, ``--planet``, a configuration's ``[system]``), else
+    the one the table's metadata name; one line asking for ``--system`` when none is found."""
+    explicit = args.system is not None or bool(getattr(args, "planet", None))
+    return system_of_table(table.meta, system=system_for(section) if explicit else None,
+                           section=section, source=str(source))
 
 
 def _clean(obj):
@@ -227,7 +237,7 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
                              "tables is least squares with the controlled settings")
     out = Path(args.out) if args.out else paths[0].parent / f"joint.{args.method}.json"
     check_output_path(out, "--out", "file")
-    options, system = _options(args)
+    options, section = _options(args)
     check_method_options(options)
     tables = []
     for path in paths:
@@ -236,6 +246,12 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
         tables.append(standardise_table(table, columns=_column_map(args.columns),
                                         time_column=args.time_column,
                                         time_format=args.time_format, labels=_TABLE_LABELS))
+    systems = [_system(args, section, t, p) for t, p in zip(tables, paths, strict=True)]
+    system = systems[0]
+    for other, path in zip(systems[1:], paths[1:], strict=True):
+        if other.name != system.name:
+            raise InputError(f"{path}: names {other.name}, {paths[0]} names {system.name}; a "
+                             "joint fit is of one planet (give --system NAME)")
     result = reduce_joint(tables, args.method, options=options, system=system, seed=args.seed,
                           pmap=args.pmap, method_options=_method_options(args.method_options))
     summary = _clean({**result.to_dict(), "tables": [str(p) for p in paths]})
@@ -269,7 +285,7 @@ def run(args: argparse.Namespace) -> dict:
     check_output_path(chain_file(out), "--out (its chain)", "file")
     if args.plot:
         check_plot_path(args.plot, "--plot")
-    options, system = _options(args)
+    options, section = _options(args)
     check_method_options(options)
     method_options = _method_options(args.method_options)
     table = read_table(table_path)
@@ -277,6 +293,7 @@ def run(args: argparse.Namespace) -> dict:
     table = standardise_table(table, columns=_column_map(args.columns),
                               time_column=args.time_column, time_format=args.time_format,
                               labels=_TABLE_LABELS)
+    system = _system(args, section, table, table_path)
     result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
                           method_options=method_options)

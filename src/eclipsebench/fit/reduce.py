@@ -23,10 +23,8 @@ import numpy as np
 from astropy.table import Table
 from scipy.optimize import least_squares
 
-from ..astro.catalogue import as_system, get_system
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..config.reduce import ReduceSection
-from ..config.system import SystemSection
 from ..decorrelate import available_methods, get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
 from ..errors import ConfigError, InputError
@@ -46,6 +44,7 @@ from .leastsq import (
 from .mcmc import McmcResult, run_mcmc
 from .profiles import PROFILES, PaperProfile, centroid_columns, paper_profile
 from .result import EpochResult, jsonable
+from .target import system_of_table
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
@@ -77,12 +76,13 @@ def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: s
                              time_format=time_format)
 
 
-def resolve_system(system: Any):
-    """A PlanetSystem from None (the configured default: the 2015 challenge's XO-3b), a name,
-    a mapping of the planet's values (with ``name``), or a PlanetSystem."""
-    if system is None:
-        return get_system(SystemSection().name)
-    return as_system(system)
+def resolve_system(system: Any, meta: Mapping[str, Any] | None = None,
+                   source: str = "the photometry table"):
+    """A PlanetSystem from a name, a mapping of the planet's values (with ``name``) or a
+    PlanetSystem; None: the planet the table's metadata name (``SYSTEM``, ``OBJECT``:
+    :func:`~eclipsebench.fit.target.system_of_table`), never the challenge's by default."""
+    return system_of_table(meta or {}, system=system, source=source,
+                           hint="system=NAME")
 
 
 def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
@@ -244,7 +244,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         if settling.any():
             dropped["settling_aor"] = int(settling.sum())
             data = data.subset(~settling)
-    system = resolve_system(system)
+    system = resolve_system(system, table.meta, source)
     t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source, options.event)
     # What the ephemeris predicts (never the truth): a method may use it to find the
     # eclipse's signature in its own decomposition (ICA's eclipse component).

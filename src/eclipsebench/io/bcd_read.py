@@ -51,7 +51,7 @@ from astropy.time import Time
 from ..detector.constants import ReadoutMode, ronoise_e
 from ..errors import DataError, InputError
 
-__all__ = ["BCD_NAME", "BcdInfo", "BcdCube", "Epoch", "find_bcd_files", "read_bcd_header",
+__all__ = ["BCD_NAME", "TARGET_KEYS", "BcdInfo", "BcdCube", "Epoch", "find_bcd_files", "read_bcd_header",
            "read_bcd", "frame_times_bmjd", "group_epochs", "electrons_per_mjysr"]
 
 BCD_NAME = re.compile(r"^SPITZER_I(?P<ch>[1-4])_(?P<aorkey>\d+)_(?P<expid>\d+)_(?P<dce>\d+)_"
@@ -92,6 +92,11 @@ class BcdInfo:
     def electrons_per_mjysr(self) -> float:
         """Factor that turns MJy/sr into electrons per pixel per frame."""
         return electrons_per_mjysr(self.gain, self.exptime_s, self.fluxconv)
+
+    @property
+    def extra_target(self) -> dict:
+        """The target cards of the header (:data:`TARGET_KEYS` present)."""
+        return {k: self.extra[k] for k in TARGET_KEYS if k in self.extra}
 
     @property
     def start_bmjd(self) -> float:
@@ -196,8 +201,12 @@ def _card_text(header: fits.Header, key: str) -> str:
     return text.split("/", 1)[0].strip() or "?"
 
 
-def _card(header: fits.Header, key: str, path: Path, kind=float, default=_MISSING):
+def _card(header: fits.Header, key: str, path: Path, kind=float, default=_MISSING, *,
+          digits: bool = False):
     """Header value ``key`` as ``kind`` (float or int), or ``default`` when absent.
+
+    ``digits``: a string of digits is read as the integer it spells (the 2015
+    challenge's public cubes write ``AORKEY = '20150000'``).
 
     Raises
     ------
@@ -218,6 +227,8 @@ def _card(header: fits.Header, key: str, path: Path, kind=float, default=_MISSIN
         if default is _MISSING:
             raise DataError(path, f"header lacks {key}")
         return default
+    if digits and isinstance(value, str) and value.strip().isdigit():
+        value = int(value.strip())
     try:
         if isinstance(value, bool) or isinstance(value, str) and kind is int:
             raise ValueError
@@ -305,7 +316,7 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
         chnl = _card(header, "CHNLNUM", path, int, int(m["ch"]))
         if chnl != int(m["ch"]):
             raise DataError(path, f"CHNLNUM = {chnl} but the name says channel {m['ch']}")
-        aorkey = _card(header, "AORKEY", path, int, int(m["aorkey"]))
+        aorkey = _card(header, "AORKEY", path, int, int(m["aorkey"]), digits=True)
         if aorkey != int(m["aorkey"]):
             raise DataError(path, f"AORKEY = {aorkey} but the name says {m['aorkey']}")
         sample_s = _card(header, "SAMPTIME", path, float, 0.01 if subarray else 0.2)
@@ -347,7 +358,26 @@ def read_bcd_header(path: str | os.PathLike) -> BcdInfo:
             fluxconv=values["FLUXCONV"], fowler=fowler, wait=wait,
             read_noise_e=read_noise, frame_interval_s=interval,
             sample_time_s=sample_s, epoch=epoch, simulate=simulate,
-            extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD")})
+            extra={"SIMSEED": header.get("SIMSEED"), "NOISEMOD": header.get("NOISEMOD"),
+                   **_target_cards(header)})
+
+
+#: What a table keeps of the target (``docs/contracts.md``): the archive's keys, and
+#: ``SYSTEM``, the catalogue planet a simulation rendered (simulated cubes only).
+TARGET_KEYS = ("OBJECT", "RA_REF", "DEC_REF", "AORLABEL", "DATE_OBS", "SYSTEM")
+
+
+def _target_cards(header: fits.Header) -> dict:
+    """The target cards present in ``header`` (text stripped, numbers finite), by name."""
+    out: dict = {}
+    for key in TARGET_KEYS:
+        value = header.get(key)
+        if isinstance(value, str) and value.strip():
+            out[key] = value.strip()
+        elif isinstance(value, (int, float)) and not isinstance(value, bool) \
+                and math.isfinite(value):
+            out[key] = float(value)
+    return out
 
 
 def frame_times_bmjd(info: BcdInfo) -> np.ndarray:

@@ -148,6 +148,8 @@ class BcdHeaderInfo:
     prf: str = "builtin"
     channel: int = 2
     subarray: bool = True
+    #: the catalogue planet rendered (``SYSTEM``): what a reduction of these cubes uses
+    system_name: str = ""
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -276,6 +278,8 @@ def sim_cards(info: BcdHeaderInfo) -> list[Card]:
         ("SIMPRF", info.prf, "PRF used by the simulator"),
         ("SIMPTG", info.pointing_motion, "Pointing motion on (F: star held fixed)"),
         ("SIMFLAT", info.flat_gain, "Intra-pixel gain switched off"),
+        *([("SYSTEM", info.system_name, "Catalogue planet the simulation rendered")]
+          if info.system_name else []),
     ]
 
 

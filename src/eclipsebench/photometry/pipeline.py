@@ -23,6 +23,7 @@ from ..config.photometry import PhotometrySection
 from ..errors import InputError
 from ..io.bcd_read import (
     BcdCube,
+    BcdInfo,
     Epoch,
     find_bcd_files,
     frame_times_bmjd,
@@ -226,6 +227,22 @@ def _relative(path: Path, root: Path) -> str:
         return path.resolve().as_posix()
 
 
+def _observation_meta(info: BcdInfo) -> dict:
+    """What the main AOR's header says of the target and the readout (``docs/contracts.md``).
+
+    The target (``OBJECT``, ``RA_REF``, ``DEC_REF``, ``AORLABEL``, ``DATE_OBS``
+    and a simulation's ``SYSTEM``) lets a reduction find the planet in the
+    catalogue; the readout (Fowler number, wait, sample and frame times, gain,
+    read noise) lets ``trust`` simulate twins of the observation.
+    """
+    return {**info.extra_target, "READMODE": "SUB" if info.subarray else "FULL",
+            "AFOWLNUM": int(info.fowler), "AWAITPER": int(info.wait),
+            "SAMPTIME": float(info.sample_time_s), "FRAMTIME": float(info.framtime_s),
+            "EXPTIME": float(info.exptime_s), "FRMINTVL": float(info.frame_interval_s),
+            "GAIN": float(info.gain), "FLUXCONV": float(info.fluxconv),
+            "RONOISE": float(info.read_noise_e)}
+
+
 def process_epoch(epoch: Epoch, options: PhotometrySection, *, input_root: Path,
                   on_file: Callable[[], None] | None = None) -> Table:
     """Read, clean and measure every AOR of ``epoch``; one table in time order."""
@@ -263,6 +280,7 @@ def process_epoch(epoch: Epoch, options: PhotometrySection, *, input_root: Path,
         "FLAGCNT": flag_counts(columns["flag"]),
         "NFRAMES": int(columns["flag"].size),
         "SIMULATE": bool(any(i.simulate for i in infos)),
+        **_observation_meta(next(i for i in infos if i.aorkey == main.aorkey)),
     }
     if meta["SIMULATE"]:
         simdir = find_simdir(infos[0].path.resolve().parent)

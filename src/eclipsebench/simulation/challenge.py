@@ -181,7 +181,7 @@ def _header_info(cfg: Config, aor: AORPlan, seed: int, mode: ReadoutMode, ra: fl
         gain_e_per_dn=gain_of(cfg), read_noise_e=read_noise_e, ra_deg=ra, dec_deg=dec,
         star_x_px=aor.x0_px, star_y_px=aor.y0_px, pointing_motion=sim.pointing_motion,
         flat_gain=sim.flat_gain, prf=prf_label(sim.prf), channel=obs.channel,
-        subarray=mode.subarray)
+        subarray=mode.subarray, system_name=system_for(cfg.system).name)
 
 
 def _target(cfg: Config) -> tuple[float, float, str]:
