@@ -2,7 +2,7 @@
 
 ``import eclipsebench as eb`` gives the public API (``docs/api.md``):
 :func:`eb.load_config`, :func:`eb.simulate`, :func:`eb.measure`,
-:func:`eb.reduce`, :func:`eb.score`, :func:`eb.run_challenge`,
+:func:`eb.reduce`, :func:`eb.score`, :func:`eb.trust`, :func:`eb.run_challenge`,
 :func:`eb.methods`, :func:`eb.method_class`, and the base classes
 :class:`eb.Systematics`, :class:`eb.MethodOptions`, :class:`eb.MethodContext`.
 """
@@ -12,7 +12,7 @@ __version__ = "0.1.0"
 #: Public name -> the module that defines it.
 _PUBLIC = {
     "load_config": "api", "methods": "api", "method_class": "api", "measure": "api",
-    "reduce": "api", "simulate": "api", "run_challenge": "api", "score": "api",
+    "reduce": "api", "simulate": "api", "run_challenge": "api", "score": "api", "trust": "api",
     "Systematics": "decorrelate.base", "MethodOptions": "decorrelate.base",
     "MethodContext": "decorrelate.base", "EpochData": "decorrelate.base",
     "EpochResult": "fit.reduce", "InputError": "errors",

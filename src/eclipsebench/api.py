@@ -34,7 +34,7 @@ from .stats.depth_table import check_depth_table, read_depth_table
 from .stats.summary import summarize
 
 __all__ = ["load_config", "methods", "method_class", "measure", "reduce", "simulate",
-           "run_challenge", "score"]
+           "run_challenge", "score", "trust"]
 
 
 def load_config(path: str | os.PathLike | None = None, overrides: Sequence[str] = (),
@@ -270,3 +270,69 @@ def score(depths: Table | str | os.PathLike | Mapping[str, Sequence], *,
                                   "depths")
     return summarize(table, sigma_phot_ppm=sigma_phot_ppm, truth_ppm=truth_ppm,
                      methods=methods, seed=seed, n_bootstrap=n_bootstrap)
+
+
+def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = None,
+          twins: int = 50, methods: Sequence[str] | None = None, depth_ppm: float | None = None,
+          seed: int = 0, config: Config | str | os.PathLike | None = None,
+          options: Mapping[str, Mapping[str, Any]] | None = None, pmap: str | None = None,
+          workers: int | None = None, **reduce_options: Any) -> dict:
+    """How far to trust the depth of one real observation: its digital twins, every method.
+
+    Simulates ``twins`` copies of the observation (its times, pointing track,
+    flux, background, readout and bad frames; the simulator's intra-pixel
+    gain; a known eclipse at the real mid-time), reduces each like the real
+    table with every method, and scores the methods (``docs/trust.md``).
+    Resumes an interrupted run in ``out``.
+
+    Parameters
+    ----------
+    table : path
+        The real observation's photometry table (made by :func:`measure`).
+    out : path
+        The trust folder (``trust.json``, ``trust.ecsv``, ``report/index.html``).
+    system : str, mapping or PlanetSystem, optional
+        The planet (default: the one the table names, as :func:`reduce`).
+    twins : int
+        Number of twins (10-10,000).
+    methods : sequence of str, optional
+        Methods to measure (default: every registered method); the first
+        one's real depth is injected unless ``depth_ppm`` is given.
+    depth_ppm : float, optional
+        The depth injected into the twins.
+    seed : int
+        The one seed of every twin's noise and every reduction.
+    config : Config or path, optional
+        Its ``[reduce]``, ``[system]`` and ``[run]`` sections are used.
+    options : mapping, optional
+        ``{method: {key: value}}``: method options, as ``reduce(options=...)``.
+    pmap : path, optional
+        Calibration set for ``kr-pmap``.
+    workers : int, optional
+        Dask worker processes (default ``run.workers``).
+    **reduce_options
+        ``[reduce]`` values to change, e.g. ``sampler="leastsq"``, ``profile="paper"``.
+
+    Returns
+    -------
+    dict
+        The content of ``trust.json``: ``methods`` (per method ``bias_ppm``,
+        ``sd_ppm``, ``rmse_ppm``, ``mean_err_ppm``, ``z_rms``, coverage,
+        ``depth_ppm``, ``honest_err_ppm``), ``skipped``, ``recommended``,
+        ``n_twins``, ``twin_depth_ppm``.
+    """
+    from .io.paths import check_output_path
+    from .trust.run import make_settings, run_trust
+
+    cfg = _config(config)
+    section = cfg.reduce
+    if reduce_options:
+        section = replace(section, **reduce_options)
+        section.validate()
+    root = check_output_path(out, "out", "folder")
+    settings = make_settings(table, reduce=section, system=system, system_section=cfg.system,
+                             methods=methods, n_twins=twins, depth_ppm=depth_ppm, seed=seed,
+                             method_options=options, pmap=pmap, hint="system=NAME")
+    summary, _ = run_trust(settings, root,
+                           workers=cfg.run.workers if workers is None else workers)
+    return summary

@@ -39,6 +39,7 @@ COMMAND_MODULES = (
     "reduce",
     "stats",
     "lightcurve",
+    "trust",
     "photon_limit",
     "config_cmd",
 )

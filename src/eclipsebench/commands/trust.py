@@ -1,0 +1,129 @@
+"""``eclipsebench trust``: how far to trust the depth of *this* observation (digital twins)."""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+from pathlib import Path
+
+from ..config import load_config
+from ..config.base import parse_override
+from ..errors import InputError
+from .options import (
+    add_planet_options,
+    check_output_path,
+    method_list,
+    planet_overrides,
+    positive_float,
+    positive_int,
+)
+
+NAME = "trust"
+HELP = ("Simulate digital twins of a real observation (its times, pointing track, flux, "
+        "background and readout, with a known eclipse), reduce each like the real table with "
+        "every chosen method, and report each method's bias, scatter, error calibration and "
+        "honest error on the real depth; resumable.")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("table", metavar="TABLE",
+                   help="photometry table of the real observation (made by 'eclipsebench "
+                        "photometry': it records the readout, background and noise pixels)")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="trust folder (rerunning the same command resumes it)")
+    p.add_argument("--system", metavar="NAME", default=None,
+                   help="planet (default: the one the table names, e.g. OBJECT XO-3 -> XO-3b)")
+    add_planet_options(p)
+    p.add_argument("--twins", type=_twin_count, default=50, metavar="N",
+                   help="number of twins (10-10000)")
+    p.add_argument("--methods", type=method_list, metavar="A,B,...", default=None,
+                   help="methods to measure (default: every registered method); the first "
+                        "one's real depth is injected unless --depth is given")
+    p.add_argument("--depth", type=positive_float(), default=None, metavar="PPM",
+                   help="depth injected into the twins (default: the first method's real depth)")
+    p.add_argument("--profile", choices=("controlled", "paper"), default=None,
+                   help="reduction profile of the real table and its twins (default: [reduce] "
+                        "profile, controlled)")
+    p.add_argument("--sampler", choices=("auto", "mcmc", "leastsq"), default=None,
+                   help="sampler of the real table and its twins (default: [reduce] sampler)")
+    p.add_argument("--option", dest="method_options", action="append", default=[],
+                   metavar="METHOD.KEY=VALUE",
+                   help="a method's option (repeatable), e.g. --option kr-data.k=40")
+    p.add_argument("--pmap", metavar="PATH", default=None,
+                   help="calibration set for kr-pmap (as reduce --pmap)")
+    p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
+                   help="one seed for every twin's noise and every reduction")
+    p.add_argument("--workers", type=positive_int(), default=None, metavar="N",
+                   help="Dask worker processes (default: run.workers); 1 runs in this process")
+    p.add_argument("--config", metavar="CONFIG", default=None,
+                   help="configuration file whose [reduce], [system] and [run] sections are used")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="SECTION.KEY=VALUE", help="override one configuration value")
+
+
+def _twin_count(text: str) -> int:
+    """``--twins``: an integer within the trust run's bounds (checked before any work)."""
+    from ..trust.run import MAX_TWINS, MIN_TWINS
+
+    value = positive_int()(text)
+    if not MIN_TWINS <= value <= MAX_TWINS:
+        raise argparse.ArgumentTypeError(f"expected {MIN_TWINS} to {MAX_TWINS} twins, got "
+                                         f"{value}")
+    return value
+
+
+def _method_options(items: list[str]) -> dict[str, dict]:
+    out: dict[str, dict] = {}
+    for item in items:
+        head, sep, _ = item.partition("=")
+        method, dot, key = head.strip().rpartition(".")
+        if not sep or not dot or not method or not key:
+            raise InputError(f"--option {item!r}: expected METHOD.KEY=VALUE")
+        _, value = parse_override(f"{key}={item.partition('=')[2]}")
+        out.setdefault(method, {})[key] = value
+    return out
+
+
+def run(args: argparse.Namespace) -> dict:
+    # the simulator and every method: imported when the command runs, not for --help
+    from ..trust.run import make_settings, run_trust
+
+    cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
+    changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))
+               if v is not None}
+    section = replace(cfg.reduce, **changes)
+    section.validate()
+    out = check_output_path(Path(args.out), "--out", "folder")
+    explicit = args.system is not None or bool(args.planet)
+    from ..astro.catalogue import system_for
+
+    settings = make_settings(args.table, reduce=section,
+                             system=system_for(cfg.system) if explicit else None,
+                             system_section=cfg.system, methods=args.methods,
+                             n_twins=args.twins, depth_ppm=args.depth, seed=args.seed,
+                             method_options=_method_options(args.method_options), pmap=args.pmap)
+    summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers)
+    return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
+                                "skipped": len(report.skipped), "wall_s": report.wall_s,
+                                "stage_seconds": report.stage_seconds()}}
+
+
+def format_text(result: dict) -> str:
+    lines = [f"{result['system']}: {result['n_twins']} twins with a "
+             f"{result['twin_depth_ppm']:.1f} ppm {result['twins']['event']} "
+             f"({result['profile']} profile, {result['sampler']})",
+             f"{'method':<10} {'depth':>8} {'honest':>7} {'bias':>7} {'SD':>6} {'RMSE':>6} "
+             f"{'<err>':>6} {'z_rms':>5} {'cov1':>5} {'cov2':>5}"]
+    for m, s in result["methods"].items():
+        lines.append(f"{m:<10} {s['depth_ppm']:8.1f} {s['honest_err_ppm']:7.1f} "
+                     f"{s['bias_ppm']:7.1f} {s['sd_ppm']:6.1f} {s['rmse_ppm']:6.1f} "
+                     f"{s['mean_err_ppm']:6.1f} {s['z_rms']:5.2f} {s['coverage_1sigma']:5.2f} "
+                     f"{s['coverage_2sigma']:5.2f}")
+    lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
+    for m, why in result["skipped"].items():
+        lines.append(f"skipped       {m}: {why}")
+    run = result.get("_run")
+    if run:
+        lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "
+                     f"{run['wall_s']:.1f} s; report in {run['out']}/report/index.html")
+    return "\n".join(lines)

@@ -1,0 +1,111 @@
+"""The twins' astrophysics and shared recipe, from the real table and its first fit.
+
+The twins' L(t) is the reduction's own astrophysical model
+(:class:`eclipsebench.fit.astro_model.AstroModel`, the physical eclipse
+shape of the planet) evaluated at every real frame with the first method's
+fitted mid-time and phase-curve coefficients and a known depth: by default
+that fit's depth, or the one asked for. No ramp: a ramp is the detector's,
+and the twins' detector is the simulator's.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..config.base import from_mapping
+from ..config.photometry import PhotometrySection
+from ..errors import InputError
+from ..fit.astro_model import AstroModel
+from ..io.atomic import atomic_path, write_json
+from ..photometry.table import read_table
+from .observation import Observation, observation_from_table
+from .twin import GAIN_MODEL, TwinRecipe, calibrate_motion, make_recipe
+
+__all__ = ["twin_light_curve", "build_recipe", "write_recipe", "read_recipe", "EVENTS"]
+
+#: The events a twin can carry (a whole phase curve is several AORs of its own kind).
+EVENTS = ("eclipse", "transit")
+
+
+def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
+                     depth_ppm: float, event: str = "eclipse") -> np.ndarray:
+    """L(t) of the real fit ``fit`` (a result's ``to_dict()``) with the depth ``depth_ppm``.
+
+    Examples
+    --------
+    >>> from eclipsebench.astro.catalogue import get_system
+    >>> t = np.linspace(56241.75, 56242.10, 500)
+    >>> lc = twin_light_curve(t, get_system("XO-3b"), {"phase": "flat",
+    ...                       "t_ecl_bmjd": 56241.955}, 1500.0)
+    >>> round(float(lc.max() - lc.min()) * 1e6)
+    1500
+    """
+    if event not in EVENTS:
+        raise InputError(f"event {event!r}: twins carry an eclipse or a transit "
+                         f"({', '.join(EVENTS)})")
+    model = AstroModel(time_bmjd, system, phase=str(fit.get("phase", "flat")), event=event)
+    when = "t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"
+    size = np.sqrt(depth_ppm * 1e-6) if event == "transit" else depth_ppm * 1e-6
+    theta = model.initial(t_ecl_bmjd=float(fit[when]))
+    theta[0] = size
+    for i, name in enumerate(model.names[2:], start=2):
+        value = fit.get(name)
+        if isinstance(value, (int, float)) and np.isfinite(value):
+            theta[i] = float(value)
+    return np.asarray(model(theta), dtype=float)
+
+
+def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm: float,
+                 event: str = "eclipse") -> tuple[TwinRecipe, dict[str, Any]]:
+    """The recipe of the twins of the table at ``table_path`` and what it is made of."""
+    table = read_table(table_path)
+    obs = observation_from_table(table, table_path)
+    options = photometry_options(obs)
+    lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px)
+    rms, calibration = calibrate_motion(recipe, options)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_rms_px=rms)
+    info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
+            "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),
+            "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
+            "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
+            "y_ref_px": recipe.y_ref_px, "motion_rms_px": rms, "calibration": calibration,
+            "gain_model": GAIN_MODEL, "n_frames": obs.n_frames, "n_good": int(obs.good.sum())}
+    return recipe, info
+
+
+def photometry_options(obs: Observation) -> PhotometrySection:
+    """The photometry settings the real table was measured with (its ``OPTIONS``)."""
+    stored = obs.meta.get("OPTIONS")
+    if isinstance(stored, str):
+        stored = json.loads(stored)
+    if not isinstance(stored, Mapping):
+        return PhotometrySection()
+    return from_mapping(PhotometrySection, dict(stored), prefix="photometry")
+
+
+def write_recipe(recipe: TwinRecipe, info: Mapping[str, Any], npz_path: Path,
+                 json_path: Path) -> None:
+    """The description (JSON), then the per-frame arrays (``.npz``, written last)."""
+    write_json(json_path, dict(info))
+    with atomic_path(npz_path) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, light_curve=recipe.light_curve, sky_e_per_px=recipe.sky_e_per_px)
+
+
+def read_recipe(table_path: str, npz_path: Path, json_path: Path
+                ) -> tuple[TwinRecipe, dict[str, Any]]:
+    """The recipe written by :func:`write_recipe` for the table at ``table_path``."""
+    info = json.loads(Path(json_path).read_text())
+    obs = observation_from_table(read_table(table_path), table_path)
+    with np.load(npz_path) as arrays:
+        recipe = TwinRecipe(obs=obs, light_curve=arrays["light_curve"],
+                            flux_aperture_e=float(info["flux_aperture_e"]),
+                            x_ref_px=float(info["x_ref_px"]), y_ref_px=float(info["y_ref_px"]),
+                            sky_e_per_px=arrays["sky_e_per_px"],
+                            motion_rms_px=float(info["motion_rms_px"]))
+    return recipe, info

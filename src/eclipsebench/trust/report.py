@@ -1,0 +1,237 @@
+"""The answer of a trust run: ``trust.json``, ``trust.ecsv`` and an HTML page with figures.
+
+:func:`collect` reads the real and twin results of a trust folder;
+:func:`trust_summary` turns them into the answer (``eclipsebench.trust.score``);
+:func:`score_task` writes the three files (the engine's last task).
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from astropy.table import Table
+
+from .. import __version__
+from ..io.atomic import atomic_path, write_json, write_text
+from ..photometry.table import read_table
+from .score import recommend, score_methods
+
+__all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS"]
+
+#: The per-method columns of ``trust.ecsv`` (ppm unless dimensionless).
+ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "coverage_1sigma",
+                "coverage_2sigma", "depth_ppm", "depth_err_ppm", "honest_err_ppm", "n_twins")
+
+
+def _load(path: Path) -> dict[str, Any]:
+    return json.loads(Path(path).read_text())
+
+
+def collect(root: Path, methods: Sequence[str], n_twins: int
+            ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
+    """Real results, twin ``(depths, errors)`` per method, skipped methods, failed twins."""
+    from .run import TrustLayout
+
+    layout = TrustLayout(Path(root))
+    real, twins, skipped, failed = {}, {}, {}, {}
+    for m in methods:
+        data = _load(layout.real(m))
+        if data.get("failed"):
+            skipped[m] = data["error"]
+            continue
+        real[m] = data
+        d, e = [], []
+        for i in range(1, n_twins + 1):
+            res = _load(layout.twin_result(m, i))
+            if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
+                failed[m] = failed.get(m, 0) + 1
+                continue
+            d.append(res["depth_ppm"])
+            e.append(res["depth_err_ppm"])
+        if len(d) < 2:
+            skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
+            del real[m]
+            continue
+        twins[m] = (d, e)
+    return real, twins, skipped, failed
+
+
+def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: Mapping,
+                  twins: Mapping, skipped: Mapping[str, str], failed: Mapping[str, int]
+                  ) -> dict[str, Any]:
+    """The answer: per-method statistics, the recommendation and what the twins were."""
+    truth = float(recipe["depth_ppm"])
+    scores = score_methods(twins, real, truth)
+    for m, n in failed.items():
+        if m in scores:
+            scores[m]["n_twins_failed"] = n
+    best, why = recommend(scores)
+    return {"methods": scores, "skipped": dict(skipped), "recommended": best,
+            "recommended_because": why, "n_twins": int(settings["n_twins"]),
+            "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],
+            "seed": settings["seed"], "profile": settings["reduce"]["profile"],
+            "sampler": settings["reduce"]["sampler"], "twins": {k: recipe[k] for k in (
+                "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
+                "motion_rms_px", "calibration", "gain_model")},
+            "eclipsebench_version": __version__}
+
+
+def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
+    methods = list(summary["methods"])
+    table = Table({"method": methods})
+    for col in ECSV_COLUMNS:
+        table[col] = [summary["methods"][m][col] for m in methods]
+        if col.endswith("_ppm"):
+            table[col].unit = "ppm"
+    table.meta.update({"recommended": summary["recommended"], "n_twins": summary["n_twins"],
+                       "twin_depth_ppm": summary["twin_depth_ppm"], "system": summary["system"],
+                       "table": summary["table"]})
+    with atomic_path(path) as tmp:
+        table.write(tmp, format="ascii.ecsv")
+
+
+def _figure_depths(summary, twins, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = list(summary["methods"])
+    fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(methods) + 2), 4.0))
+    jitter = np.random.default_rng(0)   # positions only: the figure's, not the results'
+    for i, m in enumerate(methods):
+        d = np.asarray(twins[m][0])
+        ax.plot(i + 0.15 * jitter.uniform(-1, 1, d.size), d, ".", alpha=0.5, color="C0")
+        s = summary["methods"][m]
+        ax.errorbar(i + 0.35, s["depth_ppm"], yerr=s["honest_err_ppm"], fmt="s", color="C3",
+                    label="real observation (honest error)" if i == 0 else None)
+    ax.axhline(summary["twin_depth_ppm"], color="k", lw=1, label="depth injected in the twins")
+    ax.set_xticks(range(len(methods)), methods, rotation=30, ha="right")
+    ax.set_ylabel("eclipse depth (ppm)")
+    ax.set_title(f"{summary['n_twins']} twins per method ({summary['profile']} profile)")
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _figure_z(summary, twins, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = list(summary["methods"])
+    cols = min(4, len(methods))
+    rows = int(np.ceil(len(methods) / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 2.4 * rows), squeeze=False)
+    grid = np.linspace(-5, 5, 200)
+    for ax, m in zip(axes.ravel(), methods, strict=False):
+        d, e = (np.asarray(v) for v in twins[m])
+        z = (d - summary["twin_depth_ppm"]) / e
+        ax.hist(np.clip(z, -5, 5), bins=np.linspace(-5, 5, 21), density=True, color="C0")
+        ax.plot(grid, np.exp(-0.5 * grid**2) / np.sqrt(2 * np.pi), "k-", lw=1)
+        ax.set_title(f"{m}: z_rms {summary['methods'][m]['z_rms']:.2f}", fontsize=9)
+        ax.set_xlabel("(D - D_true) / sigma")
+    for ax in axes.ravel()[len(methods):]:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _binned(time, values, width_d: float):
+    edges = np.arange(time.min(), time.max() + width_d, width_d)
+    idx = np.digitize(time, edges)
+    keep = [k for k in np.unique(idx) if np.sum(idx == k) >= 3]
+    return (np.array([time[idx == k].mean() for k in keep]),
+            np.array([np.median(values[idx == k]) for k in keep]))
+
+
+def _figure_twin(real_table, twin_table, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(4, 1, figsize=(8.0, 8.0), sharex=True)
+    for t, label, color in ((real_table, "real", "k"), (twin_table, "twin 1", "C1")):
+        good = np.asarray(t["flag"]) == 0
+        time = np.asarray(t["time_bmjd"])[good]
+        for ax, col in zip(axes, ("flux", "x", "y", "noise_pixels"), strict=True):
+            v = np.asarray(t[col], float)[good]
+            tb, vb = _binned(time, v / np.median(v) if col == "flux" else v, 5.0 / 1440)
+            ax.plot(tb, vb, ".", ms=3, color=color, label=label)
+    for ax, name in zip(axes, ("raw flux / median (5-min bins)", "x (px)", "y (px)",
+                               "noise pixels"), strict=True):
+        ax.set_ylabel(name, fontsize=8)
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("BMJD_TDB")
+    axes[0].set_title("the real observation beside one twin")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
+    esc = html.escape
+    head = ["method", "depth (ppm)", "honest error (ppm)", "bias (ppm)", "SD (ppm)",
+            "RMSE (ppm)", "mean error (ppm)", "z_rms", "1-sigma coverage", "2-sigma coverage"]
+    rows = []
+    for m, s in summary["methods"].items():
+        lo, hi = s["coverage_1sigma_interval"]
+        rows.append([m, f"{s['depth_ppm']:.1f}", f"{s['honest_err_ppm']:.1f}",
+                     f"{s['bias_ppm']:.1f}", f"{s['sd_ppm']:.1f}", f"{s['rmse_ppm']:.1f}",
+                     f"{s['mean_err_ppm']:.1f}", f"{s['z_rms']:.2f}",
+                     f"{s['coverage_1sigma']:.2f} ({lo:.2f}-{hi:.2f})",
+                     f"{s['coverage_2sigma']:.2f}"])
+    table = "<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>" + "".join(
+        "<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows) + "</table>"
+    skipped = "".join(f"<li>{esc(m)}: {esc(r)}</li>" for m, r in summary["skipped"].items())
+    tw = summary["twins"]
+    return (f"<!doctype html><html><head><meta charset='utf-8'><title>How far to trust "
+            f"{esc(summary['system'])}</title><style>body{{font-family:sans-serif;max-width:"
+            f"1100px;margin:auto}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}"
+            f"img{{max-width:100%}}</style></head><body>"
+            f"<h1>How far to trust the depth of {esc(summary['system'])}</h1>"
+            f"<p>{esc(summary['table'])}: {summary['n_twins']} twins with a "
+            f"{summary['twin_depth_ppm']:.1f} ppm {esc(str(tw['event']))} (the real depth of "
+            f"{esc(str(tw['from_method']))}), reduced like the real table ({esc(summary['profile'])}"
+            f" profile, sampler {esc(summary['sampler'])}). Recommended: <b>"
+            f"{esc(str(summary['recommended']))}</b> ({esc(summary['recommended_because'])}).</p>"
+            f"{table}<p>Honest error: the reported error times max(1, z_rms). Twins: motion "
+            f"within an exposure {tw['motion_rms_px']:.3f} px rms (median noise pixels "
+            f"{tw['calibration']['noise_pixels_real']:.2f} real); gain: "
+            f"{esc(tw['gain_model'])}.</p>"
+            + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
+            + "".join(f"<p><img src='{esc(f)}' alt='{esc(f)}'></p>" for f in figures)
+            + "</body></html>")
+
+
+def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -> None:
+    """Write the report, ``trust.ecsv``, then ``trust.json`` (the engine's outputs, in order)."""
+    from .run import TrustLayout
+
+    layout = TrustLayout(Path(root))
+    recipe = json.loads(layout.recipe_json.read_text())
+    real, twins, skipped, failed = collect(layout.root, methods, int(settings["n_twins"]))
+    skipped = {**{m: json.loads(layout.real(m).read_text())["error"]
+                  for m in settings["methods"] if m not in methods}, **skipped}
+    summary = trust_summary(settings, recipe, real, twins, skipped, failed)
+    folder = layout.report.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    figures = ["depths.png", "z_scores.png", "twin.png"]
+    if summary["methods"]:
+        _figure_depths(summary, twins, folder / figures[0])
+        _figure_z(summary, twins, folder / figures[1])
+    else:
+        figures = figures[2:]
+    _figure_twin(read_table(settings["table"]), read_table(layout.twin(1)), folder / "twin.png")
+    write_text(layout.report, _html(summary, figures))
+    _ecsv(summary, layout.table)
+    write_json(layout.result, summary)

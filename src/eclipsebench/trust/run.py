@@ -1,0 +1,341 @@
+"""``trust``: twins of a real observation, reduced like it, scored; resumable on the engine.
+
+The folder of a trust run::
+
+    DIR/trust_config.json              the settings (guards resume)
+    DIR/trust.lock                     held while a run works in DIR
+    DIR/real/<method>.json (+.lc.ecsv) the real table reduced by each method (or why not)
+    DIR/recipe.npz, DIR/recipe.json    what every twin shares (L(t), sky, motion, flux)
+    DIR/twins/twin_NNN.fits            each twin's photometry table
+    DIR/twins/<method>/twin_NNN.json   each twin reduced by each method
+    DIR/trust.json, DIR/trust.ecsv     the answer (``eclipsebench.trust.score``)
+    DIR/report/index.html              figures and the table
+
+Two passes on the engine (:func:`eclipsebench.engine.tasks.run_tasks`): the
+real reductions first (a method that refuses the real table, such as a pixel
+method without stamps or KR/Pmap without a map, is listed as skipped with its
+reason), then the recipe, the twins, their reductions and the score. Every
+random draw derives from the one seed: twin ``i``'s frames from
+``rng(seed, "trust", "twin", i, cube, ...)``, its reductions from the seed
+``spawn_ints(seed, "trust", "reduce")`` with epoch ``i``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..astro.catalogue import PlanetSystem
+from ..config.base import to_mapping
+from ..config.reduce import ReduceSection
+from ..decorrelate import get_method
+from ..engine.lock import run_lock
+from ..engine.tasks import RunReport, Task, run_tasks
+from ..errors import InputError
+from ..fit import reduce as fit_reduce
+from ..io.atomic import atomic_path, write_json, write_text
+from ..photometry.table import read_table, write_photometry
+from ..progress import get_logger
+from ..seeding import spawn_ints
+from .recipe import build_recipe, read_recipe, write_recipe
+from .twin import twin_table
+
+__all__ = ["TrustSettings", "TrustLayout", "run_trust", "MIN_TWINS", "MAX_TWINS"]
+
+#: Fewer twins give no coverage worth quoting; more is a size to bound before work.
+MIN_TWINS = 10
+MAX_TWINS = 10_000
+
+log = get_logger("trust")
+
+
+@dataclass(frozen=True)
+class TrustSettings:
+    """Everything a trust run depends on (its JSON guards a resumed folder)."""
+
+    table: str
+    system: PlanetSystem
+    methods: tuple[str, ...]
+    n_twins: int
+    seed: int
+    reduce: ReduceSection
+    depth_ppm: float | None = None
+    method_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    pmap: str | None = None
+
+    def describe(self) -> dict[str, Any]:
+        """A JSON-able view (the guard and the result both record it)."""
+        return {"table": self.table, "system": self.system.name, "methods": list(self.methods),
+                "n_twins": self.n_twins, "seed": self.seed, "depth_ppm": self.depth_ppm,
+                "reduce": to_mapping(self.reduce),
+                "method_options": {k: dict(v) for k, v in self.method_options.items()},
+                "pmap": self.pmap}
+
+
+@dataclass(frozen=True)
+class TrustLayout:
+    """Where each file of a trust run goes (module docstring)."""
+
+    root: Path
+
+    @property
+    def config(self) -> Path:
+        return self.root / "trust_config.json"
+
+    @property
+    def lock(self) -> Path:
+        return self.root / "trust.lock"
+
+    def real(self, method: str) -> Path:
+        return self.root / "real" / f"{method}.json"
+
+    @property
+    def recipe_npz(self) -> Path:
+        return self.root / "recipe.npz"
+
+    @property
+    def recipe_json(self) -> Path:
+        return self.root / "recipe.json"
+
+    def twin(self, i: int) -> Path:
+        return self.root / "twins" / f"twin_{i:03d}.fits"
+
+    def twin_result(self, method: str, i: int) -> Path:
+        return self.root / "twins" / method / f"twin_{i:03d}.json"
+
+    @property
+    def result(self) -> Path:
+        return self.root / "trust.json"
+
+    @property
+    def table(self) -> Path:
+        return self.root / "trust.ecsv"
+
+    @property
+    def report(self) -> Path:
+        return self.root / "report" / "index.html"
+
+
+# ----------------------------------------------------------------------------- tasks
+def _reduce(settings: TrustSettings, table, method: str, *, seed: int, epoch: int | None,
+            extra_options: Mapping[str, Any] | None = None):
+    options = {**settings.method_options.get(method, {}), **(extra_options or {})}
+    return fit_reduce.reduce_epoch(table, method, options=settings.reduce,
+                                   system=settings.system, seed=seed, epoch=epoch,
+                                   method_options=options or None, pmap=settings.pmap)
+
+
+def _write_result(result, out: Path) -> None:
+    with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
+        result.lightcurve_table().write(tmp, format="ascii.ecsv")
+    write_json(out, result.to_dict())
+
+
+def real_task(settings: TrustSettings, method: str, out_path: str) -> None:
+    """Reduce the real table with ``method``; a method that refuses it records why."""
+    out = Path(out_path)
+    try:
+        result = _reduce(settings, settings.table, method, seed=settings.seed, epoch=None)
+    except InputError as exc:
+        write_json(out, {"method": method, "failed": True, "error": str(exc)})
+        return
+    _write_result(result, out)
+
+
+def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: str,
+                json_path: str) -> None:
+    """The twins' shared recipe from the first method's real fit (and the depth asked for)."""
+    fit = json.loads(Path(real_path).read_text())
+    depth = settings.depth_ppm if settings.depth_ppm is not None else float(fit["depth_ppm"])
+    if not depth > 0:
+        raise InputError(f"{first}: the real depth is {depth:.1f} ppm; twins need a positive "
+                         "depth to inject (give --depth PPM)")
+    event = settings.reduce.event
+    recipe, info = build_recipe(settings.table, settings.system, fit, depth, event)
+    write_recipe(recipe, info, Path(npz_path), Path(json_path))
+
+
+def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twin: int,
+              out_path: str) -> None:
+    """Simulate and measure twin ``twin``; write its photometry table."""
+    recipe, _ = read_recipe(settings.table, Path(npz_path), Path(json_path))
+    from .recipe import photometry_options
+
+    table = twin_table(recipe, photometry_options(recipe.obs), seed=settings.seed, twin=twin)
+    write_photometry(table, out_path)
+
+
+def shared_options(method: str, real: Mapping[str, Any], asked: Mapping[str, Any]
+                   ) -> dict[str, Any]:
+    """What the twins take from the method's real fit: its fitted hyperparameters, when its
+    options have a ``hyperparameters`` field that the user left unset (GP's kernel)."""
+    names = {f.name for f in dataclasses.fields(get_method(method).Options)}
+    fitted = (real.get("diagnostics") or {}).get("hyperparameters")
+    if "hyperparameters" in names and "hyperparameters" not in asked \
+            and isinstance(fitted, Mapping) and fitted:
+        return {"hyperparameters": [float(v) for v in fitted.values()]}
+    return {}
+
+
+def twin_reduce_task(settings: TrustSettings, method: str, twin: int, table_path: str,
+                     real_path: str, out_path: str) -> None:
+    """Reduce twin ``twin`` with ``method`` exactly as the real table was reduced."""
+    real = json.loads(Path(real_path).read_text())
+    extra = shared_options(method, real, settings.method_options.get(method, {}))
+    seed = spawn_ints(settings.seed, "trust", "reduce")[0]
+    out = Path(out_path)
+    try:
+        result = _reduce(settings, table_path, method, seed=seed, epoch=twin,
+                         extra_options=extra)
+    except InputError as exc:
+        write_json(out, {"method": method, "epoch": twin, "failed": True, "error": str(exc)})
+        return
+    _write_result(result, out)
+
+
+def _json_ok(method: str, path: Path) -> bool:
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and data.get("method") == method
+
+
+# ----------------------------------------------------------------------------- plans
+def plan_real(settings: TrustSettings, layout: TrustLayout) -> list[Task]:
+    """One task per method on the real table."""
+    return [Task(f"real/{m}", "real", real_task, (settings, m, str(layout.real(m))),
+                 (layout.real(m),), check=partial(_json_ok, m)) for m in settings.methods]
+
+
+def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[str]
+               ) -> list[Task]:
+    """The recipe, every twin and every twin's reduction by the usable methods, the score."""
+    from .report import score_task
+
+    first = usable[0]
+    tasks = [Task("recipe", "recipe", recipe_task,
+                  (settings, first, str(layout.real(first)), str(layout.recipe_npz),
+                   str(layout.recipe_json)), (layout.recipe_json, layout.recipe_npz),
+                  (f"real/{first}",))]
+    results = []
+    for i in range(1, settings.n_twins + 1):
+        tasks.append(Task(f"twin/{i:03d}", "twin", twin_task,
+                          (settings, str(layout.recipe_npz), str(layout.recipe_json), i,
+                           str(layout.twin(i))), (layout.twin(i),), ("recipe",)))
+        for m in usable:
+            key = f"twin-reduce/{m}/{i:03d}"
+            results.append(key)
+            tasks.append(Task(key, "reduce", twin_reduce_task,
+                              (settings, m, i, str(layout.twin(i)), str(layout.real(m)),
+                               str(layout.twin_result(m, i))), (layout.twin_result(m, i),),
+                              (f"twin/{i:03d}", f"real/{m}"), check=partial(_json_ok, m)))
+    tasks.append(Task("score", "score", score_task,
+                      (settings.describe(), list(usable), str(layout.root)),
+                      (layout.report, layout.table, layout.result),
+                      ("recipe", *results, *(f"real/{m}" for m in settings.methods))))
+    return tasks
+
+
+def _guard(settings: TrustSettings, layout: TrustLayout) -> None:
+    text = json.dumps(settings.describe(), sort_keys=True, indent=1)
+    if layout.config.is_file():
+        if layout.config.read_text() != text:
+            raise InputError(f"{layout.root}: holds a trust run with other settings (see "
+                             f"{layout.config.name}); use another --out or remove it")
+        return
+    write_text(layout.config, text)
+
+
+def usable_methods(settings: TrustSettings, layout: TrustLayout) -> tuple[list[str], dict]:
+    """The methods whose real reduction succeeded, and ``{method: reason}`` for the others."""
+    usable, skipped = [], {}
+    for m in settings.methods:
+        data = json.loads(layout.real(m).read_text())
+        if data.get("failed"):
+            skipped[m] = data.get("error", "failed")
+        else:
+            usable.append(m)
+    return usable, skipped
+
+
+def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
+              scheduler: str | None = None) -> tuple[dict, RunReport]:
+    """Run (or resume) a trust run in ``root``; return ``trust.json``'s content and what ran."""
+    layout = TrustLayout(Path(root))
+    layout.root.mkdir(parents=True, exist_ok=True)
+    with run_lock(layout.lock):
+        _guard(settings, layout)
+        first = run_tasks(plan_real(settings, layout), workers=1)
+        usable, skipped = usable_methods(settings, layout)
+        if not usable:
+            raise InputError(f"{settings.table}: no method could reduce the real table ("
+                             + "; ".join(f"{m}: {r}" for m, r in skipped.items()) + ")")
+        tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable)
+        report = run_tasks(tasks, workers=workers, scheduler=scheduler)
+        report.ran = first.ran + report.ran
+        return json.loads(layout.result.read_text()), report
+
+
+def make_settings(table: str | Path, *, reduce: ReduceSection, system: Any = None,
+                  system_section: Any = None, methods: Sequence[str] | None = None,
+                  n_twins: int = 50, depth_ppm: float | None = None, seed: int = 0,
+                  method_options: Mapping[str, Mapping[str, Any]] | None = None,
+                  pmap: str | None = None, hint: str = "--system NAME") -> TrustSettings:
+    """Check every input of a trust run before any work; the settings it will run with.
+
+    Raises
+    ------
+    InputError
+        One line naming the argument: a missing or unreadable table, one that
+        cannot be twinned (another pipeline's, fewer than 100 good frames), a
+        twin count outside 10-10,000, a depth that is not finite and positive,
+        an unknown method, a whole phase curve, or a table naming no planet.
+    """
+    from ..decorrelate import available_methods
+    from ..fit.target import system_of_table
+    from .observation import observation_from_table
+    from .recipe import EVENTS
+
+    if isinstance(n_twins, bool) or not isinstance(n_twins, int) \
+            or not MIN_TWINS <= n_twins <= MAX_TWINS:
+        raise InputError(f"twins: expected an integer from {MIN_TWINS} to {MAX_TWINS}, got "
+                         f"{n_twins!r}")
+    if depth_ppm is not None and not (isinstance(depth_ppm, (int, float))
+                                      and np.isfinite(depth_ppm) and depth_ppm > 0):
+        raise InputError(f"depth: expected a finite depth > 0 in ppm, got {depth_ppm!r}")
+    if reduce.event not in EVENTS:
+        raise InputError(f"event {reduce.event!r}: twins are made of one eclipse or transit "
+                         f"observation ({', '.join(EVENTS)})")
+    known = available_methods()
+    chosen = tuple(methods) if methods else known
+    for m in chosen:
+        if m not in known:
+            raise InputError(f"method {m!r}: unknown (known: {', '.join(known)})")
+    if len(set(chosen)) != len(chosen):
+        raise InputError("methods: a method is named twice")
+    path = Path(table)
+    if not path.is_file():
+        raise InputError(f"{path}: no such photometry table")
+    data = read_table(path)
+    observation_from_table(data, str(path))
+    planet = system_of_table(data.meta, system=system, section=system_section,
+                             source=str(path), hint=hint)
+    options = {m: dict(v) for m, v in (method_options or {}).items()}
+    for m in options:
+        if m not in chosen:
+            raise InputError(f"option for {m!r}: not one of the methods of this run")
+    fit_reduce.check_method_options(reduce)
+    for m in chosen:
+        fit_reduce.resolve_method_options(m, reduce, options.get(m))
+    return TrustSettings(table=str(path.resolve()), system=planet, methods=chosen,
+                         n_twins=int(n_twins), seed=int(seed), reduce=reduce,
+                         depth_ppm=None if depth_ppm is None else float(depth_ppm),
+                         method_options=options, pmap=pmap)

@@ -1,0 +1,97 @@
+"""How well each method measured the twins: bias, spread, error calibration, a recommendation.
+
+Pure functions on arrays and dicts. For one method, the twins' depths
+``D_i`` with reported errors ``sigma_i`` against the injected depth ``D``
+give (``docs/trust.md``):
+
+- ``bias_ppm = mean(D_i - D)``, ``sd_ppm`` (sample standard deviation),
+  ``rmse_ppm = sqrt(mean((D_i - D)^2))`` -- the paper's accuracy statistics
+  (Section 3.3) over twins of one observation instead of challenge epochs;
+- ``mean_err_ppm = mean(sigma_i)`` and ``z_rms = sqrt(mean(z_i^2))`` with
+  ``z_i = (D_i - D) / sigma_i``: 1 when the reported errors are honest;
+- 1- and 2-sigma coverage with exact binomial intervals
+  (:func:`eclipsebench.stats.ensemble.coverage`);
+- the honest error of the real depth: its reported error times
+  ``max(1, z_rms)``.
+
+The recommended method has the lowest RMSE among those whose 1-sigma
+coverage interval contains 68.3 %.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..stats.ensemble import GAUSS_1SIGMA, coverage
+
+__all__ = ["method_score", "recommend", "score_methods"]
+
+
+def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_ppm: float
+                 ) -> dict[str, Any]:
+    """The twin statistics of one method (module docstring).
+
+    Examples
+    --------
+    >>> s = method_score([1010.0, 990.0, 1020.0, 980.0], [20.0] * 4, 1000.0)
+    >>> s["bias_ppm"], round(s["rmse_ppm"], 2), round(s["z_rms"], 3)
+    (0.0, 15.81, 0.791)
+    """
+    d = np.asarray(depth_ppm, float)
+    e = np.asarray(error_ppm, float)
+    resid = d - float(truth_ppm)
+    z = resid / e
+    c1, c1_lo, c1_hi = coverage(d, e, truth_ppm, 1.0)
+    c2, c2_lo, c2_hi = coverage(d, e, truth_ppm, 2.0)
+    return {"n_twins": int(d.size), "bias_ppm": float(resid.mean()),
+            "sd_ppm": float(resid.std(ddof=1)) if d.size > 1 else float("nan"),
+            "rmse_ppm": float(np.sqrt(np.mean(resid**2))), "mean_err_ppm": float(e.mean()),
+            "z_rms": float(np.sqrt(np.mean(z**2))),
+            "coverage_1sigma": c1, "coverage_1sigma_interval": [c1_lo, c1_hi],
+            "coverage_2sigma": c2, "coverage_2sigma_interval": [c2_lo, c2_hi]}
+
+
+def recommend(scores: Mapping[str, Mapping[str, Any]]) -> tuple[str | None, str]:
+    """The lowest-RMSE method whose 1-sigma coverage is consistent with 68.3 %, and why.
+
+    Examples
+    --------
+    >>> recommend({"a": {"rmse_ppm": 50.0, "coverage_1sigma_interval": [0.3, 0.5]},
+    ...            "b": {"rmse_ppm": 60.0, "coverage_1sigma_interval": [0.6, 0.8]}})
+    ('b', 'lowest RMSE (60.0 ppm) of the 1 method(s) whose 1-sigma coverage is consistent with 68%')
+    """
+    honest = {m: s for m, s in scores.items()
+              if s["coverage_1sigma_interval"][0] <= GAUSS_1SIGMA
+              <= s["coverage_1sigma_interval"][1]}
+    if not honest:
+        return None, "no method's 1-sigma coverage is consistent with 68%: none recommended"
+    best = min(honest, key=lambda m: (honest[m]["rmse_ppm"], m))
+    return best, (f"lowest RMSE ({honest[best]['rmse_ppm']:.1f} ppm) of the {len(honest)} "
+                  "method(s) whose 1-sigma coverage is consistent with 68%")
+
+
+def score_methods(twin_depths: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+                  real: Mapping[str, Mapping[str, float]], truth_ppm: float
+                  ) -> dict[str, dict[str, Any]]:
+    """:func:`method_score` of every method, with its real depth and honest error.
+
+    Parameters
+    ----------
+    twin_depths : mapping
+        ``{method: (depths_ppm, errors_ppm)}`` over the twins.
+    real : mapping
+        ``{method: {"depth_ppm", "depth_err_ppm"}}`` on the real observation.
+    truth_ppm : float
+        The depth injected into the twins.
+    """
+    out = {}
+    for method, (depths, errors) in twin_depths.items():
+        s = method_score(depths, errors, truth_ppm)
+        err = float(real[method]["depth_err_ppm"])
+        s.update({"depth_ppm": float(real[method]["depth_ppm"]), "depth_err_ppm": err,
+                  "honest_err_ppm": err * max(1.0, s["z_rms"])})
+        out[method] = s
+    return out

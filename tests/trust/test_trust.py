@@ -1,0 +1,161 @@
+"""Issue 26: digital twins of one observation, reduced like it, scored.
+
+A small simulated observation (one short epoch: 16-frame cubes, the
+eclipse inside) stands in for a real one where the real epoch is too large
+for a unit test; the resemblance to the real epoch 1 is tested on it
+(``shared_data``).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from eclipsebench.astro.catalogue import system_for
+from eclipsebench.astro.orbit import eclipse_time_bmjd
+from eclipsebench.cli import main
+from eclipsebench.config import load_config
+from eclipsebench.config.photometry import PhotometrySection
+from eclipsebench.photometry.table import read_table, write_photometry
+from eclipsebench.simulation.plan import JD_OFFSET_BMJD
+from eclipsebench.simulation.render import FrameModel, tick_moments
+from eclipsebench.trust.observation import observation_from_table
+from eclipsebench.trust.twin import _motion, make_recipe, twin_table
+
+SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
+        "observation.main_cubes=80", "observation.cube_interval_s=220.0",
+        "simulation.subsamples=2"]
+FAST = ["--methods", "poly2", "--sampler", "leastsq", "--twins", "10", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def small_table(tmp_path_factory):
+    """The photometry table (``eclipsebench photometry``) of a small simulated observation."""
+    root = tmp_path_factory.mktemp("trust_obs")
+    t_ecl = eclipse_time_bmjd(system_for(load_config(None, SETS).system), 57205.8)
+    sets = SETS + [f"observation.start_times_jd=[{t_ecl - 0.12 - JD_OFFSET_BMJD:.6f}]"]
+    args = [a for s in sets for a in ("--set", s)]
+    assert main(["simulate", "--out", str(root / "sim"), "--epochs", "1", "--no-calibration",
+                 "--quiet", "--workers", "1", *args]) == 0
+    assert main(["photometry", str(root / "sim"), "--out", str(root / "phot"), "--quiet"]) == 0
+    return root / "phot" / "epoch_01.fits"
+
+
+def test_the_motion_within_an_exposure_keeps_each_frame_s_mean_and_has_its_rms():
+    from eclipsebench.detector.constants import SUB_2S
+
+    model = FrameModel(mode=SUB_2S, noise_model="physical", read_noise_e=9.4)
+    dx, dy = _motion(model, 8, 0.05, np.random.default_rng(1))
+    mx, my, _ = tick_moments(dx, dy, model)
+    assert np.allclose(mx, 0.0, atol=1e-12) and np.allclose(my, 0.0, atol=1e-12)
+    assert np.sqrt(0.5 * (np.mean(dx**2) + np.mean(dy**2))) == pytest.approx(0.05)
+
+
+def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
+    table = read_table(small_table)
+    obs = observation_from_table(table)
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    a = twin_table(recipe, PhotometrySection(), seed=3, twin=1)
+    again = twin_table(recipe, PhotometrySection(), seed=3, twin=1)
+    b = twin_table(recipe, PhotometrySection(), seed=3, twin=2)
+    assert np.array_equal(np.asarray(a["time_bmjd"]), obs.time_bmjd)
+    assert np.all((np.asarray(a["flag"]) & obs.flag) == obs.flag)   # real bad frames stay bad
+    assert np.array_equal(np.asarray(a["flux"]), np.asarray(again["flux"]))
+    assert not np.array_equal(np.asarray(a["flux"]), np.asarray(b["flux"]))
+    good = np.asarray(a["flag"]) == 0
+    assert np.median(np.abs(np.asarray(a["x"])[good] - obs.x_px[good])) < 0.01
+    assert a.meta["TWIN"] == 1 and a.meta["SYSTEM"] == table.meta["SYSTEM"]
+
+
+@pytest.mark.parametrize("extra, what", [
+    (["--twins", "9"], "--twins"), (["--depth", "nan"], "--depth"),
+    (["--depth", "-5"], "--depth"), (["--methods", "no-such"], "no-such")])
+def test_bad_input_is_one_line_exit_2_and_nothing_written(small_table, tmp_path, capsys,
+                                                          extra, what):
+    out = tmp_path / "trust"
+    args = ["trust", str(small_table), "--out", str(out), "--sampler", "leastsq", "--quiet"]
+    assert _code(args + extra) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and what in err and "Traceback" not in err, err
+    assert not out.exists()
+
+
+def test_a_table_with_fewer_than_100_good_frames_is_refused(small_table, tmp_path, capsys):
+    short = read_table(small_table)[:90]
+    write_photometry(short, tmp_path / "short.fits")
+    assert main(["trust", str(tmp_path / "short.fits"), "--out", str(tmp_path / "t")] + FAST) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "good frames" in err and "100" in err, err
+    assert not (tmp_path / "t").exists()
+
+
+@pytest.mark.slow
+def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small_table,
+                                                                           tmp_path):
+    one, two = tmp_path / "one", tmp_path / "two"
+    assert main(["trust", str(small_table), "--out", str(one), "--workers", "1"] + FAST) == 0
+    assert main(["trust", str(small_table), "--out", str(two), "--workers", "2"] + FAST) == 0
+    result = (one / "trust.json").read_bytes()
+    assert result == (two / "trust.json").read_bytes()
+    assert (one / "trust.ecsv").read_bytes() == (two / "trust.ecsv").read_bytes()
+    summary = json.loads(result)
+    assert summary["n_twins"] == 10 and set(summary["methods"]) == {"poly2"}
+    assert summary["recommended"] in (None, "poly2")
+    s = summary["methods"]["poly2"]
+    assert s["honest_err_ppm"] >= s["depth_err_ppm"] and 0 <= s["coverage_1sigma"] <= 1
+    # an interrupted run: a twin, a reduction and the answer missing; the rerun redoes them
+    (one / "twins" / "twin_004.fits").unlink()
+    (one / "twins" / "poly2" / "twin_007.json").unlink()
+    (one / "trust.json").unlink()
+    shutil.rmtree(one / "report")
+    assert main(["trust", str(small_table), "--out", str(one), "--workers", "1", "--json"]
+                + FAST) == 0
+    assert (one / "trust.json").read_bytes() == result
+
+
+@pytest.mark.shared_data
+@pytest.mark.slow
+def test_the_twins_resemble_real_epoch1(real_epoch1_table):
+    """Median noise pixels, centroid rms in x and y, raw flux rms in 5-minute bins and the
+    residual rms after BLISS of the twins within 15 % of the real epoch's."""
+    from eclipsebench.api import reduce
+    from eclipsebench.trust.recipe import build_recipe
+
+    real_fit = reduce(real_epoch1_table, "bliss", sampler="leastsq", prayer_bead_shifts=0)
+    recipe, info = build_recipe(str(real_epoch1_table), system_for(
+        load_config(None, ["system.name=\"XO-3b\""]).system), real_fit.to_dict(),
+        real_fit.depth_ppm)
+    real = _statistics(read_table(real_epoch1_table), real_fit)
+    twins = []
+    for i in (1, 2):
+        table = twin_table(recipe, PhotometrySection(), seed=0, twin=i)
+        twins.append(_statistics(table, reduce(table, "bliss", system="XO-3b",
+                                               sampler="leastsq", prayer_bead_shifts=0)))
+    for key, value in real.items():
+        mean = float(np.mean([t[key] for t in twins]))
+        assert abs(mean / value - 1) < 0.15, (key, mean, value)
+
+
+def _code(argv: list[str]) -> int:
+    """The exit code, usage errors (argparse's SystemExit) included."""
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return int(exc.code)
+
+
+def _statistics(table, fit) -> dict[str, float]:
+    good = np.asarray(table["flag"]) == 0
+    time = np.asarray(table["time_bmjd"])[good]
+    flux = np.asarray(table["flux"])[good]
+    bins = np.floor((time - time[0]) / (5.0 / 1440)).astype(int)
+    counts = np.bincount(bins)
+    binned = np.bincount(bins, flux)[counts > 0] / counts[counts > 0]
+    return {"noise_pixels": float(np.median(np.asarray(table["noise_pixels"])[good])),
+            "x_rms": float(np.std(np.asarray(table["x"])[good])),
+            "y_rms": float(np.std(np.asarray(table["y"])[good])),
+            "flux_rms_5min": float(np.std(binned / np.median(binned))),
+            "bliss_residual_rms": float(fit.rms_ppm)}
