@@ -1,0 +1,201 @@
+"""trust (issue 26): the twins against the real epoch 1, its speed, and whether twins predict.
+
+Three parts (``--part``):
+
+``resemble``
+    Real epoch 1 (``../shared/data/irac/real_xo3_eclipse1``) against
+    ``--twins`` of its twins: median noise pixels, centroid rms in x and y,
+    raw flux rms in 5-minute bins, residual rms after BLISS (least squares).
+``speed``
+    ``trust`` on real epoch 1 with ``--twins`` twins (default 50) and BLISS,
+    GP, KR/Data, PLD, poly2 and SP(K2), ``--sampler leastsq``, 2 workers:
+    wall time, and the task seconds of the simulation (recipe + twins) and of
+    the reductions. Reference in the same script: one BLISS least-squares
+    reduction of the real table (median of 3).
+``predict``
+    ``--epochs`` simulated challenge epochs (physical noise) treated as real:
+    each epoch's table gets ``--twins`` twins reduced by BLISS, PLD and
+    KR/Data; the twin-predicted RMSE of each method is set against that
+    method's actual error on the epoch (its depth minus the epoch's truth).
+    Prints the rms of (actual error / predicted RMSE) per method and whether
+    the recommended method's actual errors are no worse than the median
+    method's.
+
+Command (what BENCHMARKS.md quotes): ``python bench/bench_trust.py --part
+resemble --twins 4``, ``--part speed``, ``--part predict --epochs 20
+--twins 10``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+REAL = (ROOT / ".." / "shared" / "data" / "irac" / "real_xo3_eclipse1").resolve()
+SPEED_METHODS = ["bliss", "gp", "kr-data", "pld", "poly2", "segpoly"]
+PREDICT_METHODS = ["bliss", "pld", "kr-data"]
+
+
+def _real_table(work: Path) -> Path:
+    import eclipsebench as eb
+
+    path = work / "real" / "epoch_01.fits"
+    if not path.is_file():
+        eb.measure(REAL, work / "real")
+    return path
+
+
+def _statistics(table, rms_ppm: float) -> dict[str, float]:
+    good = np.asarray(table["flag"]) == 0
+    time_d = np.asarray(table["time_bmjd"])[good]
+    flux = np.asarray(table["flux"])[good]
+    bins = np.floor((time_d - time_d[0]) / (5.0 / 1440)).astype(int)
+    counts = np.bincount(bins)
+    binned = np.bincount(bins, flux)[counts > 0] / counts[counts > 0]
+    return {"median noise pixels": float(np.median(np.asarray(table["noise_pixels"])[good])),
+            "centroid rms x (px)": float(np.std(np.asarray(table["x"])[good])),
+            "centroid rms y (px)": float(np.std(np.asarray(table["y"])[good])),
+            "raw flux rms, 5-min bins (ppm)": float(np.std(binned / np.median(binned)) * 1e6),
+            "residual rms after BLISS (ppm)": float(rms_ppm)}
+
+
+def resemble(work: Path, n_twins: int) -> None:
+    import eclipsebench as eb
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.config.photometry import PhotometrySection
+    from eclipsebench.photometry.table import read_table
+    from eclipsebench.trust.recipe import build_recipe
+    from eclipsebench.trust.twin import twin_table
+
+    path = _real_table(work)
+    fit = eb.reduce(path, "bliss", sampler="leastsq", prayer_bead_shifts=0)
+    recipe, info = build_recipe(str(path), get_system("XO-3b"), fit.to_dict(), fit.depth_ppm)
+    real = _statistics(read_table(path), fit.rms_ppm)
+    twins = []
+    for i in range(1, n_twins + 1):
+        t = twin_table(recipe, PhotometrySection(), seed=0, twin=i)
+        twins.append(_statistics(t, eb.reduce(t, "bliss", system="XO-3b", sampler="leastsq",
+                                              prayer_bead_shifts=0).rms_ppm))
+    print(f"within-exposure motion {info['motion_rms_px']:.3f} px rms; calibration "
+          f"{json.dumps(info['calibration'])}")
+    print(f"| quantity | real epoch 1 | twins (mean of {n_twins}) | twins / real |")
+    print("| --- | --- | --- | --- |")
+    for key, value in real.items():
+        mean = statistics.fmean(t[key] for t in twins)
+        print(f"| {key} | {value:.4g} | {mean:.4g} | {mean / value:.3f} |")
+
+
+def speed(work: Path, n_twins: int, workers: int) -> None:
+    import eclipsebench as eb
+
+    path = _real_table(work)
+    ref = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        eb.reduce(path, "bliss", sampler="leastsq")
+        ref.append(time.perf_counter() - t0)
+    out = work / "speed"
+    shutil.rmtree(out, ignore_errors=True)
+    from eclipsebench.config import load_config
+    from eclipsebench.trust.run import make_settings, run_trust
+
+    cfg = load_config(None, ["reduce.sampler=\"leastsq\""])
+    settings = make_settings(path, reduce=cfg.reduce, system_section=cfg.system,
+                             methods=SPEED_METHODS, n_twins=n_twins)
+    t0 = time.perf_counter()
+    summary, report = run_trust(settings, out, workers=workers)
+    wall = time.perf_counter() - t0
+    stages = report.stage_seconds()
+    sim = stages.get("recipe", 0.0) + stages.get("twin", 0.0)
+    red = stages.get("real", 0.0) + stages.get("twin-reduce", 0.0)
+    print(f"trust, real epoch 1, {n_twins} twins x {len(SPEED_METHODS)} methods, leastsq, "
+          f"{workers} workers: wall {wall:.1f} s; task seconds: simulation {sim:.1f} "
+          f"(recipe {stages.get('recipe', 0.0):.1f}), reductions {red:.1f}, score "
+          f"{stages.get('score', 0.0):.1f}")
+    print(f"reference: one BLISS least-squares reduction of the real table, median of 3: "
+          f"{statistics.median(ref):.2f} s; ratio {wall / statistics.median(ref):.0f}")
+    for m, s in summary["methods"].items():
+        print(f"  {m:8s} depth {s['depth_ppm']:7.1f} honest {s['honest_err_ppm']:6.1f} bias "
+              f"{s['bias_ppm']:7.1f} RMSE {s['rmse_ppm']:6.1f} z_rms {s['z_rms']:.2f} cov1 "
+              f"{s['coverage_1sigma']:.2f}")
+    print(f"  recommended {summary['recommended']}; skipped {summary['skipped']}")
+
+
+def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
+    from astropy.table import Table
+
+    import eclipsebench as eb
+    from eclipsebench.config import load_config
+    from eclipsebench.trust.run import make_settings, run_trust
+
+    cfg = eb.load_config(overrides=[f"challenge.epochs={n_epochs}", "challenge.seed=26"])
+    sim, phot = work / "predict" / "sim", work / "predict" / "phot"
+    eb.simulate(sim, config=cfg, workers=workers, calibration=False)
+    if not (phot / f"epoch_{n_epochs:02d}.fits").is_file():
+        eb.measure(sim, phot, config=cfg)
+    truth = Table.read(sim / "truth.ecsv", format="ascii.ecsv")
+    depth = {int(r["epoch"]): float(r["depth_ppm"]) for r in truth}
+    rcfg = load_config(None, ["reduce.sampler=\"leastsq\""])
+    ratios: dict[str, list[float]] = {m: [] for m in PREDICT_METHODS}
+    rec_err, med_err = [], []
+    for e in range(1, n_epochs + 1):
+        table = phot / f"epoch_{e:02d}.fits"
+        settings = make_settings(table, reduce=rcfg.reduce, system_section=rcfg.system,
+                                 methods=PREDICT_METHODS, n_twins=n_twins, seed=e)
+        summary, _ = run_trust(settings, work / "predict" / f"trust_{e:02d}", workers=workers)
+        errors = {}
+        for m, s in summary["methods"].items():
+            errors[m] = abs(s["depth_ppm"] - depth[e])
+            ratios[m].append((s["depth_ppm"] - depth[e]) / s["rmse_ppm"])
+        if summary["recommended"] in errors:
+            rec_err.append(errors[summary["recommended"]])
+            med_err.append(float(np.median(list(errors.values()))))
+        print(f"epoch {e:2d}: truth {depth[e]:.0f}; " + ", ".join(
+            f"{m} {summary['methods'][m]['depth_ppm'] - depth[e]:+.0f} (RMSE "
+            f"{summary['methods'][m]['rmse_ppm']:.0f})" for m in summary["methods"])
+            + f"; recommended {summary['recommended']}", flush=True)
+    for m, r in ratios.items():
+        print(f"{m}: rms(actual error / predicted RMSE) over {len(r)} epochs = "
+              f"{float(np.sqrt(np.mean(np.square(r)))):.2f}")
+    if rec_err:
+        print(f"recommended method's mean |error| {np.mean(rec_err):.1f} ppm against the "
+              f"median method's {np.mean(med_err):.1f} ppm over {len(rec_err)} epochs")
+
+
+def main(argv: list[str]) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--part", choices=("resemble", "speed", "predict"), default="resemble")
+    p.add_argument("--twins", type=int, default=None)
+    p.add_argument("--epochs", type=int, default=20)
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--workdir", default="bench/results/trust")
+    args = p.parse_args(argv)
+    work = Path(args.workdir)
+    work.mkdir(parents=True, exist_ok=True)
+    print(f"# bench_trust --part {args.part}: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())},"
+          f" {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
+    if args.part != "predict" and not REAL.is_dir():
+        print("../shared/data/irac/real_xo3_eclipse1 is absent: skipped")
+        return 0
+    if args.part == "resemble":
+        resemble(work, args.twins or 4)
+    elif args.part == "speed":
+        speed(work, args.twins or 50, args.workers)
+    else:
+        predict(work, args.epochs, args.twins or 10, args.workers)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
