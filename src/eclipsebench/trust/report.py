@@ -19,6 +19,7 @@ from astropy.table import Table
 from .. import __version__
 from ..io.atomic import atomic_path, write_json, write_text
 from ..photometry.table import read_table
+from .layout import TrustLayout
 from .score import recommend, score_methods
 
 __all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS"]
@@ -35,8 +36,6 @@ def _load(path: Path) -> dict[str, Any]:
 def collect(root: Path, methods: Sequence[str], n_twins: int
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
     """Real results, twin ``(depths, errors)`` per method, skipped methods, failed twins."""
-    from .run import TrustLayout
-
     layout = TrustLayout(Path(root))
     real, twins, skipped, failed = {}, {}, {}, {}
     for m in methods:
@@ -95,12 +94,18 @@ def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
         table.write(tmp, format="ascii.ecsv")
 
 
-def _figure_depths(summary, twins, path: Path) -> None:
+def _pyplot():
+    """matplotlib's pyplot on the file backend (imported only when a page is drawn)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    return plt
+
+
+def _figure_depths(summary, twins, path: Path) -> None:
+    plt = _pyplot()
     methods = list(summary["methods"])
     fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(methods) + 2), 4.0))
     jitter = np.random.default_rng(0)   # positions only: the figure's, not the results'
@@ -121,11 +126,7 @@ def _figure_depths(summary, twins, path: Path) -> None:
 
 
 def _figure_z(summary, twins, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     methods = list(summary["methods"])
     cols = min(4, len(methods))
     rows = int(np.ceil(len(methods) / cols))
@@ -154,11 +155,7 @@ def _binned(time, values, width_d: float):
 
 
 def _figure_twin(real_table, twin_table, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     fig, axes = plt.subplots(4, 1, figsize=(8.0, 8.0), sharex=True)
     for t, label, color in ((real_table, "real", "k"), (twin_table, "twin 1", "C1")):
         good = np.asarray(t["flag"]) == 0
@@ -215,8 +212,6 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
 
 def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -> None:
     """Write the report, ``trust.ecsv``, then ``trust.json`` (the engine's outputs, in order)."""
-    from .run import TrustLayout
-
     layout = TrustLayout(Path(root))
     recipe = json.loads(layout.recipe_json.read_text())
     real, twins, skipped, failed = collect(layout.root, methods, int(settings["n_twins"]))

@@ -1,15 +1,6 @@
 """``trust``: twins of a real observation, reduced like it, scored; resumable on the engine.
 
-The folder of a trust run::
-
-    DIR/trust_config.json              the settings (guards resume)
-    DIR/trust.lock                     held while a run works in DIR
-    DIR/real/<method>.json (+.lc.ecsv) the real table reduced by each method (or why not)
-    DIR/recipe.npz, DIR/recipe.json    what every twin shares (L(t), sky, motion, flux)
-    DIR/twins/twin_NNN.fits            each twin's photometry table
-    DIR/twins/<method>/twin_NNN.json   each twin reduced by each method
-    DIR/trust.json, DIR/trust.ecsv     the answer (``eclipsebench.trust.score``)
-    DIR/report/index.html              figures and the table
+The folder of a trust run is :class:`~eclipsebench.trust.layout.TrustLayout`.
 
 Two passes on the engine (:func:`eclipsebench.engine.tasks.run_tasks`): the
 real reductions first (a method that refuses the real table, such as a pixel
@@ -44,10 +35,12 @@ from ..io.atomic import atomic_path, write_json, write_text
 from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
-from .recipe import build_recipe, read_recipe, write_recipe
+from .layout import TrustLayout
+from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
+from .report import score_task
 from .twin import twin_table
 
-__all__ = ["TrustSettings", "TrustLayout", "run_trust", "MIN_TWINS", "MAX_TWINS"]
+__all__ = ["TrustSettings", "make_settings", "run_trust", "MIN_TWINS", "MAX_TWINS"]
 
 #: Fewer twins give no coverage worth quoting; more is a size to bound before work.
 MIN_TWINS = 10
@@ -77,50 +70,6 @@ class TrustSettings:
                 "reduce": to_mapping(self.reduce),
                 "method_options": {k: dict(v) for k, v in self.method_options.items()},
                 "pmap": self.pmap}
-
-
-@dataclass(frozen=True)
-class TrustLayout:
-    """Where each file of a trust run goes (module docstring)."""
-
-    root: Path
-
-    @property
-    def config(self) -> Path:
-        return self.root / "trust_config.json"
-
-    @property
-    def lock(self) -> Path:
-        return self.root / "trust.lock"
-
-    def real(self, method: str) -> Path:
-        return self.root / "real" / f"{method}.json"
-
-    @property
-    def recipe_npz(self) -> Path:
-        return self.root / "recipe.npz"
-
-    @property
-    def recipe_json(self) -> Path:
-        return self.root / "recipe.json"
-
-    def twin(self, i: int) -> Path:
-        return self.root / "twins" / f"twin_{i:03d}.fits"
-
-    def twin_result(self, method: str, i: int) -> Path:
-        return self.root / "twins" / method / f"twin_{i:03d}.json"
-
-    @property
-    def result(self) -> Path:
-        return self.root / "trust.json"
-
-    @property
-    def table(self) -> Path:
-        return self.root / "trust.ecsv"
-
-    @property
-    def report(self) -> Path:
-        return self.root / "report" / "index.html"
 
 
 # ----------------------------------------------------------------------------- tasks
@@ -166,8 +115,6 @@ def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twin: int,
               out_path: str) -> None:
     """Simulate and measure twin ``twin``; write its photometry table."""
     recipe, _ = read_recipe(settings.table, Path(npz_path), Path(json_path))
-    from .recipe import photometry_options
-
     table = twin_table(recipe, photometry_options(recipe.obs), seed=settings.seed, twin=twin)
     write_photometry(table, out_path)
 
@@ -218,8 +165,6 @@ def plan_real(settings: TrustSettings, layout: TrustLayout) -> list[Task]:
 def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[str]
                ) -> list[Task]:
     """The recipe, every twin and every twin's reduction by the usable methods, the score."""
-    from .report import score_task
-
     first = usable[0]
     tasks = [Task("recipe", "recipe", recipe_task,
                   (settings, first, str(layout.real(first)), str(layout.recipe_npz),

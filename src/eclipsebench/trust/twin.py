@@ -33,6 +33,7 @@ from ..config.photometry import PhotometrySection
 from ..instrument.pointing import fbm_segments
 from ..instrument.prf import BuiltinPRF
 from ..photometry.clean import running_median
+from ..photometry.measure import measure_stack
 from ..photometry.pipeline import AorStack, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
@@ -230,8 +231,6 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *, n_frames
 
 
 def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
-    from ..photometry.measure import measure_stack
-
     median = np.median(frames, axis=0)
     sy, sx = np.unravel_index(int(np.argmax(median)), median.shape)
     m = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
