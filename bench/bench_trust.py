@@ -57,17 +57,9 @@ def _real_table(work: Path) -> Path:
 
 
 def _statistics(table, rms_ppm: float) -> dict[str, float]:
-    good = np.asarray(table["flag"]) == 0
-    time_d = np.asarray(table["time_bmjd"])[good]
-    flux = np.asarray(table["flux"])[good]
-    bins = np.floor((time_d - time_d[0]) / (5.0 / 1440)).astype(int)
-    counts = np.bincount(bins)
-    binned = np.bincount(bins, flux)[counts > 0] / counts[counts > 0]
-    return {"median noise pixels": float(np.median(np.asarray(table["noise_pixels"])[good])),
-            "centroid rms x (px)": float(np.std(np.asarray(table["x"])[good])),
-            "centroid rms y (px)": float(np.std(np.asarray(table["y"])[good])),
-            "raw flux rms, 5-min bins (ppm)": float(np.std(binned / np.median(binned)) * 1e6),
-            "residual rms after BLISS (ppm)": float(rms_ppm)}
+    from eclipsebench.trust.score import observation_statistics
+
+    return {**observation_statistics(table), "bliss_residual_rms_ppm": float(rms_ppm)}
 
 
 def resemble(work: Path, n_twins: int) -> None:

@@ -27,3 +27,21 @@ def real_epoch1_table(shared_irac, tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("real_epoch1")
     measure(shared_irac / "real_xo3_eclipse1", out)
     return out / "epoch_01.fits"
+
+
+def simulate_eclipse_epoch(root: Path, sets: list[str], lead_d: float) -> Path:
+    """Simulate one short epoch (configuration ``sets``) that starts ``lead_d`` days before an
+    eclipse of the configured planet, measure it; the photometry table's path."""
+    from eclipsebench.astro.catalogue import system_for
+    from eclipsebench.astro.orbit import eclipse_time_bmjd
+    from eclipsebench.cli import main
+    from eclipsebench.config import load_config
+    from eclipsebench.simulation.plan import JD_OFFSET_BMJD
+
+    t_ecl = eclipse_time_bmjd(system_for(load_config(None, sets).system), 57205.8)
+    sets = sets + [f"observation.start_times_jd=[{t_ecl - lead_d - JD_OFFSET_BMJD:.6f}]"]
+    args = [a for s in sets for a in ("--set", s)]
+    assert main(["simulate", "--out", str(root / "sim"), "--epochs", "1", "--no-calibration",
+                 "--quiet", "--workers", "1", *args]) == 0
+    assert main(["photometry", str(root / "sim"), "--out", str(root / "phot"), "--quiet"]) == 0
+    return root / "phot" / "epoch_01.fits"

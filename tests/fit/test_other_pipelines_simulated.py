@@ -17,13 +17,13 @@ import pytest
 from astropy.table import Table
 
 from eclipsebench.astro.catalogue import system_for
-from eclipsebench.astro.orbit import eclipse_time_bmjd
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.fit.reduce import reduce_epoch
 from eclipsebench.photometry.table import read_table
-from eclipsebench.simulation.plan import JD_OFFSET_BMJD
+
+from ..conftest import simulate_eclipse_epoch
 
 FAST = replace(ReduceSection(), prayer_bead_shifts=0)
 MINIMAL = ("time_bmjd", "flux", "flux_err", "x", "y", "noise_pixels")
@@ -37,13 +37,8 @@ SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
 def main_aor(tmp_path_factory):
     """(full photometry table of the Main AOR's good frames, the same as a six-column CSV)."""
     root = tmp_path_factory.mktemp("sim_csv")
-    t_ecl = eclipse_time_bmjd(system_for(load_config(None, SETS).system), 57205.8)
-    sets = SETS + [f"observation.start_times_jd=[{t_ecl - 0.14 - JD_OFFSET_BMJD:.6f}]"]
-    args = [a for s in sets for a in ("--set", s)]
-    assert main(["simulate", "--out", str(root / "sim"), "--epochs", "1", "--no-calibration",
-                 "--quiet", "--workers", "1", *args]) == 0
-    assert main(["photometry", str(root / "sim"), "--out", str(root / "phot"), "--quiet"]) == 0
-    table = read_table(root / "phot" / "epoch_01.fits")
+    path = simulate_eclipse_epoch(root, SETS, 0.14)
+    table = read_table(path)
     keys = np.unique(np.asarray(table["aorkey"]))
     assert len(keys) == 2
     keep = (np.asarray(table["aorkey"]) == keys.max()) & (np.asarray(table["flag"]) == 0)

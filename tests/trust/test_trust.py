@@ -15,15 +15,16 @@ import numpy as np
 import pytest
 
 from eclipsebench.astro.catalogue import system_for
-from eclipsebench.astro.orbit import eclipse_time_bmjd
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table, write_photometry
-from eclipsebench.simulation.plan import JD_OFFSET_BMJD
 from eclipsebench.simulation.render import FrameModel, tick_moments
 from eclipsebench.trust.observation import observation_from_table
+from eclipsebench.trust.score import observation_statistics
 from eclipsebench.trust.twin import _motion, make_recipe, twin_table
+
+from ..conftest import simulate_eclipse_epoch
 
 SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
         "observation.main_cubes=80", "observation.cube_interval_s=220.0",
@@ -34,14 +35,7 @@ FAST = ["--methods", "poly2,kr-pmap", "--sampler", "leastsq", "--twins", "10", "
 @pytest.fixture(scope="module")
 def small_table(tmp_path_factory):
     """The photometry table (``eclipsebench photometry``) of a small simulated observation."""
-    root = tmp_path_factory.mktemp("trust_obs")
-    t_ecl = eclipse_time_bmjd(system_for(load_config(None, SETS).system), 57205.8)
-    sets = SETS + [f"observation.start_times_jd=[{t_ecl - 0.12 - JD_OFFSET_BMJD:.6f}]"]
-    args = [a for s in sets for a in ("--set", s)]
-    assert main(["simulate", "--out", str(root / "sim"), "--epochs", "1", "--no-calibration",
-                 "--quiet", "--workers", "1", *args]) == 0
-    assert main(["photometry", str(root / "sim"), "--out", str(root / "phot"), "--quiet"]) == 0
-    return root / "phot" / "epoch_01.fits"
+    return simulate_eclipse_epoch(tmp_path_factory.mktemp("trust_obs"), SETS, 0.12)
 
 
 def test_the_motion_within_an_exposure_keeps_each_frame_s_mean_and_has_its_rms():
@@ -150,14 +144,4 @@ def _code(argv: list[str]) -> int:
 
 
 def _statistics(table, fit) -> dict[str, float]:
-    good = np.asarray(table["flag"]) == 0
-    time = np.asarray(table["time_bmjd"])[good]
-    flux = np.asarray(table["flux"])[good]
-    bins = np.floor((time - time[0]) / (5.0 / 1440)).astype(int)
-    counts = np.bincount(bins)
-    binned = np.bincount(bins, flux)[counts > 0] / counts[counts > 0]
-    return {"noise_pixels": float(np.median(np.asarray(table["noise_pixels"])[good])),
-            "x_rms": float(np.std(np.asarray(table["x"])[good])),
-            "y_rms": float(np.std(np.asarray(table["y"])[good])),
-            "flux_rms_5min": float(np.std(binned / np.median(binned))),
-            "bliss_residual_rms": float(fit.rms_ppm)}
+    return {**observation_statistics(table), "bliss_residual_rms_ppm": float(fit.rms_ppm)}

@@ -20,7 +20,7 @@ from .. import __version__
 from ..io.atomic import atomic_path, write_json, write_text
 from ..photometry.table import read_table
 from .layout import TrustLayout
-from .score import recommend, score_methods
+from .score import observation_statistics, recommend, score_methods
 
 __all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS"]
 
@@ -190,6 +190,10 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
     table = "<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>" + "".join(
         "<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows) + "</table>"
     skipped = "".join(f"<li>{esc(m)}: {esc(r)}</li>" for m, r in summary["skipped"].items())
+    like = summary.get("resemblance", {})
+    resemblance = "".join(
+        f"<tr><td>{esc(k)}</td><td>{v:.4g}</td><td>{like['twin_001'][k]:.4g}</td></tr>"
+        for k, v in like.get("real", {}).items())
     tw = summary["twins"]
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>How far to trust "
             f"{esc(summary['system'])}</title><style>body{{font-family:sans-serif;max-width:"
@@ -206,6 +210,8 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
             f"{tw['calibration']['noise_pixels_real']:.2f} real); gain: "
             f"{esc(tw['gain_model'])}.</p>"
             + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
+            + ("<h2>The real observation and twin 1</h2><table><tr><th>good frames</th>"
+               f"<th>real</th><th>twin 1</th></tr>{resemblance}</table>" if resemblance else "")
             + "".join(f"<p><img src='{esc(f)}' alt='{esc(f)}'></p>" for f in figures)
             + "</body></html>")
 
@@ -218,6 +224,9 @@ def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -
     skipped = {**{m: json.loads(layout.real(m).read_text())["error"]
                   for m in settings["methods"] if m not in methods}, **skipped}
     summary = trust_summary(settings, recipe, real, twins, skipped, failed)
+    real_table, twin = read_table(settings["table"]), read_table(layout.twin(1))
+    summary["resemblance"] = {"real": observation_statistics(real_table),
+                              "twin_001": observation_statistics(twin)}
     folder = layout.report.parent
     folder.mkdir(parents=True, exist_ok=True)
     figures = ["depths.png", "z_scores.png", "twin.png"]
@@ -226,7 +235,7 @@ def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -
         _figure_z(summary, twins, folder / figures[1])
     else:
         figures = figures[2:]
-    _figure_twin(read_table(settings["table"]), read_table(layout.twin(1)), folder / "twin.png")
+    _figure_twin(real_table, twin, folder / "twin.png")
     write_text(layout.report, _html(summary, figures))
     _ecsv(summary, layout.table)
     write_json(layout.result, summary)

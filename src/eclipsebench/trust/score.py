@@ -27,7 +27,7 @@ import numpy as np
 
 from ..stats.ensemble import GAUSS_1SIGMA, coverage
 
-__all__ = ["method_score", "recommend", "score_methods"]
+__all__ = ["method_score", "recommend", "score_methods", "observation_statistics"]
 
 
 def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_ppm: float
@@ -95,3 +95,22 @@ def score_methods(twin_depths: Mapping[str, tuple[Sequence[float], Sequence[floa
                   "honest_err_ppm": err * max(1.0, s["z_rms"])})
         out[method] = s
     return out
+
+
+def observation_statistics(table) -> dict[str, float]:
+    """What a twin must share with its observation, measured on a photometry table's good frames.
+
+    The median noise pixels, the centroid rms in x and y (px) and the raw
+    flux rms in 5-minute bins (relative, ppm): ``docs/trust.md``,
+    "Validation".
+    """
+    good = np.asarray(table["flag"]) == 0
+    time_d = np.asarray(table["time_bmjd"])[good]
+    flux = np.asarray(table["flux"], float)[good]
+    bins = np.floor((time_d - time_d[0]) / (5.0 / 1440.0)).astype(int)
+    counts = np.bincount(bins)
+    binned = np.bincount(bins, flux)[counts > 0] / counts[counts > 0]
+    return {"noise_pixels_median": float(np.median(np.asarray(table["noise_pixels"])[good])),
+            "x_rms_px": float(np.std(np.asarray(table["x"], float)[good])),
+            "y_rms_px": float(np.std(np.asarray(table["y"], float)[good])),
+            "flux_rms_5min_ppm": float(np.std(binned / np.median(binned)) * 1e6)}
