@@ -24,7 +24,7 @@ from ..fit.astro_model import AstroModel
 from ..io.atomic import atomic_path, write_json
 from ..photometry.table import read_table
 from .observation import Observation, observation_from_table
-from .twin import GAIN_MODEL, TwinRecipe, calibrate_motion, make_recipe
+from .twin import TwinRecipe, calibrate_motion, gain_model, make_recipe
 
 __all__ = ["twin_light_curve", "build_recipe", "write_recipe", "read_recipe", "EVENTS"]
 
@@ -75,7 +75,8 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
             "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
             "y_ref_px": recipe.y_ref_px, "motion_rms_px": rms, "calibration": calibration,
-            "gain_model": GAIN_MODEL, "n_frames": obs.n_frames, "n_good": int(obs.good.sum())}
+            "gain_model": gain_model(obs.channel), "n_frames": obs.n_frames,
+            "n_good": int(obs.good.sum())}
     return recipe, info
 
 

@@ -31,7 +31,7 @@ from astropy.table import Table
 
 from ..config.photometry import PhotometrySection
 from ..instrument.pointing import fbm_segments
-from ..instrument.prf import BuiltinPRF
+from ..instrument.prf import BuiltinPRF, load_gainmap_coefficients
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack
 from ..photometry.pipeline import AorStack, measure_aor
@@ -42,12 +42,24 @@ from ..simulation.star import StarImager
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "make_recipe", "render_frames_of", "twin_table", "calibrate_motion",
-           "MOTION_GRID_PX", "GAIN_MODEL"]
+           "MOTION_GRID_PX", "gain_model"]
 
 #: Within-exposure motion rms (px) on which the noise pixels are calibrated.
 MOTION_GRID_PX = (0.0, 0.02, 0.04, 0.07, 0.1, 0.14, 0.2, 0.28)
-#: What the twins' intra-pixel gain is (the report says it).
-GAIN_MODEL = "the simulator's gain model of the channel (BuiltinPRF, data/gainmap_ch<N>.json)"
+
+
+def gain_model(channel: int) -> str:
+    """What the twins' intra-pixel gain is, for the report: the simulator's model of the
+    channel, fitted to the SSC pixel map named in ``data/gainmap_ch<N>.json``.
+
+    Examples
+    --------
+    >>> gain_model(2)[:60]
+    "the simulator's gain model of channel 2 (BuiltinPRF's intra-"
+    """
+    source = load_gainmap_coefficients(channel).get("source", "an SSC pixel map")
+    return (f"the simulator's gain model of channel {channel} (BuiltinPRF's intra-pixel gain, "
+            f"a polynomial fitted to {source}; data/gainmap_ch{channel}.json)")
 _BACKGROUND_WINDOW = 65   # frames of the running median of the real background (one cube)
 _FBM_BETA = 1.0           # the jitter's spectral index (paper Table 5)
 
