@@ -5,6 +5,20 @@ metadata (``INPUTS``, ``OPTIONS``, ``AORKEYS``, ``FLAGBITS``, ``FLAGCNT``) are
 stored as JSON strings in the FITS header and decoded by
 :func:`read_photometry`.
 
+Files the astropy way: ``Table.read`` of a written table emits no warning.
+Every ``TUNITn`` is a FITS-standard string; FITS has no electron (FITS 4.0,
+Table 4), so electrons are written as the standard count ``ct`` (``count``,
+``count pix-2``) and the header card ``CTUNIT = 'electron'`` says what is
+counted: :func:`read_photometry` gives them back as ``u.electron``, a plain
+``Table.read`` as ``u.ct``. Each column has its description in ``TCOMMn``, and the header has ``TIMESYS = 'TDB'``,
+``MJDREF = 0``, ``TIMEUNIT = 'd'`` for ``time_bmjd``.
+
+The bytes are a function of the data and the configuration (issue 28):
+``CHECKSUM``/``DATASUM`` carry a fixed comment instead of the write time, and
+the provenance folders ``INROOT`` and ``SIMDIR`` are written relative to the
+table's own folder (``PATHREL`` lists them) and read back as absolute paths,
+so two runs of the same input into different run folders write identical files.
+
 FITS header values must be printable ASCII, but provenance paths (``INROOT``,
 ``SIMDIR``) may hold spaces and any letters. A string value that is not
 printable ASCII is stored JSON-escaped (``"/data/\u00fc"``, quotes included)
@@ -33,7 +47,7 @@ from ..errors import DataError
 from ..io.atomic import atomic_path
 
 __all__ = ["REQUIRED_COLUMNS", "COLUMN_UNITS", "JSON_KEYS", "make_table", "write_photometry",
-           "read_photometry", "read_table", "table_format"]
+           "read_photometry", "read_table", "table_format", "column_description", "fits_unit"]
 
 REQUIRED_COLUMNS = ("time_bmjd", "aorkey", "expid", "frame", "x", "y", "x_gauss", "y_gauss",
                     "noise_pixels", "width_x", "width_y", "background", "flux", "flux_err",
@@ -43,7 +57,12 @@ ESCAPED_KEY = "ESCAPED"
 _PRINTABLE_ASCII = re.compile(r"^[\x20-\x7e]*$")
 
 _STRUCTURAL = re.compile(r"^(XTENSION|BITPIX|NAXIS\d*|PCOUNT|GCOUNT|TFIELDS|EXTNAME|CHECKSUM|"
-                         r"DATASUM|COMMENT|HISTORY|T(TYPE|FORM|UNIT|DIM|NULL|SCAL|ZERO|DISP)\d+)$")
+                         r"DATASUM|COMMENT|HISTORY|CTUNIT|PATHREL|"
+                         r"T(TYPE|FORM|UNIT|DIM|NULL|SCAL|ZERO|DISP|COMM)\d+)$")
+#: Provenance folders written relative to the table's folder (byte-reproducible tables).
+_PATH_KEYS = ("INROOT", "SIMDIR")
+#: The comment of CHECKSUM/DATASUM (astropy's default is the write time).
+_CHECKSUM_NOTE = "eclipsebench photometry table"
 _PIX = u.pix
 _E = u.electron
 COLUMN_UNITS = {
@@ -61,6 +80,82 @@ _ORDER = ("time_bmjd", "aorkey", "expid", "dce", "frame", "x", "y", "x_col", "y_
 _DTYPES = {"aorkey": np.int64, "expid": np.int32, "dce": np.int32, "frame": np.int32,
            "flag": np.int32, "peak_x": np.int16, "peak_y": np.int16, "stamp_x": np.int16,
            "stamp_y": np.int16, "background_npix": np.int16}
+
+
+#: What each column holds (TCOMMn); :func:`column_description` adds the patterned ones.
+_DESCRIPTIONS = {
+    "time_bmjd": "mid-exposure time, BMJD (TDB, barycentric)",
+    "aorkey": "Spitzer AOR key", "expid": "exposure number in the AOR",
+    "dce": "DCE number", "frame": "frame index in its subarray cube",
+    "x": "star column (0-based, the chosen centroid)",
+    "y": "star row (0-based, the chosen centroid)",
+    "x_col": "centre-of-light column", "y_col": "centre-of-light row",
+    "x_gauss": "Gaussian-fit column", "y_gauss": "Gaussian-fit row",
+    "x_gfix": "fixed-width Gaussian column", "y_gfix": "fixed-width Gaussian row",
+    "x_lsq": "asymmetric Gaussian column", "y_lsq": "asymmetric Gaussian row",
+    "peak_x": "column of the brightest pixel", "peak_y": "row of the brightest pixel",
+    "stamp_x": "column of the pixel stamps' centre", "stamp_y": "row of the pixel stamps' centre",
+    "width_x": "Gaussian-fit sigma along columns", "width_y": "Gaussian-fit sigma along rows",
+    "gauss_fixed_width": "sigma of the fixed-width Gaussian fit",
+    "gauss_ok": "1 if the Gaussian fit converged", "gfix_ok": "1 if the fixed fit converged",
+    "lsq_ok": "1 if the asymmetric fit converged",
+    "noise_pixels": "noise pixels (sum I)^2 / sum I^2",
+    "background": "background per pixel (the chosen estimator)",
+    "background_mean": "annulus background, clipped mean",
+    "background_median": "annulus background, median",
+    "background_sigma": "annulus background, standard deviation",
+    "background_npix": "annulus pixels used for the background",
+    "flux": "aperture flux minus background (electrons)",
+    "flux_err": "uncertainty of flux (electrons)",
+    "flux_raw": "aperture sum before background (electrons)",
+    "aperture_area": "aperture area (pixels, partial pixels exact)",
+    "stamp3": "3x3 pixels about the stamp centre (electrons)",
+    "stamp5": "5x5 pixels about the stamp centre (electrons)",
+    "flag": "bit mask, 0 = good (FLAGBITS lists the bits)",
+}
+
+
+def column_description(name: str) -> str:
+    """The description of a photometry column (TCOMMn), or "" for one unknown here.
+
+    Examples
+    --------
+    >>> column_description("flux_r2p25")
+    'aperture flux minus background, aperture r2p25 (electrons)'
+    """
+    if name in _DESCRIPTIONS:
+        return _DESCRIPTIONS[name]
+    if name.startswith("flux_err_"):
+        return f"uncertainty of flux_{name[9:]} (electrons)"
+    if name.startswith("flux_"):
+        return f"aperture flux minus background, aperture {name[5:]} (electrons)"
+    if name.startswith("radius_"):
+        return f"radius of the variable aperture {name[7:]}"
+    return ""
+
+
+def fits_unit(unit) -> str:
+    """``unit`` as a FITS-standard ``TUNITn`` string, electrons written as counts (``ct``).
+
+    Examples
+    --------
+    >>> fits_unit(u.electron / u.pix**2), fits_unit(u.day)
+    ('count pix-2', 'd')
+    """
+    unit = u.Unit(unit)
+    bases = [u.ct if b == _E else b for b in unit.bases]
+    return u.CompositeUnit(unit.scale, bases, unit.powers).to_string("fits")
+
+
+def _unit_from_fits(text: str, counts_are: str | None):
+    """A TUNITn read back: FITS first (counts as electrons when CTUNIT says so), else generic."""
+    unit = u.Unit(text, format="fits", parse_strict="silent")
+    if isinstance(unit, u.UnrecognizedUnit):  # a table written before TUNITn was FITS-standard
+        return u.Unit(text, format="generic", parse_strict="silent")
+    if counts_are == "electron":
+        bases = [_E if b == u.ct else b for b in unit.bases]
+        unit = u.CompositeUnit(unit.scale, bases, unit.powers)
+    return unit
 
 
 def _unit_for(name: str):
@@ -93,6 +188,7 @@ def make_table(columns: dict[str, np.ndarray], meta: dict) -> Table:
         table[name] = values if unit is None else u.Quantity(values, unit).value
         if unit is not None:
             table[name].unit = unit
+        table[name].description = column_description(name) or None
     table.meta.update(meta)
     return table
 
@@ -119,26 +215,56 @@ def _header_cards(meta: dict) -> list[tuple[str, object]]:
     return cards
 
 
+def _relative_paths(meta: dict, folder: Path) -> tuple[dict, list[str]]:
+    """``meta`` with the provenance folders relative to ``folder``; the keys made relative."""
+    meta, done = dict(meta), []
+    for key in _PATH_KEYS:
+        value = meta.get(key)
+        if isinstance(value, str) and os.path.isabs(value):
+            try:
+                meta[key] = Path(os.path.relpath(value, folder)).as_posix()
+            except ValueError:   # another drive (Windows): kept absolute
+                continue
+            done.append(key)
+    return meta, done
+
+
 def write_photometry(table: Table, path: str | os.PathLike) -> Path:
-    """Write ``table`` as a FITS binary table, atomically (temporary file + rename)."""
+    """Write ``table`` as a FITS binary table, atomically (temporary file + rename).
+
+    The bytes depend only on the data, the metadata and the folders' relative
+    layout (module docstring); ``Table.read`` of the file emits no warning.
+    """
     path = Path(path)
     plain = Table(table, meta={}, copy=False)
     units = {}
     for name in plain.colnames:
         if plain[name].unit is not None:
-            # electrons are not a FITS-standard unit: keep astropy's generic spelling in TUNITn
-            units[name] = plain[name].unit.to_string("generic")
+            units[name] = fits_unit(plain[name].unit)
             plain[name].unit = None
     hdu = fits.table_to_hdu(plain)
     hdu.name = "PHOTOMETRY"
     for k, name in enumerate(plain.colnames, start=1):
         if name in units:
             hdu.header[f"TUNIT{k}"] = units[name]
-    for key, value in _header_cards(dict(table.meta)):
+        text = table[name].description or column_description(name)
+        if text:
+            hdu.header[f"TCOMM{k}"] = text[:68]
+    hdu.header["CTUNIT"] = ("electron", "what TUNITn 'count' counts")
+    meta, relative = _relative_paths(dict(table.meta), path.resolve().parent)
+    for key, value in _header_cards(meta):
         hdu.header[key] = value
+    if relative:
+        hdu.header["PATHREL"] = (json.dumps(relative), "keys relative to this file's folder")
+    for key, value in (("TIMESYS", "TDB"), ("MJDREF", 0.0), ("TIMEUNIT", "d")):
+        if key not in hdu.header:
+            hdu.header[key] = value
     hdu.header["HIERARCH EB_VERSION"] = str(table.meta.get("EB_VERSION", __version__))
+    primary = fits.PrimaryHDU()
+    for h in (primary, hdu):   # a fixed comment: the checksums do not carry the write time
+        h.add_checksum(when=_CHECKSUM_NOTE)
     with atomic_path(path) as tmp:
-        fits.HDUList([fits.PrimaryHDU(), hdu]).writeto(tmp, checksum=True)
+        fits.HDUList([primary, hdu]).writeto(tmp)
     return path
 
 
@@ -240,24 +366,31 @@ def _read_fits(path: Path) -> Table:
             if not isinstance(hdu, (fits.BinTableHDU, fits.TableHDU)):
                 raise TypeError(f"extension {hdu.name or 1} is not a table")
             header = hdu.header
-            units = {header[f"TTYPE{k}"]: header[f"TUNIT{k}"]
-                     for k in range(1, int(header.get("TFIELDS", 0)) + 1)
-                     if f"TUNIT{k}" in header}
-            # a plain structured array: astropy would warn about the non-FITS unit 'electron'
+            counts_are = header.get("CTUNIT")
+            # a plain structured array: units and descriptions are set from the header below
             table = Table(np.array(hdu.data))
-            for name, unit in units.items():
-                table[name].unit = u.Unit(unit, format="generic", parse_strict="silent")
+            for k in range(1, int(header.get("TFIELDS", 0)) + 1):
+                name = header.get(f"TTYPE{k}")
+                if name not in table.colnames:
+                    continue
+                if f"TUNIT{k}" in header:
+                    table[name].unit = _unit_from_fits(str(header[f"TUNIT{k}"]), counts_are)
+                if f"TCOMM{k}" in header:
+                    table[name].description = str(header[f"TCOMM{k}"])
             for key, value in header.items():
                 if not _STRUCTURAL.match(key):
                     table.meta[key] = value
+            relative = header.get("PATHREL")
     except Exception as exc:
         raise DataError(path, f"not a readable photometry table ({type(exc).__name__}: {exc})") \
             from None
-    escaped = table.meta.pop(ESCAPED_KEY, None)
-    try:
-        escaped = set(json.loads(escaped)) if isinstance(escaped, str) else set()
-    except (json.JSONDecodeError, TypeError):
-        escaped = set()
+    _decode_meta(table, path, relative)
+    return table
+
+
+def _decode_meta(table: Table, path: Path, relative: str | None) -> None:
+    """JSON and escaped values back to Python objects; relative folders back to absolute."""
+    escaped = _json_list(table.meta.pop(ESCAPED_KEY, None))
     meta = {}
     for key, value in table.meta.items():
         if (key in JSON_KEYS or key in escaped) and isinstance(value, str):
@@ -266,6 +399,17 @@ def _read_fits(path: Path) -> Table:
             except json.JSONDecodeError:
                 pass
         meta[key] = value
+    folder = path.resolve().parent
+    for key in _json_list(relative):
+        if isinstance(meta.get(key), str):
+            meta[key] = os.path.normpath(folder / meta[key])
     table.meta.clear()
     table.meta.update(meta)
-    return table
+
+
+def _json_list(text) -> set:
+    """The JSON list ``text`` as a set (empty when absent or unreadable)."""
+    try:
+        return set(json.loads(text)) if isinstance(text, str) else set()
+    except (json.JSONDecodeError, TypeError):
+        return set()
