@@ -3,7 +3,8 @@
 ``import eclipsebench as eb`` gives the public API (``docs/api.md``):
 :func:`eb.load_config`, :func:`eb.simulate`, :func:`eb.measure`,
 :func:`eb.reduce`, :func:`eb.score`, :func:`eb.trust`, :func:`eb.run_challenge`,
-:func:`eb.methods`, :func:`eb.method_class`, and the base classes
+:func:`eb.methods`, :func:`eb.method_class`, :func:`eb.read_result`,
+:func:`eb.read_photometry`, and the base classes
 :class:`eb.Systematics`, :class:`eb.MethodOptions`, :class:`eb.MethodContext`.
 """
 
@@ -15,7 +16,8 @@ _PUBLIC = {
     "reduce": "api", "simulate": "api", "run_challenge": "api", "score": "api", "trust": "api",
     "Systematics": "decorrelate.base", "MethodOptions": "decorrelate.base",
     "MethodContext": "decorrelate.base", "EpochData": "decorrelate.base",
-    "EpochResult": "fit.reduce", "InputError": "errors",
+    "EpochResult": "fit.result", "InputError": "errors",
+    "read_result": "api", "read_photometry": "api",
 }
 
 __all__ = ["__version__", *_PUBLIC]

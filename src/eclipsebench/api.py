@@ -34,7 +34,7 @@ from .stats.depth_table import check_depth_table, read_depth_table
 from .stats.summary import summarize
 
 __all__ = ["load_config", "methods", "method_class", "measure", "reduce", "simulate",
-           "run_challenge", "score", "trust"]
+           "run_challenge", "score", "trust", "read_result", "read_photometry"]
 
 
 def load_config(path: str | os.PathLike | None = None, overrides: Sequence[str] = (),
@@ -336,3 +336,71 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
     summary, _ = run_trust(settings, root,
                            workers=cfg.run.workers if workers is None else workers)
     return summary
+
+
+def read_result(path: str | os.PathLike):
+    """The result of a reduction from its ``RESULT.json``, as :func:`reduce` returned it.
+
+    ``RESULT.lc.ecsv`` (the decorrelated light curve) and ``RESULT.chain.npz``
+    (the posterior) beside it are read when present. A joint fit's file gives
+    its ``JointResult``.
+
+    Parameters
+    ----------
+    path : path
+        A result file written by ``eclipsebench reduce`` or ``run``
+        (``results/<method>/epoch_NN.json``).
+
+    Returns
+    -------
+    EpochResult or JointResult
+        Equal to the written result in every field the file holds.
+
+    Raises
+    ------
+    InputError
+        One line naming the file: missing, not JSON, not a result, a failed
+        reduction, written by an older version.
+
+    Examples
+    --------
+    >>> read_result("no/such/result.json")
+    Traceback (most recent call last):
+    ...
+    eclipsebench.errors.InputError: no/such/result.json: no such result file
+    """
+    from .fit.result import read_result as read
+
+    return read(path)
+
+
+def read_photometry(path: str | os.PathLike) -> Table:
+    """A photometry table written by :func:`measure` (or ``eclipsebench photometry``).
+
+    The columns keep their units (``electron``, ``pix``, ``d``, ...) and
+    descriptions, the JSON metadata come back as Python objects, and a
+    ``time`` column is added first: ``time_bmjd`` as an astropy ``Time``
+    (``format="mjd"``, ``scale="tdb"``; barycentric). The table can go to
+    :func:`reduce` as it is.
+
+    Raises
+    ------
+    InputError
+        One line naming the file (a ``DataError``): missing, unreadable, or
+        lacking a required column.
+
+    Examples
+    --------
+    >>> read_photometry("no/such/epoch_01.fits")
+    Traceback (most recent call last):
+    ...
+    eclipsebench.errors.DataError: no/such/epoch_01.fits: no such photometry table
+    """
+    from astropy.time import Time
+
+    from .photometry.table import read_photometry as read
+
+    table = read(path)
+    table.add_column(Time(table["time_bmjd"], format="mjd", scale="tdb"), name="time", index=0)
+    table["time"].info.description = "mid-exposure time, barycentric (BMJD_TDB)"
+    return table

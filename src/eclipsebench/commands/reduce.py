@@ -194,10 +194,10 @@ ZERO_ERROR_PPM = 1e-6
 
 
 def lightcurve_path(result_path: str | Path) -> Path:
-    """``RESULT.json`` -> ``RESULT.lc.ecsv``."""
-    p = Path(result_path)
-    stem = p.name[:-len(p.suffix)] if p.suffix else p.name
-    return p.with_name(stem + ".lc.ecsv")
+    """``RESULT.json`` -> ``RESULT.lc.ecsv`` (:func:`eclipsebench.fit.result.lightcurve_path`)."""
+    from ..fit.result import lightcurve_path as path_of
+
+    return path_of(result_path)
 
 
 _TABLE_SUFFIXES = (".fits", ".fit", ".ecsv", ".csv")
@@ -261,9 +261,10 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
 
 
 def chain_file(result_path: str | Path) -> Path:
-    """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples)."""
-    return lightcurve_path(result_path).with_name(
-        lightcurve_path(result_path).name.replace(".lc.ecsv", ".chain.npz"))
+    """``RESULT.json`` -> ``RESULT.chain.npz`` (:func:`eclipsebench.fit.result.chain_path`)."""
+    from ..fit.result import chain_path
+
+    return chain_path(result_path)
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -349,6 +350,9 @@ def format_text(result: dict) -> str:
                  f"combined      {result['depth_combined_ppm']:.1f} +- "
                  f"{result['depth_combined_err_ppm']:.1f} ppm (the epochs fitted alone, "
                  "inverse-variance mean)"]
+        lines.append(f"BIC / AIC     {_num(result['bic'], 1)} / {_num(result['aic'], 1)} "
+                     f"(k = {result['k']}, on {result['bic_data']}: comparable only with fits "
+                     "of the same points)")
         for e in result["per_epoch"]:
             lines.append(f"  epoch {e['epoch']}: alone {e['depth_alone_ppm']:7.1f} +- "
                          f"{e['depth_alone_err_ppm']:5.1f} ppm, beta_red {_num(e['beta_red'])}")
@@ -363,7 +367,9 @@ def format_text(result: dict) -> str:
              "BMJD_TDB",
              f"rms           {result['rms_ppm']:.0f} ppm, beta_red {_num(result['beta_red'])}, "
              f"chi2_red {result['chi2_red']:.3f}",
-             f"BIC / AIC     {result['bic']:.1f} / {result['aic']:.1f} (k = {result['k']})"]
+             f"BIC / AIC     {_num(result['bic'], 1)} / {_num(result['aic'], 1)} (k = {result['k']}, "
+             f"on {result.get('bic_data', 'points not recorded')}: comparable only with fits "
+             "of the same points)"]
     if when == "t_transit":
         lines.insert(2, f"rp_rs         {result['rp_rs']:.5f} +- {result['rp_rs_err']:.5f} "
                         "(depth = rp_rs^2)")

@@ -1,5 +1,13 @@
 """Figures of one reduced epoch: the binned decorrelated light curve with the model, and
-the corner plot of its posterior."""
+the corner plot of its posterior.
+
+:func:`lightcurve_figure` and :func:`corner_figure` return a matplotlib
+``Figure`` (what ``EpochResult.plot()`` gives a notebook);
+:func:`plot_reduced_lightcurve` and :func:`plot_corner` write them as PNG
+(``reduce --plot``). matplotlib is imported only when a figure is made, and
+no backend is chosen: the figures are bare ``Figure`` objects, so a
+notebook's own backend is left alone.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +17,8 @@ import numpy as np
 
 from ..io.atomic import atomic_path
 
-__all__ = ["bin_series", "plot_reduced_lightcurve", "plot_corner"]
+__all__ = ["bin_series", "lightcurve_figure", "corner_figure", "plot_reduced_lightcurve",
+           "plot_corner", "save_png"]
 
 
 def bin_series(time: np.ndarray, values: np.ndarray, width_d: float):
@@ -29,17 +38,25 @@ def bin_series(time: np.ndarray, values: np.ndarray, width_d: float):
     return t, m, err
 
 
-def plot_reduced_lightcurve(result, path: str | os.PathLike, *, bin_minutes: float = 5.0) -> None:
-    """Write a PNG of ``result`` (an EpochResult): binned decorrelated flux, model, residuals."""
-    # matplotlib (about 0.5 s to import) only when a plot is asked for.
-    import matplotlib
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
+def save_png(fig, path: str | os.PathLike) -> None:
+    """Write ``fig`` as a PNG atomically, with no software stamp (stable bytes)."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", metadata={"Software": None})
 
+
+def lightcurve_figure(result, *, bin_minutes: float = 5.0):
+    """A Figure of ``result`` (an EpochResult): binned decorrelated flux and model, residuals.
+
+    Two axes sharing the time axis (hours from mid-eclipse): the light curve
+    with the model above, the residuals below; the title names the method,
+    epoch, profile and depth.
+    """
+    # matplotlib (about 0.5 s to import) only when a plot is asked for.
+    from matplotlib.figure import Figure
 
     lc = result.lightcurve
     t0 = result.t_ecl_bmjd
-    hours = (lc["time_bmjd"] - t0) * 24.0
+    hours = (np.asarray(lc["time_bmjd"]) - t0) * 24.0
     width_h = bin_minutes / 60.0
     tb, fb, eb = bin_series(hours, lc["flux_corrected"], width_h)
     _, rb, rbe = bin_series(hours, lc["residual"], width_h)
@@ -48,19 +65,23 @@ def plot_reduced_lightcurve(result, path: str | os.PathLike, *, bin_minutes: flo
     ax, axr = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1]})
     ax.errorbar(tb, (fb - 1) * 1e6, yerr=eb * 1e6, fmt="o", ms=3, color="0.3", lw=0.8,
                 label=f"decorrelated, {bin_minutes:g}-min bins")
-    ax.plot(hours[order], (lc["astro_model"][order] - 1) * 1e6, color="C3", lw=1.5,
+    ax.plot(hours[order], (np.asarray(lc["astro_model"])[order] - 1) * 1e6, color="C3", lw=1.5,
             label=f"model ({result.phase} phase)")
     ax.set_ylabel("relative flux - 1 (ppm)")
-    ax.set_title(f"{result.method}, epoch {result.epoch}: depth {result.depth_ppm:.0f} "
-                 f"+- {result.depth_err_ppm:.0f} ppm")
+    ax.set_title(f"{result.method}, epoch {result.epoch} ({result.profile} profile): depth "
+                 f"{result.depth_ppm:.0f} +- {result.depth_err_ppm:.0f} ppm")
     ax.legend(loc="best", fontsize=8)
     axr.errorbar(tb, rb * 1e6, yerr=rbe * 1e6, fmt="o", ms=3, color="0.3", lw=0.8)
     axr.axhline(0.0, color="C3", lw=1)
     axr.set_xlabel(f"hours from mid-eclipse ({t0:.5f} BMJD_TDB)")
     axr.set_ylabel("residual (ppm)")
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", metadata={"Software": None})
+    return fig
+
+
+def plot_reduced_lightcurve(result, path: str | os.PathLike, *, bin_minutes: float = 5.0) -> None:
+    """Write a PNG of :func:`lightcurve_figure` of ``result``."""
+    save_png(lightcurve_figure(result, bin_minutes=bin_minutes), path)
 
 
 def _display(name: str, values: np.ndarray) -> tuple[str, np.ndarray]:
@@ -72,23 +93,20 @@ def _display(name: str, values: np.ndarray) -> tuple[str, np.ndarray]:
     return name, values
 
 
-def plot_corner(names, samples: np.ndarray, path: str | os.PathLike, *, bins: int = 30) -> None:
-    """Write a PNG corner plot of posterior ``samples`` (n, p): histograms and 2-D densities.
+def corner_figure(names, samples: np.ndarray, *, bins: int = 30):
+    """A corner-plot Figure of posterior ``samples`` (n, p): histograms and 2-D densities.
 
     Each diagonal panel is the marginal histogram with the 16th, 50th and
-    84th percentiles dashed; below it, the 2-D histogram of each pair.
+    84th percentiles dashed; below it, the 2-D histogram of each pair. The
+    depth is shown in ppm and the eclipse time in seconds from its median.
 
     Examples
     --------
-    >>> import tempfile, pathlib
     >>> g = np.random.default_rng(0)
-    >>> out = pathlib.Path(tempfile.mkdtemp()) / "corner.png"
-    >>> plot_corner(["depth", "t_ecl_bmjd"], g.normal([1.8e-3, 5e4], [1e-4, 1e-3], (500, 2)), out)
-    >>> out.stat().st_size > 0
-    True
+    >>> fig = corner_figure(["depth", "t_ecl_bmjd"], g.normal([1.8e-3, 5e4], [1e-4, 1e-3], (500, 2)))
+    >>> len(fig.axes)
+    4
     """
-    import matplotlib
-    matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
     samples = np.asarray(samples, dtype=float)
@@ -123,5 +141,19 @@ def plot_corner(names, samples: np.ndarray, path: str | os.PathLike, *, bins: in
                 ax.set_yticklabels([])
             ax.tick_params(labelsize=7)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", metadata={"Software": None})
+    return fig
+
+
+def plot_corner(names, samples: np.ndarray, path: str | os.PathLike, *, bins: int = 30) -> None:
+    """Write a PNG of :func:`corner_figure` of posterior ``samples``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> g = np.random.default_rng(0)
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "corner.png"
+    >>> plot_corner(["depth", "t_ecl_bmjd"], g.normal([1.8e-3, 5e4], [1e-4, 1e-3], (500, 2)), out)
+    >>> out.stat().st_size > 0
+    True
+    """
+    save_png(corner_figure(names, samples, bins=bins), path)

@@ -31,6 +31,7 @@ from ..errors import ConfigError, InputError
 from ..photometry.table import read_table
 from .astro_model import PHASE_CURVE_MODELS, PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table, median_cadence_s, standardise_table
+from .display import html_repr, text_repr
 from .frames import per_aor_systematics, settling_aor
 from .leastsq import (
     FitResult,
@@ -43,7 +44,13 @@ from .leastsq import (
 )
 from .mcmc import McmcResult, run_mcmc
 from .profiles import PROFILES, PaperProfile, centroid_columns, paper_profile
-from .result import EpochResult, jsonable
+from .result import (
+    EpochResult,
+    joint_extra_keys,
+    joint_fields_shown,
+    jsonable,
+    lightcurve_errors,
+)
 from .target import system_of_table
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
@@ -545,7 +552,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     corrected = systematics.correct(astro, theta_s)
     lightcurve = {"time_bmjd": np.asarray(systematics.data.time_bmjd, dtype=float),
                   "flux_corrected": corrected, "astro_model": astro,
-                  "residual": corrected - astro}
+                  "residual": corrected - astro,
+                  **lightcurve_errors(systematics.data.flux, systematics.data.flux_err, corrected)}
     params = {n: float(v) for n, v in zip(fit.names, theta_report, strict=True)}
     param_err = {n: float(e) for n, e in zip(fit.names, fit.errors, strict=True)}
     if mc is not None:
@@ -578,7 +586,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         chi2_red=fit.chi2_red, rms_ppm=fit.rms_ppm, beta_red=fit.beta_red,
         cadence_s=median_cadence_s(prep.table["time_bmjd"]),
         n_frames=prep.n_frames, n_frames_dropped=dict(prep.n_frames_dropped),
-        n_points=len(systematics.data.time_bmjd),
+        n_points=len(systematics.data.time_bmjd), bic_n_points=fit.n_data,
         phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
         sampler="mcmc" if mc is not None else "leastsq", converged=converged,
         params=params, param_errors=param_err,
@@ -782,7 +790,13 @@ class JointResult:
                 "beta_red": self.beta_red, "chi2_red": self.chi2_red, "bic": self.bic,
                 "aic": self.aic, "k": self.k, "n_points": self.n_points, "phase": self.phase,
                 "converged": self.converged, "t_ecl_bmjd": list(self.t_ecl_bmjd),
-                "per_epoch": list(self.per_epoch)}
+                "per_epoch": list(self.per_epoch), **joint_extra_keys(self)}
+
+    def __repr__(self) -> str:
+        return text_repr("JointResult", joint_fields_shown(self))
+
+    def _repr_html_(self) -> str:
+        return html_repr("JointResult", joint_fields_shown(self))
 
 
 class _JointProblem:

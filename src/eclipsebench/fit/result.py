@@ -2,22 +2,46 @@
 
 :class:`EpochResult` is what :func:`eclipsebench.fit.reduce.reduce_epoch`
 returns; ``to_dict()`` is what ``RESULT.json`` holds (``docs/fitting.md``
-lists the keys).
+lists the keys), :meth:`EpochResult.lightcurve_table` what ``RESULT.lc.ecsv``
+holds, and :func:`read_result` gives the result back from those files. In a
+notebook a result shows itself (``_repr_html_``), draws itself
+(:meth:`EpochResult.plot`) and gives its light curve as an astropy ``QTable``
+with units and a ``Time`` column (:meth:`EpochResult.to_table`).
 """
 
 from __future__ import annotations
 
+import json
+import math
+import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from astropy.table import Table
 
+from .. import __version__
 from ..errors import InputError
 from ..io.atomic import atomic_path
+from .display import html_repr, text_repr
 
-__all__ = ["EpochResult", "jsonable"]
+__all__ = ["EpochResult", "jsonable", "lightcurve_errors", "lightcurve_path", "chain_path",
+           "read_result", "bic_data", "joint_extra_keys", "joint_fields_shown",
+           "LIGHTCURVE_COLUMNS"]
+
+#: ``RESULT.lc.ecsv``'s columns: their description (all relative fluxes, units of the star).
+LIGHTCURVE_COLUMNS = {
+    "time_bmjd": "mid-exposure time (or bin centre), BMJD_TDB",
+    "flux_corrected": "decorrelated flux: flux / systematics_model",
+    "flux_err": "uncertainty of flux_corrected (the table's flux_err, decorrelated)",
+    "astro_model": "the fitted eclipse and phase-curve model",
+    "systematics_model": "the fitted systematics (flux / flux_corrected)",
+    "residual": "flux_corrected - astro_model",
+}
+#: The time keys of RESULT.lc.ecsv's meta (FITS time conventions: barycentric TDB days).
+TIME_META = {"TIMESYS": "TDB", "TIMEREF": "SOLARSYSTEM", "TIMEUNIT": "d", "MJDREF": 0.0}
 
 
 @dataclass(frozen=True)
@@ -76,6 +100,56 @@ class EpochResult:
     #: eclipse): its ``depth_*`` fields then hold the transit depth rp_rs^2 and
     #: ``t_ecl_*`` the mid-transit time, which ``to_dict`` names ``t_transit_*``.
     event_detail: dict[str, Any] = field(default_factory=dict)
+    #: The points BIC and AIC were computed on: frames, or a binned method's bins.
+    bic_n_points: int | None = None
+
+    def __post_init__(self) -> None:
+        # plain JSON types (tuples as lists, numpy scalars as numbers), so that a result
+        # read back from its RESULT.json equals the one that wrote it
+        for name in ("n_frames_dropped", "options", "diagnostics", "profile_detail",
+                     "event_detail", "mcmc"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, jsonable(value))
+
+    def _fields_shown(self) -> dict[str, Any]:
+        """The fields of the text and HTML summaries (:mod:`eclipsebench.fit.display`)."""
+        return {"method": self.method, "epoch": self.epoch, "system": self.system,
+                "profile": self.profile, "depth_ppm": self.depth_ppm,
+                "depth_err_ppm": self.depth_err_ppm, "error from": self.depth_err_method,
+                "beta_red": self.beta_red, "rms_ppm": self.rms_ppm, "chi2_red": self.chi2_red,
+                "BIC": f"{self.bic:.1f} on {bic_data(vars(self))}",
+                "phase / ramp": f"{self.phase} / {self.ramp}", "sampler": self.sampler}
+
+    def __repr__(self) -> str:
+        return text_repr(type(self).__name__, self._fields_shown())
+
+    def _repr_html_(self) -> str:
+        return html_repr(type(self).__name__, self._fields_shown())
+
+    def plot(self, kind: str = "lightcurve", *, bin_minutes: float = 5.0, bins: int = 30):
+        """A matplotlib Figure: ``"lightcurve"`` (flux and model over residuals, two axes)
+        or ``"corner"`` (the MCMC posterior).
+
+        Raises
+        ------
+        InputError
+            An unknown ``kind``; ``"corner"`` of a fit without MCMC; a result
+            read without its light curve.
+        """
+        from . import plot as figures  # matplotlib only when a figure is asked for
+
+        if kind == "corner":
+            if self.chain is None:
+                raise InputError("plot(kind='corner'): no posterior (the fit ran no MCMC; "
+                                 "sampler='mcmc')")
+            return figures.corner_figure(self.chain["names"], self.chain["samples"], bins=bins)
+        if kind != "lightcurve":
+            raise InputError(f"plot: kind {kind!r}: expected 'lightcurve' or 'corner'")
+        if not self.lightcurve:
+            raise InputError("plot: this result has no light curve (its RESULT.lc.ecsv was "
+                             "not found beside the RESULT.json)")
+        return figures.lightcurve_figure(self, bin_minutes=bin_minutes)
 
     def write_chain(self, path) -> None:
         """Write the posterior samples as ``.npz`` (``names``, ``samples``; depth as a fraction).
@@ -135,15 +209,145 @@ class EpochResult:
                 del out[key]
         if self.event_detail:
             out.update(jsonable(self.event_detail))
+            out["event_keys"] = list(self.event_detail)
+        out.update({"params": dict(self.params), "param_errors": dict(self.param_errors),
+                    "depth_err_own_ppm": dict(self.depth_err_own_ppm),
+                    "bic_n_points": self.bic_n_points, "eclipsebench_version": __version__})
+        out["bic_data"] = bic_data(out)
         return out
 
-    def lightcurve_table(self):
-        """The decorrelated light curve as an astropy Table (``RESULT.lc.ecsv`` columns)."""
-        t = Table({k: self.lightcurve[k] for k in
-                   ("time_bmjd", "flux_corrected", "astro_model", "residual")})
+    def lightcurve_table(self) -> Table:
+        """The decorrelated light curve as written to ``RESULT.lc.ecsv``.
+
+        Columns :data:`LIGHTCURVE_COLUMNS` (those the fit made), ``time_bmjd``
+        in days, the fluxes dimensionless (units of the star), each with its
+        description; meta: the time scale (``TIMESYS = 'TDB'``, barycentric),
+        the method, epoch, system, profile, depth and the software version.
+        """
+        t = Table()
+        for name, text in LIGHTCURVE_COLUMNS.items():
+            if name in self.lightcurve:
+                t[name] = np.asarray(self.lightcurve[name], dtype=float)
+                t[name].unit = "d" if name == "time_bmjd" else ""
+                t[name].description = text
         t.meta.update({"method": self.method, "epoch": self.epoch, "depth_ppm": self.depth_ppm,
-                       "phase": self.phase})
+                       "phase": self.phase, "system": self.system, "profile": self.profile,
+                       **TIME_META, "eclipsebench_version": __version__})
         return t
+
+    def to_table(self):
+        """The decorrelated light curve as an astropy ``QTable`` with units.
+
+        ``time`` is an astropy ``Time`` (``format="mjd"``, ``scale="tdb"``;
+        barycentric: BMJD_TDB), the flux columns are dimensionless Quantities
+        (units of the star): ``flux_corrected``, ``flux_err``, ``astro_model``,
+        ``systematics_model``, ``residual`` (those the fit made).
+        """
+        from astropy.table import QTable
+        from astropy.time import Time
+
+        plain = self.lightcurve_table()
+        table = QTable(meta=dict(plain.meta))
+        table["time"] = Time(np.asarray(plain["time_bmjd"]), format="mjd", scale="tdb")
+        table["time"].info.description = "mid-exposure time, barycentric (BMJD_TDB)"
+        for name in plain.colnames[1:]:
+            table[name] = plain[name].quantity
+            table[name].info.description = plain[name].description
+        return table
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], lightcurve: Mapping[str, Any] | None = None,
+                  chain: Mapping[str, Any] | None = None) -> EpochResult:
+        """The result whose :meth:`to_dict` is ``data`` (with its light curve and chain).
+
+        Raises
+        ------
+        KeyError
+            ``data`` lacks a key this version writes (``params``, say: written
+            by an older eclipsebench).
+        """
+        return cls(**_fields_from_dict(cls, data), lightcurve=dict(lightcurve or {}),
+                   chain=None if chain is None else dict(chain))
+
+
+#: Fields that to_dict writes as they are (the rest are rebuilt by _fields_from_dict).
+_NOT_FLAT = ("params", "param_errors", "mcmc", "depth_err_own_ppm", "event_detail",
+             "profile_detail", "lightcurve", "chain", "t_ecl_bmjd", "t_ecl_err_d",
+             "t_ecl_predicted_bmjd")
+
+
+def _fields_from_dict(cls, data: Mapping[str, Any]) -> dict[str, Any]:
+    """The constructor's keywords (except the light curve and chain) from a RESULT.json dict.
+
+    A null float (NaN, written as null by the command line) comes back as NaN.
+    """
+    out: dict[str, Any] = {}
+    for f in fields(cls):
+        if f.name in _NOT_FLAT or f.name not in data:
+            continue
+        value = data[f.name]
+        out[f.name] = float("nan") if value is None and f.type == "float" else value
+    event = {k: data[k] for k in data.get("event_keys", [])}
+    prefix = "t_transit" if event.get("event") == "transit" else "t_ecl"
+    out.update(t_ecl_bmjd=data[f"{prefix}_bmjd"], t_ecl_err_d=data[f"{prefix}_err_d"],
+               t_ecl_predicted_bmjd=data[f"{prefix}_predicted_bmjd"])
+    mcmc = {k[5:]: v for k, v in data.items() if k.startswith("mcmc_")}
+    out.update(params=dict(data["params"]), param_errors=dict(data["param_errors"]),
+               mcmc=mcmc or None, depth_err_own_ppm=dict(data["depth_err_own_ppm"]),
+               event_detail=event, profile_detail=dict(data.get("profile_detail", {})))
+    return out
+
+
+def lightcurve_errors(flux: np.ndarray, flux_err: np.ndarray,
+                      corrected: np.ndarray) -> dict[str, np.ndarray]:
+    """The systematics model ``flux / corrected`` and the decorrelated flux error.
+
+    Examples
+    --------
+    >>> out = lightcurve_errors(np.array([2.0, 4.0]), np.array([0.2, 0.2]), np.array([1.0, 1.0]))
+    >>> out["systematics_model"].tolist(), out["flux_err"].tolist()
+    ([2.0, 4.0], [0.1, 0.05])
+    """
+    flux = np.asarray(flux, dtype=float)
+    corrected = np.asarray(corrected, dtype=float)
+    if flux.shape != corrected.shape:   # a method that corrects other points than it fits
+        return {}
+    systematic = flux / corrected
+    return {"flux_err": np.asarray(flux_err, dtype=float) / systematic,
+            "systematics_model": systematic}
+
+
+def bic_data(result: Mapping[str, Any]) -> str:
+    """What a result's BIC and AIC were computed on: ``"14418 frames"`` or
+    ``"227 bins of 14525 frames"``.
+
+    Two BICs compare only when this (and the epoch) is the same: a binned
+    fit's likelihood is over fewer, less noisy points.
+
+    Examples
+    --------
+    >>> bic_data({"bic_n_points": 227, "n_frames": 14525})
+    '227 bins of 14525 frames'
+    """
+    n, frames = result.get("bic_n_points"), result.get("n_frames")
+    if n is None:
+        return "points not recorded"
+    if frames is None or n == frames:
+        return f"{n} frames"
+    return f"{n} bins of {frames} frames"
+
+
+def lightcurve_path(result_path: str | os.PathLike) -> Path:
+    """``RESULT.json`` -> ``RESULT.lc.ecsv`` (the decorrelated light curve beside it)."""
+    p = Path(result_path)
+    stem = p.name[:-len(p.suffix)] if p.suffix else p.name
+    return p.with_name(stem + ".lc.ecsv")
+
+
+def chain_path(result_path: str | os.PathLike) -> Path:
+    """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples)."""
+    lc = lightcurve_path(result_path)
+    return lc.with_name(lc.name.replace(".lc.ecsv", ".chain.npz"))
 
 
 def jsonable(obj: Any) -> Any:
@@ -156,3 +360,101 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, np.generic):
         return obj.item()
     return obj
+
+
+def read_result(path: str | os.PathLike):
+    """The result written to ``path`` (a RESULT.json), with its light curve and chain.
+
+    ``RESULT.lc.ecsv`` and ``RESULT.chain.npz`` beside it are read when present
+    (else the result has no light curve, or no chain). A joint fit's JSON gives
+    a ``JointResult``. Every field ``to_dict`` writes comes back equal.
+
+    Raises
+    ------
+    InputError
+        Naming the file: missing, unreadable, not JSON, not a result, a failed
+        reduction, or written by an older eclipsebench (no ``params``).
+    """
+    path = Path(path)
+    data = _read_json(path)
+    if data.get("joint"):
+        return _joint_from_dict(path, data)
+    lc_file, chain_file = lightcurve_path(path), chain_path(path)
+    lightcurve = _read_lightcurve(lc_file) if lc_file.is_file() else {}
+    chain = _read_chain(chain_file) if chain_file.is_file() else None
+    try:
+        return EpochResult.from_dict(data, lightcurve, chain)
+    except (KeyError, TypeError) as exc:
+        raise InputError(f"{path}: not a result of this eclipsebench ({__version__}): "
+                         f"{type(exc).__name__} {exc} (written by an older version? "
+                         "reduce again)") from None
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    """A result file's dict; InputError naming the file when it is not one."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such result file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read the result file "
+                         f"({type(exc).__name__}: {exc})") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: not a result file (invalid JSON: {exc.msg}, line "
+                         f"{exc.lineno})") from None
+    if not isinstance(data, dict) or "method" not in data or "depth_ppm" not in data:
+        raise InputError(f"{path}: not a result file (no 'method' and 'depth_ppm')")
+    if data.get("failed"):
+        raise InputError(f"{path}: a failed reduction, no result: {data.get('error')}")
+    return data
+
+
+def _read_lightcurve(path: Path) -> dict[str, np.ndarray]:
+    try:
+        table = Table.read(path, format="ascii.ecsv")
+    except Exception as exc:
+        raise InputError(f"{path}: not a readable light curve "
+                         f"({type(exc).__name__}: {exc})") from None
+    return {name: np.asarray(table[name], dtype=float) for name in table.colnames}
+
+
+def _read_chain(path: Path) -> dict[str, np.ndarray]:
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            return {"names": npz["names"], "samples": npz["samples"]}
+    except Exception as exc:
+        raise InputError(f"{path}: not a readable chain ({type(exc).__name__}: {exc})") \
+            from None
+
+
+def joint_extra_keys(result) -> dict[str, Any]:
+    """A joint result's keys beyond its fields: its BIC's points (every epoch's, summed;
+    bins for a binned method) and the software version."""
+    return {"bic_n_points": result.n_points,
+            "bic_data": f"{result.n_points} points of {len(result.epochs)} epochs",
+            "eclipsebench_version": __version__}
+
+
+def joint_fields_shown(result) -> dict[str, Any]:
+    """A joint result's fields for :func:`~eclipsebench.fit.display.text_repr` and
+    :func:`~eclipsebench.fit.display.html_repr`."""
+    return {"method": result.method, "epoch": ", ".join(str(e) for e in result.epochs),
+            "depth_ppm": result.depth_ppm, "depth_err_ppm": result.depth_err_ppm,
+            "combined_ppm": result.depth_combined_ppm, "beta_red": result.beta_red,
+            "chi2_red": result.chi2_red,
+            "BIC": f"{result.bic:.1f} on {result.n_points} points",
+            "phase": result.phase, "converged": result.converged}
+
+
+def _joint_from_dict(path: Path, data: Mapping[str, Any]):
+    from .reduce import JointResult  # the joint fit's module imports this one
+
+    try:
+        kw = {f.name: data[f.name] for f in fields(JointResult)}
+    except KeyError as exc:
+        raise InputError(f"{path}: not a joint result (no {exc})") from None
+    for name in ("epochs", "t_ecl_bmjd", "per_epoch"):
+        kw[name] = tuple(kw[name])
+    for name in ("beta_red", "chi2_red", "bic", "aic"):
+        kw[name] = math.nan if kw[name] is None else kw[name]
+    return JointResult(**kw)
