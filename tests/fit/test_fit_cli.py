@@ -31,7 +31,8 @@ def test_reduce_writes_result_and_lightcurve(tmp_path, table_file, polygain, cap
     assert saved["depth_ppm"] == printed["depth_ppm"]
     assert abs(saved["depth_ppm"] - kit.TRUE_DEPTH * 1e6) < 3 * saved["depth_err_ppm"]
     lc = Table.read(tmp_path / "res" / "r.lc.ecsv", format="ascii.ecsv")
-    assert lc.colnames == ["time_bmjd", "flux_corrected", "astro_model", "residual"]
+    assert lc.colnames == ["time_bmjd", "flux_corrected", "astro_model", "residual", "flux_err",
+                           "systematics_model"]   # the last two since issue 29
     assert len(lc) == saved["n_points"]
     assert (tmp_path / "lc.png").read_bytes()[:4] == b"\x89PNG"
 

@@ -266,3 +266,17 @@ def test_method_hooks_see_the_derivative_per_unit_depth():
     ecl = np.ones(100)
     ecl[40:60] = 0.0
     assert eclipse_frames(ecl) == 20
+
+
+def test_a_transit_result_read_back_equals_it(transit_table, polygain, tmp_path):
+    """Issue 29: read_result gives the transit back (its times written as t_transit_*)."""
+    from eclipsebench import read_result
+    from eclipsebench.io.atomic import write_json
+
+    res = reduce_epoch(transit_table, polygain.name, system=SYSTEM,
+                       options=ReduceSection(event="transit", phase="linear",
+                                             prayer_bead_shifts=0))
+    write_json(tmp_path / "t.json", res.to_dict())
+    back = read_result(tmp_path / "t.json")
+    assert back == res and back.event_detail["event"] == "transit"
+    assert back.t_ecl_bmjd == res.event_detail["t_transit_bmjd"]

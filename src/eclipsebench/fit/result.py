@@ -35,10 +35,10 @@ __all__ = ["EpochResult", "jsonable", "lightcurve_errors", "lightcurve_path", "c
 LIGHTCURVE_COLUMNS = {
     "time_bmjd": "mid-exposure time (or bin centre), BMJD_TDB",
     "flux_corrected": "decorrelated flux: flux / systematics_model",
-    "flux_err": "uncertainty of flux_corrected (the table's flux_err, decorrelated)",
     "astro_model": "the fitted eclipse and phase-curve model",
-    "systematics_model": "the fitted systematics (flux / flux_corrected)",
     "residual": "flux_corrected - astro_model",
+    "flux_err": "uncertainty of flux_corrected (the table's flux_err, decorrelated)",
+    "systematics_model": "the fitted systematics (flux / flux_corrected)",
 }
 #: The time keys of RESULT.lc.ecsv's meta (FITS time conventions: barycentric TDB days).
 TIME_META = {"TIMESYS": "TDB", "TIMEREF": "SOLARSYSTEM", "TIMEUNIT": "d", "MJDREF": 0.0}
