@@ -2,17 +2,24 @@
 
 Bars are drawn on stderr only when it is a terminal and the user did not ask
 for quiet; under CI, in pipes and with ``--quiet`` or ``--json`` they vanish.
+Off a terminal (a batch job, ``run ... > log 2>&1``) long work reports through
+:class:`ProgressLines` instead: a line when a stage is done and, at most once
+a minute (and at least once a minute while work is running), a line with the
+tasks done out of the total.
 """
 
 from __future__ import annotations
 
 import logging
 import sys
-from collections.abc import Iterable
+import threading
+import time
+from collections.abc import Callable, Iterable, Mapping
 
 from tqdm.auto import tqdm
 
-__all__ = ["configure", "progress", "get_logger"]
+__all__ = ["configure", "progress", "get_logger", "bars_enabled", "lines_enabled",
+           "ProgressLines"]
 
 _state = {"quiet": False}
 
@@ -30,6 +37,11 @@ def bars_enabled() -> bool:
     return not _state["quiet"] and sys.stderr.isatty()
 
 
+def lines_enabled() -> bool:
+    """Whether progress goes to log lines: not quiet and stderr not a terminal."""
+    return not _state["quiet"] and not sys.stderr.isatty()
+
+
 def progress(iterable: Iterable | None = None, *, desc: str = "", total: int | None = None,
              unit: str = "it", leave: bool = False):
     """A tqdm bar on stderr, disabled when quiet or when stderr is not a terminal."""
@@ -40,3 +52,73 @@ def progress(iterable: Iterable | None = None, *, desc: str = "", total: int | N
 def get_logger(name: str) -> logging.Logger:
     """A logger under the ``eclipsebench`` namespace."""
     return logging.getLogger(name if name.startswith("eclipsebench") else f"eclipsebench.{name}")
+
+
+class ProgressLines:
+    """Tasks done out of the total as log lines, for a log file instead of a bar.
+
+    ``update(stage)`` counts one task of ``stage`` done: the stage's last task
+    writes "``stage``: all N tasks done", and :meth:`tick` (called on every
+    update, and every few seconds by the heartbeat thread of :meth:`start`)
+    writes "progress: d / n tasks done (...)" when ``every_s`` has passed
+    since the last such line: at most one a minute, and at least one a minute
+    while the work runs. ``clock`` and ``emit`` are injectable for tests.
+
+    Examples
+    --------
+    >>> now = [0.0]
+    >>> lines = []
+    >>> p = ProgressLines({"reduce": 3}, emit=lines.append, clock=lambda: now[0])
+    >>> p.update("reduce"); now[0] = 61.0; p.update("reduce"); p.update("reduce")
+    >>> lines
+    ['3 tasks to run (reduce 3)', 'progress: 2 / 3 tasks done (reduce 2/3)', 'reduce: all 3 tasks done']
+    """
+
+    def __init__(self, totals: Mapping[str, int], *, emit: Callable[[str], None] | None = None,
+                 clock: Callable[[], float] = time.monotonic, every_s: float = 60.0):
+        self.totals = dict(totals)
+        self.done = dict.fromkeys(self.totals, 0)
+        self.emit = emit or get_logger("progress").info
+        self.clock = clock
+        self.every_s = float(every_s)
+        self.last = clock()
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        stages = ", ".join(f"{s} {n}" for s, n in self.totals.items())
+        self.emit(f"{sum(self.totals.values())} tasks to run ({stages})")
+
+    def update(self, stage: str) -> None:
+        """One task of ``stage`` done."""
+        with self._lock:
+            self.done[stage] += 1
+            if self.done[stage] == self.totals[stage]:
+                self.emit(f"{stage}: all {self.totals[stage]} tasks done")
+        self.tick()
+
+    def tick(self) -> None:
+        """Write the tasks done / total if ``every_s`` has passed since the last such line."""
+        with self._lock:
+            now = self.clock()
+            if now - self.last < self.every_s:
+                return
+            self.last = now
+            stages = ", ".join(f"{s} {self.done[s]}/{n}" for s, n in self.totals.items()
+                               if self.done[s] < n)
+            self.emit(f"progress: {sum(self.done.values())} / {sum(self.totals.values())} "
+                      f"tasks done ({stages})")
+
+    def start(self, poll_s: float = 5.0) -> ProgressLines:
+        """Tick every ``poll_s`` seconds in a daemon thread (a line a minute during long tasks)."""
+        def beat():
+            while not self._stop.wait(poll_s):
+                self.tick()
+        self._thread = threading.Thread(target=beat, name="eclipsebench-progress", daemon=True)
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        """Stop the heartbeat."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()

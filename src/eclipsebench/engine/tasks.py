@@ -52,7 +52,7 @@ from threadpoolctl import threadpool_limits
 
 from ..errors import InputError
 from ..io.atomic import write_json
-from ..progress import get_logger, progress
+from ..progress import ProgressLines, get_logger, lines_enabled, progress
 
 __all__ = ["Task", "TaskTiming", "RunReport", "TaskFailed", "run_tasks", "stamp_path",
            "is_done"]
@@ -286,19 +286,26 @@ def _call(func: Callable[..., object], args: tuple) -> tuple[float, float, str]:
 
 
 class _Bars:
+    """A bar per stage on a terminal; off one, :class:`ProgressLines` in the log."""
+
     def __init__(self, tasks: Iterable[Task]):
         totals: dict[str, int] = {}
         for t in tasks:
             totals[t.stage] = totals.get(t.stage, 0) + 1
         self.bars = {s: progress(total=n, desc=s, unit="task", leave=True)
                      for s, n in totals.items()}
+        self.lines = ProgressLines(totals).start() if lines_enabled() else None
 
     def update(self, stage: str) -> None:
         self.bars[stage].update(1)
+        if self.lines is not None:
+            self.lines.update(stage)
 
     def close(self) -> None:
         for b in self.bars.values():
             b.close()
+        if self.lines is not None:
+            self.lines.close()
 
 
 def _worker_env() -> dict[str, str]:

@@ -32,6 +32,7 @@ from scipy.optimize import least_squares
 
 from ..decorrelate.base import Systematics
 from ..errors import InputError
+from ..progress import progress
 from .astro_model import AstroModel
 
 __all__ = ["FitResult", "fit_leastsq", "information_criteria", "rms_vs_bin_size",
@@ -380,7 +381,7 @@ def prayer_bead(systematics: Systematics, astro_model: AstroModel, fit: FitResul
         shifts = (np.arange(1, n_shifts + 1) * n) // (n_shifts + 1)
     resid = systematics.data.flux - fit.model
     rows = [fit.theta]
-    for s in shifts:
+    for s in progress(shifts, desc=f"prayer bead ({systematics.name})", unit="shift"):
         shifted = systematics.with_flux(fit.model + np.roll(resid, int(s)))
         problem = _Problem(shifted, astro_model)
         rows.append(_solve(problem, fit.theta, max_nfev).x)

@@ -36,6 +36,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from ..decorrelate.base import Systematics
+from ..progress import progress
 from .astro_model import AstroModel
 
 __all__ = ["McmcResult", "run_mcmc", "make_moves"]
@@ -221,12 +222,16 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     converged = False
     # One BLAS thread: the batched likelihoods are small matrix products, which
     # threads slow down on a shared machine and would sum in a thread-dependent order.
-    with threadpool_limits(limits=1, user_api="blas"):
+    # A bar on a terminal (quiet and off a terminal: none); it may stop early, at convergence.
+    bar = progress(total=int(max_steps), desc=f"MCMC ({systematics.name})", unit="step")
+    with threadpool_limits(limits=1, user_api="blas"), bar:
         while n_steps < max_steps:
             steps = min(block_steps, max_steps - n_steps)
             state = sampler.run_mcmc(state, steps, progress=False)
             n_steps += steps
+            bar.update(steps)
             tau, burn_in, n_over_tau = _autocorrelation(sampler.get_chain())
+            bar.set_postfix_str(f"N/tau {n_over_tau:.0f} of {tau_factor:g}", refresh=False)
             if n_over_tau > tau_factor:
                 converged = True
                 break
