@@ -284,17 +284,20 @@ def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro,
     nfev = sol.nfev
     if has_hyperparameters(systematics):
         # coordinate ascent: hyperparameters for the fitted astro, then the joint fit again
-        for _ in range(max_alternations):
-            previous = sol.x
-            changed = systematics.optimise_hyperparameters(
-                astro_model(previous[:problem.n_astro]))
-            if changed is None:   # the method kept its settings: the fit stands
-                break
-            sol = _solve(problem, previous, max_nfev)
-            nfev += sol.nfev
-            step = np.abs(sol.x[:2] - previous[:2])
-            if step[0] < 1e-7 and step[1] < 1e-6:  # 0.1 ppm and 0.09 s
-                break
+        with progress(total=max_alternations, desc=f"hyperparameters ({systematics.name})",
+                      unit="round") as bar:
+            for _ in range(max_alternations):
+                previous = sol.x
+                changed = systematics.optimise_hyperparameters(
+                    astro_model(previous[:problem.n_astro]))
+                if changed is None:   # the method kept its settings: the fit stands
+                    break
+                sol = _solve(problem, previous, max_nfev)
+                nfev += sol.nfev
+                bar.update(1)
+                step = np.abs(sol.x[:2] - previous[:2])
+                if step[0] < 1e-7 and step[1] < 1e-6:  # 0.1 ppm and 0.09 s
+                    break
     if not np.all(np.isfinite(sol.fun)):
         raise InputError(f"method '{systematics.name}': the model is not finite at the "
                          "least-squares solution")
