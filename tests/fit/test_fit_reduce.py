@@ -65,7 +65,8 @@ def test_recovers_depth_within_its_error(kit, polygain, xo3_epoch):
     assert res.depth_err_ppm == pytest.approx(max(jac_beta, res.depth_err_prayer_bead_ppm))
     assert res.converged
     lc = res.lightcurve
-    assert set(lc) == {"time_bmjd", "flux_corrected", "astro_model", "residual"}
+    assert set(lc) == {"time_bmjd", "flux_corrected", "astro_model", "residual", "flux_err",
+                       "systematics_model"}
     # decorrelated: the gain is gone, only the 1e-3 white noise remains
     assert np.std(lc["residual"]) == pytest.approx(1e-3, rel=0.1)
     assert np.allclose(lc["residual"], lc["flux_corrected"] - lc["astro_model"])
