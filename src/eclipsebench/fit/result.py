@@ -49,7 +49,12 @@ class EpochResult:
     """The eclipse measured in one epoch by one method.
 
     ``to_dict()`` gives the JSON-able summary (``docs/fitting.md`` lists the
-    keys); ``lightcurve`` holds the decorrelated light curve.
+    keys); ``lightcurve`` holds the decorrelated light curve. In a notebook
+    (``docs/api.md``, "Results in a notebook", runs as a doctest): ``repr``
+    is two lines and ``_repr_html_`` a small table (depth and error, method,
+    epoch, system, profile, diagnostics); :meth:`plot` returns a Figure,
+    :meth:`to_table` a ``QTable`` with units and a TDB ``Time``;
+    :func:`read_result` reads a written result back.
     """
 
     method: str
