@@ -38,7 +38,7 @@ LIGHTCURVE_COLUMNS = {
     "astro_model": "the fitted eclipse and phase-curve model",
     "residual": "flux_corrected - astro_model",
     "flux_err": "uncertainty of flux_corrected (the table's flux_err, decorrelated)",
-    "systematics_model": "the fitted systematics (flux / flux_corrected)",
+    "systematics_model": "the fitted systematics, flux / flux_corrected over its median",
 }
 #: The time keys of RESULT.lc.ecsv's meta (FITS time conventions: barycentric TDB days).
 TIME_META = {"TIMESYS": "TDB", "TIMEREF": "SOLARSYSTEM", "TIMEUNIT": "d", "MJDREF": 0.0}
@@ -305,13 +305,18 @@ def _fields_from_dict(cls, data: Mapping[str, Any]) -> dict[str, Any]:
 
 def lightcurve_errors(flux: np.ndarray, flux_err: np.ndarray,
                       corrected: np.ndarray) -> dict[str, np.ndarray]:
-    """The systematics model ``flux / corrected`` and the decorrelated flux error.
+    """The decorrelated flux error and the relative systematics model.
+
+    ``flux / corrected`` is the systematics times the star's flux (electrons
+    for this package's tables); ``flux_err`` divided by it is the error of
+    the decorrelated (relative) flux, and divided by its median it is the
+    systematics relative to their median (dimensionless).
 
     Examples
     --------
     >>> out = lightcurve_errors(np.array([2.0, 4.0]), np.array([0.2, 0.2]), np.array([1.0, 1.0]))
-    >>> out["systematics_model"].tolist(), out["flux_err"].tolist()
-    ([2.0, 4.0], [0.1, 0.05])
+    >>> out["flux_err"].tolist(), out["systematics_model"].tolist()
+    ([0.1, 0.05], [0.6666666666666666, 1.3333333333333333])
     """
     flux = np.asarray(flux, dtype=float)
     corrected = np.asarray(corrected, dtype=float)
@@ -319,7 +324,7 @@ def lightcurve_errors(flux: np.ndarray, flux_err: np.ndarray,
         return {}
     systematic = flux / corrected
     return {"flux_err": np.asarray(flux_err, dtype=float) / systematic,
-            "systematics_model": systematic}
+            "systematics_model": systematic / np.median(systematic)}
 
 
 def bic_data(result: Mapping[str, Any]) -> str:
