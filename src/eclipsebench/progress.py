@@ -58,7 +58,7 @@ class ProgressLines:
     """Tasks done out of the total as log lines, for a log file instead of a bar.
 
     ``update(stage)`` counts one task of ``stage`` done: the stage's last task
-    writes "``stage``: all N tasks done", and :meth:`tick` (called on every
+    writes "``stage``: N/N tasks done", and :meth:`tick` (called on every
     update, and every few seconds by the heartbeat thread of :meth:`start`)
     writes "progress: d / n tasks done (...)" when ``every_s`` has passed
     since the last such line: at most one a minute, and at least one a minute
@@ -71,7 +71,7 @@ class ProgressLines:
     >>> p = ProgressLines({"reduce": 3}, emit=lines.append, clock=lambda: now[0])
     >>> p.update("reduce"); now[0] = 61.0; p.update("reduce"); p.update("reduce")
     >>> lines
-    ['3 tasks to run (reduce 3)', 'progress: 2 / 3 tasks done (reduce 2/3)', 'reduce: all 3 tasks done']
+    ['3 tasks to run (reduce 3)', 'progress: 2 / 3 tasks done (reduce 2/3)', 'reduce: 3/3 tasks done']
     """
 
     def __init__(self, totals: Mapping[str, int], *, emit: Callable[[str], None] | None = None,
@@ -93,7 +93,7 @@ class ProgressLines:
         with self._lock:
             self.done[stage] += 1
             if self.done[stage] == self.totals[stage]:
-                self.emit(f"{stage}: all {self.totals[stage]} tasks done")
+                self.emit(f"{stage}: {self.totals[stage]}/{self.totals[stage]} tasks done")
         self.tick()
 
     def tick(self) -> None:

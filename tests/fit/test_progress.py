@@ -60,7 +60,7 @@ def test_progress_lines_are_rate_limited_to_one_a_minute():
     for t in (1.0, 30.0):                       # two tasks in the first minute: no line yet
         now[0] = t
         p.update("photometry")
-    assert lines[1:] == ["photometry: all 2 tasks done"]   # a line per stage
+    assert lines[1:] == ["photometry: 2/2 tasks done"]   # a line per stage
     now[0] = 59.9
     p.tick()
     assert len(lines) == 2
@@ -104,4 +104,4 @@ def test_a_run_off_a_terminal_logs_its_stages(tmp_path, caplog, monkeypatch):
     with caplog.at_level(logging.INFO, logger="eclipsebench"):
         run_tasks(tasks, workers=1)
     lines = [r.getMessage() for r in caplog.records if r.name == "eclipsebench.progress"]
-    assert lines == ["2 tasks to run (photometry 2)", "photometry: all 2 tasks done"]
+    assert lines == ["2 tasks to run (photometry 2)", "photometry: 2/2 tasks done"]
