@@ -74,3 +74,16 @@ def test_the_command_line_text_says_what_bic_was_computed_on(tmp_path, xo3_epoch
     line = next(x for x in text.splitlines() if x.startswith("BIC / AIC"))
     n = json.loads((tmp_path / "r.json").read_text())["bic_n_points"]
     assert f"on {n} frames: comparable only with fits of the same points" in line
+
+
+def test_an_old_or_damaged_result_is_one_line_naming_the_file(tmp_path, polygain, xo3_epoch):
+    res = reduce_epoch(xo3_epoch["table"](seed=7), polygain.name,
+                       options=ReduceSection(phase="flat", prayer_bead_shifts=0))
+    old = {k: v for k, v in res.to_dict().items() if k not in ("params", "param_errors")}
+    write_json(tmp_path / "old.json", old)
+    with pytest.raises(InputError, match=r"old.json: not a result of this eclipsebench .*older"):
+        read_result(tmp_path / "old.json")
+    _write_like_the_run(res, tmp_path / "cut.json")
+    (tmp_path / "cut.lc.ecsv").write_text("# %ECSV 1.0\n# ---\n# datatype: [oops\n")
+    with pytest.raises(InputError, match="cut.lc.ecsv: not a readable light curve"):
+        read_result(tmp_path / "cut.json")

@@ -348,14 +348,26 @@ def bic_data(result: Mapping[str, Any]) -> str:
 
 
 def lightcurve_path(result_path: str | os.PathLike) -> Path:
-    """``RESULT.json`` -> ``RESULT.lc.ecsv`` (the decorrelated light curve beside it)."""
+    """``RESULT.json`` -> ``RESULT.lc.ecsv`` (the decorrelated light curve beside it).
+
+    Examples
+    --------
+    >>> lightcurve_path("results/pld/epoch_01.json").as_posix()
+    'results/pld/epoch_01.lc.ecsv'
+    """
     p = Path(result_path)
     stem = p.name[:-len(p.suffix)] if p.suffix else p.name
     return p.with_name(stem + ".lc.ecsv")
 
 
 def chain_path(result_path: str | os.PathLike) -> Path:
-    """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples)."""
+    """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples).
+
+    Examples
+    --------
+    >>> chain_path("r.json").as_posix()
+    'r.chain.npz'
+    """
     lc = lightcurve_path(result_path)
     return lc.with_name(lc.name.replace(".lc.ecsv", ".chain.npz"))
 
