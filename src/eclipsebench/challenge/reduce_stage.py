@@ -14,6 +14,7 @@ import json
 from functools import partial
 from pathlib import Path
 
+from .. import __version__
 from ..astro.catalogue import system_for
 from ..config import Config
 from ..engine.layout import Layout
@@ -53,7 +54,8 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int
     except InputError as exc:
         log.warning("%s epoch %d: %s", method, epoch, exc)
         write_json(out, {"method": method, "epoch": epoch, "failed": True, "error": str(exc),
-                         "depth_ppm": None, "depth_err_ppm": None, "profile": profile})
+                         "depth_ppm": None, "depth_err_ppm": None, "profile": profile,
+                         "eclipsebench_version": __version__})
         return
     with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
         result.lightcurve_table().write(tmp, format="ascii.ecsv")
