@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from astropy.table import Table
+from astropy.time import Time
 
 from .astro.catalogue import as_system, system_for
 from .challenge.runner import run_challenge as _run_challenge
@@ -26,8 +27,10 @@ from .decorrelate.base import MethodOptions, Systematics, available_methods, get
 from .engine import RunReport
 from .errors import InputError
 from .fit.reduce import EpochResult, reduce_epoch
+from .fit.result import read_result as _read_result
 from .fit.target import names_a_system
 from .photometry.pipeline import photometry_tables, replace_options
+from .photometry.table import read_photometry as _read_photometry
 from .photometry.table import write_photometry
 from .simulation.challenge import ChallengeResult, simulate_challenge
 from .stats.depth_table import check_depth_table, read_depth_table
@@ -369,9 +372,7 @@ def read_result(path: str | os.PathLike):
     ...
     eclipsebench.errors.InputError: no/such/result.json: no such result file
     """
-    from .fit.result import read_result as read
-
-    return read(path)
+    return _read_result(path)
 
 
 def read_photometry(path: str | os.PathLike) -> Table:
@@ -396,11 +397,7 @@ def read_photometry(path: str | os.PathLike) -> Table:
     ...
     eclipsebench.errors.DataError: no/such/epoch_01.fits: no such photometry table
     """
-    from astropy.time import Time
-
-    from .photometry.table import read_photometry as read
-
-    table = read(path)
+    table = _read_photometry(path)
     table.add_column(Time(table["time_bmjd"], format="mjd", scale="tdb"), name="time", index=0)
     table["time"].info.description = "mid-exposure time, barycentric (BMJD_TDB)"
     return table

@@ -195,7 +195,7 @@ ZERO_ERROR_PPM = 1e-6
 
 def lightcurve_path(result_path: str | Path) -> Path:
     """``RESULT.json`` -> ``RESULT.lc.ecsv`` (:func:`eclipsebench.fit.result.lightcurve_path`)."""
-    from ..fit.result import lightcurve_path as path_of
+    from ..fit.result import lightcurve_path as path_of  # the result's module (astropy)
 
     return path_of(result_path)
 
@@ -262,7 +262,7 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
 
 def chain_file(result_path: str | Path) -> Path:
     """``RESULT.json`` -> ``RESULT.chain.npz`` (:func:`eclipsebench.fit.result.chain_path`)."""
-    from ..fit.result import chain_path
+    from ..fit.result import chain_path  # the result's module (astropy)
 
     return chain_path(result_path)
 

@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from astropy.table import Table
+from astropy.table import QTable, Table
+from astropy.time import Time
 
 from .. import __version__
 from ..errors import InputError
@@ -248,9 +249,6 @@ class EpochResult:
         (units of the star): ``flux_corrected``, ``flux_err``, ``astro_model``,
         ``systematics_model``, ``residual`` (those the fit made).
         """
-        from astropy.table import QTable
-        from astropy.time import Time
-
         plain = self.lightcurve_table()
         table = QTable(meta=dict(plain.meta))
         table["time"] = Time(np.asarray(plain["time_bmjd"]), format="mjd", scale="tdb")
