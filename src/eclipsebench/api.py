@@ -35,6 +35,7 @@ from .photometry.table import write_photometry
 from .simulation.challenge import ChallengeResult, simulate_challenge
 from .stats.depth_table import check_depth_table, read_depth_table
 from .stats.summary import summarize
+from .trust.result import TrustResult
 
 __all__ = ["load_config", "methods", "method_class", "measure", "reduce", "simulate",
            "run_challenge", "score", "trust", "read_result", "read_photometry"]
@@ -279,7 +280,7 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
           twins: int = 50, methods: Sequence[str] | None = None, depth_ppm: float | None = None,
           seed: int = 0, config: Config | str | os.PathLike | None = None,
           options: Mapping[str, Mapping[str, Any]] | None = None, pmap: str | None = None,
-          workers: int | None = None, **reduce_options: Any) -> dict:
+          workers: int | None = None, **reduce_options: Any) -> TrustResult:
     """How far to trust the depth of one real observation: its digital twins, every method.
 
     Simulates ``twins`` copies of the observation (its times, pointing track,
@@ -318,8 +319,9 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
 
     Returns
     -------
-    dict
-        The content of ``trust.json``: ``methods`` (per method ``bias_ppm``,
+    TrustResult
+        The content of ``trust.json`` (a dict; ``to_table()`` and a notebook
+        summary; :func:`eclipsebench.trust.result.read_trust` reads it back): ``methods`` (per method ``bias_ppm``,
         ``sd_ppm``, ``rmse_ppm``, ``mean_err_ppm``, ``z_rms``, coverage,
         ``depth_ppm``, ``honest_err_ppm``), ``skipped``, ``recommended``,
         ``n_twins``, ``twin_depth_ppm``.

@@ -21,6 +21,7 @@ from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table, write_photometry
 from eclipsebench.simulation.render import FrameModel, tick_moments
 from eclipsebench.trust.observation import observation_from_table
+from eclipsebench.trust.result import read_trust
 from eclipsebench.trust.score import observation_statistics
 from eclipsebench.trust.twin import _motion, make_recipe, twin_table
 
@@ -102,6 +103,10 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     assert summary["recommended"] in (None, "poly2")
     s = summary["methods"]["poly2"]
     assert s["honest_err_ppm"] >= s["depth_err_ppm"] and 0 <= s["coverage_1sigma"] <= 1
+    answer = read_trust(one)           # the notebook face of trust.json
+    assert answer == summary and "TrustResult" in repr(answer)
+    assert len(answer._repr_html_()) < 2048
+    assert answer.to_table()["rmse_ppm"].unit.to("") == pytest.approx(1e-6)
     # an interrupted run: a twin, a reduction and the answer missing; the rerun redoes them
     (one / "twins" / "twin_004.fits").unlink()
     (one / "twins" / "poly2" / "twin_007.json").unlink()

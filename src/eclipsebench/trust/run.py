@@ -38,6 +38,7 @@ from ..seeding import spawn_ints
 from .layout import TrustLayout
 from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
 from .report import score_task
+from .result import TrustResult, read_trust
 from .twin import twin_table
 
 __all__ = ["TrustSettings", "make_settings", "run_trust", "MIN_TWINS", "MAX_TWINS"]
@@ -212,8 +213,8 @@ def usable_methods(settings: TrustSettings, layout: TrustLayout) -> tuple[list[s
 
 
 def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
-              scheduler: str | None = None) -> tuple[dict, RunReport]:
-    """Run (or resume) a trust run in ``root``; return ``trust.json``'s content and what ran."""
+              scheduler: str | None = None) -> tuple[TrustResult, RunReport]:
+    """Run (or resume) a trust run in ``root``; return its answer and what ran."""
     layout = TrustLayout(Path(root))
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
@@ -226,7 +227,7 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
         tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable)
         report = run_tasks(tasks, workers=workers, scheduler=scheduler)
         report.ran = first.ran + report.ran
-        return json.loads(layout.result.read_text()), report
+        return read_trust(layout.result), report
 
 
 def make_settings(table: str | Path, *, reduce: ReduceSection, system: Any = None,
