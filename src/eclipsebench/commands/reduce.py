@@ -11,14 +11,14 @@ from ..astro.catalogue import PlanetSystem, system_for
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
-from ..fit.astro_model import (
+from ..fit.names import (
     ECLIPSE_SHAPES,
     EVENTS,
     PHASE_CURVE_MODELS,
     PHASE_MODELS,
     RAMP_MODELS,
+    TIME_FORMATS,
 )
-from ..fit.data import TIME_FORMATS
 from ..fit.target import system_of_table
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path

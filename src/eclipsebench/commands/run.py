@@ -7,7 +7,6 @@ from pathlib import Path
 
 from ..config import load_config
 from ..io.paths import check_output_path
-from ..report.tables import format_text_table
 from .options import (
     add_config_options,
     add_planet_options,
@@ -87,6 +86,8 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def format_text(result: dict) -> str:
+    from ..report.tables import format_text_table  # astropy: not at CLI start
+
     profiles = result.get("profiles") or {result.get("profile", "controlled"): result}
     lines = []
     for name, stats in profiles.items():
