@@ -376,6 +376,14 @@ def _method_scatter(fig: Figure, ax, names: Sequence[str], x, y, values: str) ->
                    title_fontsize=7)
 
 
+def _log_when_spread(ax, r: np.ndarray) -> bool:
+    """A log r axis when the reliabilities span more than a decade (a few epochs' outliers)."""
+    spread = r.size >= 2 and r.min() > 0 and r.max() / r.min() > 10.0
+    if spread:
+        ax.set_xscale("log")
+    return bool(spread)
+
+
 def repeatability_vs_reliability(summary: Mapping, sigma_phot_ppm: float, *,
                                  title: str = "Repeatability vs reliability") -> Figure:
     """R against r with ``R = sqrt(2) sigma_phot / r`` and the fit ``R = k / r`` (Figs. 12-13)."""
@@ -384,13 +392,15 @@ def repeatability_vs_reliability(summary: Mapping, sigma_phot_ppm: float, *,
     ax = fig.add_subplot()
     _method_scatter(fig, ax, names, r, R, "r = {x:.2f}, R = {y:.0f} ppm")
     if r.size:
-        grid = np.linspace(0.8 * r.min(), min(1.2 * r.max(), 1.5), 200)
+        log = _log_when_spread(ax, r)
+        grid = (np.geomspace(0.8 * r.min(), 1.2 * r.max(), 200) if log
+                else np.linspace(0.8 * r.min(), min(1.2 * r.max(), 1.5), 200))
         ax.plot(grid, math.sqrt(2) * sigma_phot_ppm / grid, "-", color="k",
                 label=f"R = √2 σ_phot / r = {math.sqrt(2) * sigma_phot_ppm:.1f} / r")
         k = fit_inverse(r, R)
         ax.plot(grid, k / grid, "--", color="tab:red", label=f"fit R = {k:.1f} / r")
         ax.legend(handles=ax.get_lines()[len(names):], fontsize=7)
-    ax.set_xlabel("reliability r")
+    ax.set_xlabel("reliability r" + (" (log scale)" if ax.get_xscale() == "log" else ""))
     ax.set_ylabel("repeatability R (ppm)")
     ax.set_title(title)
     return fig
@@ -404,13 +414,16 @@ def accuracy_vs_reliability(summary: Mapping, *, title: str = "Accuracy vs relia
     _method_scatter(fig, ax, names, r, a, "r = {x:.2f}, a = {y:.2f}")
     if r.size:
         top = float(max(r.max(), a.max()) * 1.15)
-        ax.plot([0, top], [0, top], ":", color="0.5", label="a = r")
+        grid = (np.geomspace(0.8 * r.min(), top, 200) if _log_when_spread(ax, r)
+                else np.linspace(0.0, top, 200))
+        ax.plot(grid, grid, ":", color="0.5", label="a = r")
         if r.size >= 2 and np.ptp(r) > 0:
             slope, icpt = fit_line(r, a)
-            ax.plot([0, top], [icpt, slope * top + icpt], "--", color="tab:red",
+            ax.plot(grid, slope * grid + icpt, "--", color="tab:red",
                     label=f"fit a = {slope:.2f} r {icpt:+.2f}")
+        ax.set_ylim(0.0, 1.3 * float(a.max()) if a.max() > 0 else 1.0)  # the points, not a = r
         ax.legend(handles=ax.get_lines()[len(names):], fontsize=7)
-    ax.set_xlabel("reliability r")
+    ax.set_xlabel("reliability r" + (" (log scale)" if ax.get_xscale() == "log" else ""))
     ax.set_ylabel("accuracy a")
     ax.set_title(title)
     return fig
@@ -466,7 +479,7 @@ def coverage_per_method(summary: Mapping, *, title: str = "Coverage of the truth
     ax.set_xlim(-0.6, max(len(rows), 1) - 0.4)
     ax.set_ylim(0.0, 1.04)
     ax.set_ylabel("fraction of epochs covering the truth")
-    ax.set_title(title + (f" (N = {n[0]} epochs)" if len(n) == 1 else ""))
+    ax.set_title(title + (f", N = {n[0]} epochs" if len(n) == 1 else ""))
     ax.legend(fontsize=7, loc="lower left")
     return fig
 
