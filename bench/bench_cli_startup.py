@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import resource
 import statistics
 import subprocess
 import sys
@@ -80,16 +81,24 @@ def _cases(folder: Path) -> list[tuple[str, list[str]]]:
     ]
 
 
-def _time(argv: list[str], env: dict[str, str], repeat: int) -> list[float]:
+def _cpu() -> float:
+    """CPU seconds (user + system) of the finished children so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _time(argv: list[str], env: dict[str, str], repeat: int) -> tuple[list[float], list[float]]:
+    """Wall and CPU seconds of ``repeat`` runs after one warm-up."""
     warm = subprocess.run(argv, env=env, capture_output=True, check=False)  # + bytecode
     if warm.returncode not in (0, 2):  # 2: the misspelt table's one-line error
         raise SystemExit(f"{argv}: exit {warm.returncode}: {warm.stderr.decode()[-500:]}")
-    out = []
+    wall, cpu = [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        c0, t0 = _cpu(), time.perf_counter()
         subprocess.run(argv, env=env, capture_output=True, check=False)
-        out.append(time.perf_counter() - t0)
-    return out
+        wall.append(time.perf_counter() - t0)
+        cpu.append(_cpu() - c0)
+    return wall, cpu
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -103,15 +112,17 @@ def main(argv: list[str] | None = None) -> int:
           f"cores {os.cpu_count()}, load average {os.getloadavg()[0]:.2f}, "
           f"eclipsebench {eclipsebench.__version__} from {SRC}")
     print(f"# median of {args.repeat} runs after one warm-up, wall seconds from process "
-          "start to exit")
-    print(f"{'command':<66} {'median s':>9} {'min s':>7} {'x pass':>7}")
+          "start to exit; cpu: the median user + system seconds (less sensitive to a loaded "
+          "machine)")
+    print(f"{'command':<66} {'median s':>9} {'min s':>7} {'x pass':>7} {'cpu s':>6}")
     with tempfile.TemporaryDirectory() as tmp:
         base = None
         for label, command in _cases(Path(tmp)):
-            times = _time(command, env, args.repeat)
+            times, cpu = _time(command, env, args.repeat)
             median = statistics.median(times)
             base = base if base is not None else median
-            print(f"{label:<66} {median:9.3f} {min(times):7.3f} {median / base:7.1f}")
+            print(f"{label:<66} {median:9.3f} {min(times):7.3f} {median / base:7.1f} "
+                  f"{statistics.median(cpu):6.3f}")
     return 0
 
 
