@@ -49,7 +49,7 @@ def test_building_the_parser_imports_nothing_heavy():
 
 @pytest.mark.parametrize("argv", [["--version"], ["--help"], ["reduce", "--help"],
                                   ["run", "--help"], ["lightcurve", "--help"],
-                                  ["photon-limit", "--help"]])
+                                  ["photon-limit", "--help"], ["trust", "--help"]])
 def test_version_and_help_import_nothing_heavy(argv):
     body = ("import contextlib, io\nfrom eclipsebench.cli import main\n"
             "with contextlib.redirect_stdout(io.StringIO()):\n"
