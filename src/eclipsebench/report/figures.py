@@ -339,6 +339,7 @@ def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttes
                     color="tab:red" if p < 0.05 else "k")
         ax.set_title(f"{a} - {b}", fontsize=8)
         ax.tick_params(labelsize=6)
+        ax.ticklabel_format(axis="x", useOffset=False)  # no "+1.832e3" under a small panel
     return _finish_grid(fig, axes, len(pairs), title, "mean depth (ppm)", "difference (ppm)")
 
 
