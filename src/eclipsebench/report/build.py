@@ -247,7 +247,7 @@ def _symbols_html() -> str:
 
 
 def _with_units(head: list[str]) -> list[str]:
-    """Table headings with their unit: ``D_mean (ppm)``, ``R ours (ppm)``."""
+    """Table headings with their unit: ``D_mean (ppm)``."""
     units = [_UNITS.get(h, _UNITS.get(h.split(" ")[0], "")) for h in head]
     return [f"{h} ({u})" if u else h for h, u in zip(head, units, strict=True)]
 
@@ -277,7 +277,7 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
         "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #bbb;"
         "padding:2px 6px;text-align:right}td:first-child{text-align:left}"
         "figure{margin:1.5em 0}img{max-width:100%;border:1px solid #ddd}"
-        "table.symbols td{text-align:left}</style>",
+        "table.symbols td,table.symbols th{text-align:left}</style>",
         "</head>", "<body>", f"<h1>{esc(title)}</h1>",
     ]
     if notes:
@@ -294,8 +294,8 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
         parts += [f"<p>{esc(line)}</p>" for line in anova_lines(stats)]
         if summary.get("truth_ppm") is not None:
             rows = comparison_rows(stats, TABLE4)
-            head = ["method", "paper"] + _with_units([f"{k} {w}" for k in COMPARED_KEYS
-                                                      for w in ("ours", "Table 4")])
+            head = ["method", "paper"] + [f"{k} {w}" for k in COMPARED_KEYS
+                                          for w in ("ours", "Table 4")]
             parts += [f"<p>The {esc(name)} profile beside the paper's Table 4 (the simulated "
                       "2015 challenge; for comparison only).</p>", _html_table([head, *rows])]
     parts.append("<p>Tables: " + ", ".join(f'<a href="{esc(_rel(p, root))}">{esc(p.name)}</a>'
