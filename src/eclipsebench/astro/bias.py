@@ -16,11 +16,9 @@ import numpy as np
 
 from .eclipse import EclipseShape
 from .phase_curves import design_matrix
+from .times import EPOCH10_START_BMJD
 
 __all__ = ["EPOCH10_START_BMJD", "epoch_times", "phase_model_bias"]
-
-EPOCH10_START_BMJD = 2234.8406 + 2455000.0 - 2400000.5
-"""Start of the paper's simulated epoch 10 (Table 2: JD - 2455000 = 2234.8406) as BMJD."""
 
 
 def epoch_times(start_bmjd: float = EPOCH10_START_BMJD, hours: float = 8.8,

@@ -32,10 +32,13 @@ from dataclasses import dataclass, field, fields
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
-from .orbit import BMJD_OFFSET, OrbitClock
+from .times import BMJD_OFFSET
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .orbit import OrbitClock
 
 __all__ = ["PlanetSystem", "get_system", "list_systems", "load_catalogue", "system_from_mapping",
            "planet_table_from_pairs", "system_from_pairs", "system_for", "as_system",
@@ -143,6 +146,8 @@ class PlanetSystem:
     @cached_property
     def clock(self) -> OrbitClock:
         """The orbit's geometric clock (built once per system)."""
+        from .orbit import OrbitClock  # numpy, scipy: the catalogue alone stays light (CLI)
+
         return OrbitClock(self)
 
     def to_dict(self) -> dict[str, Any]:

@@ -33,6 +33,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from .times import BMJD_OFFSET
+
 if TYPE_CHECKING:  # pragma: no cover
     from .catalogue import PlanetSystem
 
@@ -48,8 +50,6 @@ __all__ = [
     "OrbitClock",
 ]
 
-BMJD_OFFSET = 2400000.5
-"""BMJD = BJD - 2400000.5."""
 
 _C_KM_S = 299792.458
 _RSUN_KM = 695700.0  # IAU 2015 nominal solar radius

@@ -8,20 +8,15 @@ epoch of the built-in challenge (:func:`eclipsebench.astro.bias.phase_model_bias
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
-import numpy as np
-from astropy.table import Table
-
-from ..astro.bias import EPOCH10_START_BMJD, epoch_times, phase_model_bias
 from ..astro.catalogue import system_for
-from ..astro.lightcurve import light_curve_function
-from ..astro.orbit import BMJD_OFFSET
+from ..astro.times import BMJD_OFFSET, EPOCH10_START_BMJD
 from ..config import Config
 from ..config.system import CHALLENGE_SYSTEM, SystemSection
 from ..errors import InputError
 from ..io.atomic import atomic_path
 from ..io.paths import check_plot_path
-from ..simulation.plan import epoch_start_times_bmjd, plan_epoch
 from .options import (
     add_planet_options,
     check_output_path,
@@ -31,6 +26,12 @@ from .options import (
     positive_float,
     positive_int,
 )
+
+if TYPE_CHECKING:  # pragma: no cover
+    import numpy as np
+
+# numpy, astropy and the light-curve model are imported where the work is done, so the
+# command line's parser stays light (tests/foundation/test_cli_startup.py).
 
 NAME = "lightcurve"
 HELP = ("Model light curve L(t) of a star and planet (Cowan & Agol thermal phase curve, "
@@ -102,6 +103,10 @@ def challenge_epoch_times_bmjd(epoch: int, cfg: Config | None = None) -> np.ndar
     >>> t.size, round(float(t[0]), 4), round(float(t[-1] - t[0]) * 24, 2)
     (15616, 57234.3406, 8.85)
     """
+    import numpy as np
+
+    from ..simulation.plan import epoch_start_times_bmjd, plan_epoch
+
     cfg = cfg if cfg is not None else Config()
     if not 1 <= epoch <= cfg.challenge.epochs:
         raise InputError(f"--epoch: expected an epoch of the challenge, 1-{cfg.challenge.epochs}, "
@@ -134,6 +139,9 @@ def _light_curve_options(args: argparse.Namespace) -> dict:
 
 def _run_phase_bias(args: argparse.Namespace) -> dict:
     """Section 4.2: the depth bias of each phase model on one challenge epoch's noiseless L(t)."""
+    from ..astro.bias import phase_model_bias
+    from ..astro.lightcurve import light_curve_function
+
     for name in ("start", "hours", "cadence_s", "out", "plot"):
         if getattr(args, name) is not None:
             option = "--" + name.replace("_", "-")
@@ -165,6 +173,11 @@ def _run_phase_bias(args: argparse.Namespace) -> dict:
 
 
 def run(args: argparse.Namespace) -> dict:
+    import numpy as np
+
+    from ..astro.bias import epoch_times
+    from ..astro.lightcurve import light_curve_function
+
     if args.phase_bias:
         return _run_phase_bias(args)
     if args.epoch is not None:
@@ -222,6 +235,8 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def _write_table(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
+    from astropy.table import Table
+
     table = Table({"time_bmjd": time, "flux": flux,
                    "planet_flux": lc.planet_flux(time),
                    "visible_fraction": lc.visible_fraction(time),

@@ -5,15 +5,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from ..config import load_config
 from ..errors import InputError
-from ..photometry.clean import flag_counts
-from ..photometry.pipeline import photometry_tables, replace_options
-from ..photometry.table import write_photometry
-from ..progress import progress
 from .options import check_output_path, positive_float, positive_int
+
+# numpy, astropy and the stage's modules are imported where the work is done, so the
+# command line's parser stays light (tests/foundation/test_cli_startup.py).
 
 NAME = "photometry"
 HELP = ("Measure IRAC BCD cubes (archive or simulated): centroids, noise pixels, apertures, "
@@ -46,6 +43,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _options(args: argparse.Namespace):
+    from ..photometry.pipeline import replace_options
+
     opt = load_config(args.config, args.overrides).photometry
     changes = {}
     if args.centroid is not None:
@@ -58,6 +57,13 @@ def _options(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> dict:
+    import numpy as np
+
+    from ..photometry.clean import flag_counts
+    from ..photometry.pipeline import photometry_tables
+    from ..photometry.table import write_photometry
+    from ..progress import progress
+
     out = Path(args.out)
     as_file = out.suffix.lower() in (".fits", ".fit", ".fts")
     check_output_path(out, "--out", "file" if as_file else "folder")

@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from ..detector.constants import READ_NOISE_E, SUB_2S
-from ..detector.fowler import SHOT_NOISE_FORMS
+from ..detector.constants import READ_NOISE_E, SHOT_NOISE_FORMS, SUB_2S
 from ..errors import InputError
-from ..stats.photon_limit import photon_limit
 from .options import nonnegative_float, open_unit_float, positive_float, positive_int
 
 NAME = "photon-limit"
@@ -44,6 +42,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..stats.photon_limit import photon_limit  # numpy: not at CLI start
+
     if (args.frames is None) != (args.depth_ppm is None):
         raise InputError("--frames and --depth-ppm: give both to compute sigma_phot_ppm")
     if args.flux_aperture < args.flux_net:

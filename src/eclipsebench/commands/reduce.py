@@ -11,14 +11,14 @@ from ..astro.catalogue import PlanetSystem, system_for
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
-from ..fit.astro_model import (
+from ..fit.names import (
     ECLIPSE_SHAPES,
     EVENTS,
     PHASE_CURVE_MODELS,
     PHASE_MODELS,
     RAMP_MODELS,
+    TIME_FORMATS,
 )
-from ..fit.data import TIME_FORMATS
 from ..fit.target import system_of_table
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
@@ -268,15 +268,15 @@ def chain_file(result_path: str | Path) -> Path:
 
 
 def run(args: argparse.Namespace) -> dict:
-    # The fitter pulls in every method (numba, scikit-learn): imported when the command
-    # runs, not for `eclipsebench --help`.
+    paths = _table_paths(args.table)
+    if len(paths) > 1:
+        return _run_joint(args, paths)
+    # The fitter pulls in every method (numba, scikit-learn, about 2 s): imported once the
+    # table is found, not for `eclipsebench --help` or a misspelt path.
     from ..fit.data import standardise_table
     from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
     from ..photometry.table import read_table
 
-    paths = _table_paths(args.table)
-    if len(paths) > 1:
-        return _run_joint(args, paths)
     table_path = paths[0]
     out = Path(args.out) if args.out else table_path.with_name(
         f"{table_path.stem}.{args.method}.json")

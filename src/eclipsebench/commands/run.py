@@ -7,7 +7,6 @@ from pathlib import Path
 
 from ..config import load_config
 from ..io.paths import check_output_path
-from ..report.tables import format_text_table
 from .options import (
     add_config_options,
     add_planet_options,
@@ -87,6 +86,8 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def format_text(result: dict) -> str:
+    from ..report.tables import format_text_table  # astropy: not at CLI start
+
     profiles = result.get("profiles") or {result.get("profile", "controlled"): result}
     lines = []
     for name, stats in profiles.items():
@@ -121,7 +122,8 @@ def _coverage_lines(stats: dict) -> list[str]:
     for n_sigma, key in ((1, "coverage"), (2, "coverage_2sigma")):
         cover = {m: s for m, s in stats["methods"].items() if s.get(key) is not None}
         if cover:
-            lines.append(f"{n_sigma}-sigma coverage of the truth (68% interval): " + ", ".join(
+            lines.append(f"fraction of epochs within {n_sigma} sigma of the truth (its 68% "
+                         "binomial interval): " + ", ".join(
                 f"{m} {s[key]:.2f} ({s[key + '_lo']:.2f}-{s[key + '_hi']:.2f})"
                 for m, s in cover.items()))
     return lines

@@ -6,13 +6,7 @@ import argparse
 import csv
 from pathlib import Path
 
-import numpy as np
-from astropy.table import Table
-
 from ..errors import DataError
-from ..report.tables import format_text_table
-from ..stats.depth_table import read_depth_table
-from ..stats.summary import summarize
 from .options import method_list, nonnegative_float, positive_float, positive_int
 
 NAME = "stats"
@@ -54,6 +48,9 @@ def _check_text(path: Path) -> None:
 
 def _check_methods(path: Path) -> None:
     """Refuse a row whose method name is blank (astropy would read it as masked '--')."""
+    import numpy as np
+    from astropy.table import Table
+
     try:
         if path.suffix.lower() == ".ecsv":
             column = Table.read(path, format="ascii.ecsv")["method"]
@@ -77,10 +74,15 @@ def run(args: argparse.Namespace) -> dict:
     path = Path(args.depths)
     _check_text(path)
     _check_methods(path)
+    from ..stats.depth_table import read_depth_table
+    from ..stats.summary import summarize
+
     table = read_depth_table(args.depths)
     return summarize(table, sigma_phot_ppm=args.sigma_phot, truth_ppm=args.truth,
                      methods=args.methods, seed=args.seed, n_bootstrap=args.bootstrap)
 
 
 def format_text(result: dict) -> str:
+    from ..report.tables import format_text_table  # astropy: not at CLI start
+
     return format_text_table(result)

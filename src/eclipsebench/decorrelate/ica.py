@@ -52,8 +52,6 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 import pywt
-from sklearn.decomposition import FastICA
-from sklearn.exceptions import ConvergenceWarning
 
 from ..config.base import check
 from ..errors import InputError
@@ -124,6 +122,11 @@ def separate(coeffs: np.ndarray, n_components: int, seed_int: int, *, max_iter: 
         False when FastICA reached ``max_iter`` (the ConvergenceWarning is
         recorded, not shown).
     """
+    # scikit-learn (about 0.7 s to import): loaded when ICA runs, not by every fit that
+    # imports the registry of methods.
+    from sklearn.decomposition import FastICA
+    from sklearn.exceptions import ConvergenceWarning
+
     ica = FastICA(n_components=n_components, algorithm="parallel", fun="logcosh",
                   whiten="unit-variance", random_state=seed_int, max_iter=max_iter, tol=tol,
                   whiten_solver="svd")

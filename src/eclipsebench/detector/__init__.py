@@ -8,7 +8,18 @@ this package imports none of them.
 """
 
 from .constants import SUB_0P1S, SUB_2S, ReadoutMode, readout_mode
-from .fowler import NOISE_MODELS, fowler_sample, group_charges
 
 __all__ = ["SUB_0P1S", "SUB_2S", "ReadoutMode", "readout_mode", "NOISE_MODELS",
            "fowler_sample", "group_charges"]
+
+#: Names of :mod:`.fowler` (numpy, numba), loaded on first use (PEP 562) so the
+#: constants alone import nothing heavy (the command line's parser reads them).
+_FOWLER = ("NOISE_MODELS", "fowler_sample", "group_charges")
+
+
+def __getattr__(name: str):
+    if name not in _FOWLER:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from . import fowler
+
+    return getattr(fowler, name)

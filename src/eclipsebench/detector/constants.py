@@ -35,7 +35,7 @@ if TYPE_CHECKING:  # annotations only: the configuration package imports this mo
 __all__ = [
     "PIXEL_SCALE_ARCSEC", "PIXEL_SCALE_X_ARCSEC", "PIXEL_SCALE_Y_ARCSEC", "PIXEL_SOLID_ANGLE_SR",
     "GAIN_E_PER_DN", "FLUXCONV_WARM_CH2", "FLUXCONV_HEADER_XO3", "READ_NOISE_E",
-    "READ_NOISE_IRACSIM2015_E", "NOISE_FACTOR_IRACSIM2015", "WAVELENGTH_UM", "BAND_UM",
+    "READ_NOISE_IRACSIM2015_E", "SHOT_NOISE_FORMS", "NOISE_FACTOR_IRACSIM2015", "WAVELENGTH_UM", "BAND_UM",
     "TELESCOPE_DIAMETER_M",
     "SUBARRAY_SHAPE", "FULL_ARRAY_SHAPE", "SUBARRAY_ORIGIN_FULL", "SWEET_SPOT_PX",
     "IRACSIM_RESET_S", "ReadoutMode",
@@ -61,6 +61,10 @@ FLUXCONV_WARM_CH2 = 0.1469
 FLUXCONV_HEADER_XO3 = 0.1447
 #: Read noise per read (e): the header RONOISE, used by the physical model.
 READ_NOISE_E = 9.4
+#: How :func:`eclipsebench.detector.fowler.fowler_variance` counts the shot
+#: noise: ``"paper"``, the paper's Eq. ``gar_for_var`` as printed; ``"poisson"``,
+#: the exact variance of Fowler-sampled independent Poisson increments.
+SHOT_NOISE_FORMS = ("paper", "poisson")
 #: Read noise per read that IRACSIM used for channel 2 (e).
 READ_NOISE_IRACSIM2015_E = 16.8
 #: IRACSIM's ``NOISE_FACTOR`` (it multiplies the Poisson deviates and the read

@@ -40,7 +40,7 @@ import numpy as np
 
 from eclipsebench.errors import InputError
 
-from .constants import READ_NOISE_E, SUB_2S, ReadoutMode
+from .constants import READ_NOISE_E, SHOT_NOISE_FORMS, SUB_2S, ReadoutMode
 
 __all__ = ["SHOT_NOISE_FORMS", "fowler_variance", "NOISE_MODELS", "fowler_weights", "group_charges", "read_charges",
            "fowler_sample", "fowler_sample_ticks",
@@ -49,13 +49,6 @@ __all__ = ["SHOT_NOISE_FORMS", "fowler_variance", "NOISE_MODELS", "fowler_weight
            "bunc_mjysr"]
 
 NOISE_MODELS = ("physical", "iracsim2015")
-
-
-
-#: How :func:`fowler_variance` counts the shot noise: ``"paper"``, the paper's
-#: Eq. ``gar_for_var`` as printed; ``"poisson"``, the exact variance of
-#: Fowler-sampled independent Poisson increments (see :func:`fowler_variance`).
-SHOT_NOISE_FORMS = ("paper", "poisson")
 
 
 def _check_readout(fowler: int, wait: int) -> None:

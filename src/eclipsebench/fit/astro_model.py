@@ -88,18 +88,12 @@ from ..astro.eclipse import EclipseShape
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..astro.phase_curves import harmonic_curve, harmonic_summary
 from ..errors import InputError
+from .names import ECLIPSE_SHAPES, EVENTS, PHASE_CURVE_MODELS, PHASE_MODELS, RAMP_MODELS
 
 __all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES",
            "EVENTS", "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u",
            "u_from_q", "integration_offsets_d", "aor_order"]
 
-PHASE_MODELS = ("flat", "linear", "quadratic", "sinusoid")
-#: The phase models of a whole phase curve (``event="phase-curve"``): the first harmonic,
-#: or the first and second (:func:`eclipsebench.astro.phase_curves.harmonic_curve`).
-PHASE_CURVE_MODELS = ("harmonic1", "harmonic2")
-RAMP_MODELS = ("none", "linear", "exponential")
-ECLIPSE_SHAPES = ("physical", "box")
-EVENTS = ("eclipse", "transit", "phase-curve")
 #: The transit's optional free parameters, in the order they take in the vector.
 TRANSIT_FREE = ("a_rs", "b", "q1", "q2")
 

@@ -25,6 +25,7 @@ from ..decorrelate.base import EpochData
 from ..errors import InputError
 from ..photometry.table import COLUMN_UNITS
 from ..photometry.table import REQUIRED_COLUMNS as CONTRACT_COLUMNS
+from .names import TIME_FORMATS
 
 __all__ = ["epoch_data_from_table", "aperture_column", "standardise_table", "median_cadence_s",
            "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "TIME_FORMATS"]
@@ -34,9 +35,6 @@ REQUIRED_COLUMNS = ("time_bmjd", "flux", "flux_err", "x", "y")
 #: Columns some methods or rules use; a table may lack them (``flag`` absent: every frame good).
 OPTIONAL_COLUMNS = ("noise_pixels", "flag", "aorkey", "background", "width_x", "width_y",
                     "stamp3", "stamp5")
-#: ``time_format`` -> the offset (days) subtracted to give BMJD. Every format is read as
-#: a BJD_TDB-based count: no time-scale or barycentric conversion is made.
-TIME_FORMATS = {"bmjd": 0.0, "mjd": 0.0, "bjd": 2400000.5, "jd": 2400000.5}
 #: Values below this are modified (MJD-like) dates, above it full Julian dates.
 _JD_THRESHOLD_D = 1.0e6
 _PIXEL_COLUMN = re.compile(r"^p(\d+)$")

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import emcee
 import numpy as np
 from threadpoolctl import threadpool_limits
 
@@ -97,6 +96,8 @@ class McmcResult:
 
 def make_moves(move: str):
     """The emcee moves for ``move`` ("stretch" or "de")."""
+    import emcee  # scipy.stats with it, about 1 s: not paid by a least-squares fit
+
     if move == "stretch":
         return emcee.moves.StretchMove()
     if move == "de":
@@ -196,6 +197,8 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     >>> mc.converged, mc.n_over_tau > 50, bool(abs(mc.median[0] - 0.002) < 3 * mc.error("depth"))
     (True, True, True)
     """
+    import emcee  # scipy.stats with it, about 1 s: not paid by a least-squares fit
+
     theta_start = np.asarray(theta_start, dtype=float)
     ndim = len(theta_start)
     lo_a, hi_a = astro_model.bounds
@@ -254,6 +257,8 @@ def _autocorrelation(chain: np.ndarray) -> tuple[np.ndarray, int, float]:
     ``n_over_tau = (steps - burn_in) / max(tau)``. A tau that cannot be
     estimated gives burn-in of half the chain and ``n_over_tau = 0``.
     """
+    import emcee  # scipy.stats with it, about 1 s: not paid by a least-squares fit
+
     n = chain.shape[0]
     with np.errstate(divide="ignore", invalid="ignore"):   # a parameter that never moved
         tau = emcee.autocorr.integrated_time(chain, tol=0)

@@ -38,8 +38,8 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
                  lightcurve_epoch: object | None = None,
                  truth_curve: tuple[np.ndarray, np.ndarray] | None = None,
                  gain_map: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-                 title: str = "eclipsebench report", notes: Mapping[str, object] | None = None
-                 ) -> Path:
+                 title: str = "eclipsebench report", notes: Mapping[str, object] | None = None,
+                 profile: str | None = None) -> Path:
     """Write the whole report to ``dest`` and return the path of ``index.html``.
 
     Parameters
@@ -68,85 +68,127 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
     notes : mapping, optional
         Extra ``name: value`` lines shown at the top of the page (seed, photon
         limits, wall time...).
+    profile : str, optional
+        The profile whose depths and statistics the figures show, named in
+        each figure's title (default: ``summary["profile"]``).
+
+    Returns
+    -------
+    Path
+        ``dest/index.html``.
     """
     root = Path(dest)
     root.mkdir(parents=True, exist_ok=True)
-    groups = group_by_method(depths, list(summary["methods"]))
     table_files = []
     for name, stats in (summary.get("profiles") or {"controlled": summary}).items():
         stem = "eclipse_depth_stats" + ("" if name == "controlled" else f"_{name}")
         table_files += write_tables(stats, root, stem=stem, caption=f"{title} ({name} profile)")
-    sigma_phot = summary.get("sigma_phot_ppm")
-    items: list[tuple[str, str, list[Path]]] = []
+    profile = profile or summary.get("profile") or "controlled"
+    items, skipped = _photometry_figures(root, photometry, gain_map)
+    more, not_drawn = _result_figures(
+        root, summary, group_by_method(depths, list(summary["methods"])), profile,
+        truth_ppm=truth_ppm, lightcurves=lightcurves, lightcurve_epoch=lightcurve_epoch,
+        truth_curve=truth_curve)
+    summary_path = write_text(root / "statistics.json",
+                              json.dumps(_plain(summary), indent=2, sort_keys=True) + "\n")
+    page = render_index(title=title, summary=summary, figures=items + more,
+                        tables=[*table_files, summary_path], skipped=skipped + not_drawn,
+                        root=root, notes=notes or {}, profile=profile)
+    return write_text(root / "index.html", page)
+
+
+#: A figure of the report: file stem, caption, files written.
+Item = tuple[str, str, list[Path]]
+
+
+def _photometry_figures(root: Path, photometry, gain_map) -> tuple[list[Item], list[str]]:
+    """Centroids and photometry against phase: one photometry for every profile."""
+    if not photometry:
+        return [], ["centroid clouds and photometry vs phase (no photometry given)"]
+    every = " (photometry: the same for every profile)"
+    return [
+        ("centroids", "Centroid positions per epoch (center of light)"
+         + (" over the intra-pixel gain map." if gain_map is not None else "."),
+         F.save_figure(F.centroid_clouds({e: (p["x"], p["y"]) for e, p in photometry.items()},
+                                         gain_map=gain_map, title="Centroids" + every,
+                                         max_points=max(400, CENTROID_POINTS // len(photometry))),
+                       root / "centroids")),
+        ("photometry_phase", "x and y centroids, noise pixels, background and aperture flux "
+         "(normalised to the mean of all epochs) against orbital phase, binned 63 frames.",
+         F.save_figure(F.photometry_vs_phase(photometry, title="Photometry vs phase" + every),
+                       root / "photometry_phase")),
+    ], []
+
+
+def _result_figures(root: Path, summary: Mapping, groups: Mapping, profile: str, *,
+                    truth_ppm, lightcurves, lightcurve_epoch, truth_curve
+                    ) -> tuple[list[Item], list[str]]:
+    """The figures of one profile's depths and statistics, each titled with the profile."""
+    items: list[Item] = []
     skipped: list[str] = []
+    sigma_phot = summary.get("sigma_phot_ppm")
+
+    def named(text: str) -> str:
+        return f"{text} ({profile} profile)"
 
     def add(name: str, caption: str, fig) -> None:
         items.append((name, caption, F.save_figure(fig, root / name)))
 
-    if photometry:
-        add("centroids", "Centroid positions per epoch (center of light)"
-            + (" over the intra-pixel gain map." if gain_map is not None else "."),
-            F.centroid_clouds({e: (p["x"], p["y"]) for e, p in photometry.items()},
-                              gain_map=gain_map,
-                              max_points=max(400, CENTROID_POINTS // len(photometry))))
-        add("photometry_phase", "x and y centroids, noise pixels, background and aperture flux "
-            "(normalised to the mean of all epochs) against orbital phase, binned 63 frames.",
-            F.photometry_vs_phase(photometry))
-    else:
-        skipped.append("centroid clouds and photometry vs phase (no photometry given)")
     if lightcurves:
-        add("lightcurves", f"Decorrelated light curves of epoch {lightcurve_epoch}, binned 64x; "
-            "red: the fitted model" + ("; blue: the input light curve." if truth_curve is not None
-                                        else "."),
-            F.decorrelated_lightcurves(lightcurves, truth=truth_curve))
+        add("lightcurves", f"Decorrelated light curves of epoch {lightcurve_epoch}, each binned "
+            f"to about {F.LIGHTCURVE_POINTS} points (a method fitted on bins, as GP, has fewer "
+            "rows, binned less); red: the fitted model"
+            + ("; blue: the input light curve." if truth_curve is not None else "."),
+            F.decorrelated_lightcurves(lightcurves, truth=truth_curve,
+                                       title=named("Decorrelated light curves")))
     else:
         skipped.append("decorrelated light curves (none given)")
     add("depths", "Eclipse depths per epoch and method (reported 1-sigma errors); right: weighted "
         "means with sigma_tot = f_dis sigma_orig; red: grand mean +- its error"
         + ("; blue: the input depth." if truth_ppm is not None else "."),
         F.depths_per_epoch({m: (g.epoch, g.depth_ppm, g.error_ppm) for m, g in groups.items()},
-                           summary, truth_ppm=truth_ppm))
+                           summary, truth_ppm=truth_ppm, title=named("Eclipse depths")))
     add("visit_differences", "Mean/difference plots between visits: every ordered pair of epochs; "
         "dashed: +-R (the repeatability).",
-        F.visit_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()}, summary))
+        F.visit_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()}, summary,
+                            title=named("Repeated visits: mean/difference")))
     if len(groups) >= 2:
         add("method_differences", "Mean/difference plots between methods per common epoch; dashed: "
             "mean difference +- SD; corner: unpaired t-test p (red if < 0.05).",
             F.method_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()},
-                                 summary["ttest"]["p"]))
+                                 summary["ttest"]["p"], title=named("Methods: mean/difference")))
     else:
         skipped.append("method differences (one method)")
     if sigma_phot is not None:
         add("repeatability_reliability", "Repeatability R against reliability r; solid: "
             "R = sqrt(2) sigma_phot / r; dashed: least-squares fit R = k / r.",
-            F.repeatability_vs_reliability(summary, sigma_phot))
+            F.repeatability_vs_reliability(summary, sigma_phot,
+                                           title=named("Repeatability vs reliability")))
         if truth_ppm is not None:
             add("accuracy_reliability", "Accuracy a against reliability r; dotted: a = r; dashed: "
-                "linear fit.", F.accuracy_vs_reliability(summary))
+                "linear fit.", F.accuracy_vs_reliability(summary,
+                                                         title=named("Accuracy vs reliability")))
             add("accuracy_ratio_bias", "a / r against the mean absolute bias; dashed: linear fit.",
-                F.accuracy_ratio_vs_bias(summary))
+                F.accuracy_ratio_vs_bias(summary, title=named("a/r vs |bias|")))
         else:
             skipped.append("accuracy figures (no truth)")
     else:
         skipped.append("repeatability/reliability and accuracy figures (no photon limit)")
     if truth_ppm is not None:
         add("coverage", "Fraction of epochs whose reported 1-sigma (blue) and 2-sigma (red) errors "
-            "cover the input depth, with exact binomial 68% intervals; dashed: 68.3% and 95.4%, "
-            "the coverage of honest Gaussian errors.", F.coverage_per_method(summary))
+            "cover the input depth; error bars: the exact binomial 68% interval of that "
+            "fraction; dashed: 68.3% and 95.4%, the coverage of honest Gaussian errors.",
+            F.coverage_per_method(summary, title=named("Coverage of the truth")))
         add("normalised_residuals", "Normalised residuals (D - truth) / sigma per epoch with the "
             "reported sigma: all methods pooled, then per method, against the unit Gaussian "
             "(black); values beyond +-4 are counted in the outer bins.",
             F.normalised_residual_histograms(
                 {m: normalised_residuals(g.depth_ppm, g.error_ppm, truth_ppm)
-                 for m, g in groups.items()}))
+                 for m, g in groups.items()},
+                title=named("Normalised residuals (D - truth) / sigma")))
     else:
         skipped.append("coverage and normalised residuals (no truth)")
-    summary_path = write_text(root / "statistics.json",
-                              json.dumps(_plain(summary), indent=2, sort_keys=True) + "\n")
-    page = render_index(title=title, summary=summary, figures=items,
-                        tables=[*table_files, summary_path], skipped=skipped, root=root,
-                        notes=notes or {})
-    return write_text(root / "index.html", page)
+    return items, skipped
 
 
 def _plain(obj):
@@ -169,6 +211,47 @@ _PROFILE_WORDS = {
 }
 
 
+#: The table's symbols: (heading, unit, meaning), in the order of its columns (docs/scoring.md).
+SYMBOLS = (
+    ("D_mean", "ppm", "inverse-variance weighted mean depth over the epochs (Eq. weighted_mean)"),
+    ("sigma_mean", "ppm", "mean of the reported 1-sigma errors"),
+    ("SD", "ppm", "sample standard deviation of the depths (N - 1)"),
+    ("sigma_orig", "ppm", "error of D_mean from the reported errors, 1 / sqrt(sum 1/sigma_i^2)"),
+    ("f_dis", "", "dispersion factor max(1, sqrt(chi^2 / (N - 1))): how much the depths scatter "
+                  "beyond their errors; +up/-down: its 68% interval, shown when above 1 "
+                  "(Section 3.2)"),
+    ("sigma_tot", "ppm", "f_dis sigma_orig: the error of D_mean"),
+    ("R", "ppm", "repeatability: SD of the differences between every ordered pair of epochs "
+                 "(Section 3.4.1)"),
+    ("r", "", "reliability sigma_phot / SD: 1 when the depths scatter as photon noise alone "
+              "(Section 3.4.2)"),
+    ("Closest match", "ppm", "the other method whose per-epoch differences from this one are "
+                             "smallest: its name, (mean +- SD of the differences)"),
+    ("RMSE", "ppm", "root-mean-square of depth - true depth"),
+    ("bias", "ppm", "D_mean - true depth"),
+    ("a", "", "accuracy sigma_phot / RMSE (Section 3.4.3)"),
+    ("sigma_phot", "ppm", "photon-noise limit of one epoch's depth (the notes at the top say "
+                          "which)"),
+)
+_UNITS = {name: unit for name, unit, _ in SYMBOLS}
+
+
+def _symbols_html() -> str:
+    """The legend of the table's symbols with their units."""
+    esc = html.escape
+    rows = "".join(f"<tr><td>{esc(n)}</td><td>{esc(u or '-')}</td><td>{esc(m)}</td></tr>"
+                   for n, u, m in SYMBOLS)
+    return ("<p>Symbols (every depth-like column in ppm; r, a and f_dis are ratios):</p>"
+            '<table class="symbols"><thead><tr><th>symbol</th><th>unit</th><th>meaning</th>'
+            f"</tr></thead><tbody>{rows}</tbody></table>")
+
+
+def _with_units(head: list[str]) -> list[str]:
+    """Table headings with their unit: ``D_mean (ppm)``."""
+    units = [_UNITS.get(h, _UNITS.get(h.split(" ")[0], "")) for h in head]
+    return [f"{h} ({u})" if u else h for h, u in zip(head, units, strict=True)]
+
+
 def _html_table(rows: list[list[str]]) -> str:
     esc = html.escape
     thead = "".join(f"<th>{esc(str(c))}</th>" for c in rows[0])
@@ -179,11 +262,12 @@ def _html_table(rows: list[list[str]]) -> str:
 
 def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, list[Path]]],
                  tables: list[Path], skipped: list[str], root: Path,
-                 notes: Mapping[str, object]) -> str:
+                 notes: Mapping[str, object], profile: str | None = None) -> str:
     """The HTML page: the statistics table, links to the table files, every figure.
 
     All links are relative to ``root`` so the folder can be moved or opened
-    offline; no scripts, no external resources.
+    offline; no scripts, no external resources. ``profile`` is the profile
+    the figures show (named in the Figures heading).
     """
     esc = html.escape
     parts = [
@@ -192,7 +276,8 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
         "<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
         "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #bbb;"
         "padding:2px 6px;text-align:right}td:first-child{text-align:left}"
-        "figure{margin:1.5em 0}img{max-width:100%;border:1px solid #ddd}</style>",
+        "figure{margin:1.5em 0}img{max-width:100%;border:1px solid #ddd}"
+        "table.symbols td,table.symbols th{text-align:left}</style>",
         "</head>", "<body>", f"<h1>{esc(title)}</h1>",
     ]
     if notes:
@@ -200,10 +285,12 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
                                       for k, v in notes.items()) + "</ul>")
     profiles = summary.get("profiles") or {summary.get("profile", "controlled"): summary}
     for name, stats in profiles.items():
+        rows = display_rows(stats, pm=" ± ", minus="−", interval="{f} +{up}/−{down}")
         parts += [f"<h2>Eclipse depth statistics: {esc(name)} profile</h2>",
                   f"<p>{esc(_PROFILE_WORDS.get(name, ''))}</p>",
-                  _html_table(display_rows(stats, pm=" ± ", minus="−",
-                                           interval="{f} +{up}/−{down}"))]
+                  _html_table([_with_units(rows[0]), *rows[1:]])]
+        if name == next(iter(profiles)):
+            parts.append(_symbols_html())
         parts += [f"<p>{esc(line)}</p>" for line in anova_lines(stats)]
         if summary.get("truth_ppm") is not None:
             rows = comparison_rows(stats, TABLE4)
@@ -213,7 +300,7 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
                       "2015 challenge; for comparison only).</p>", _html_table([head, *rows])]
     parts.append("<p>Tables: " + ", ".join(f'<a href="{esc(_rel(p, root))}">{esc(p.name)}</a>'
                                             for p in tables) + "</p>")
-    parts.append("<h2>Figures</h2>")
+    parts.append("<h2>Figures" + (f" ({esc(profile)} profile)" if profile else "") + "</h2>")
     for name, caption, files in figures:
         png = next(p for p in files if p.suffix == ".png")
         pdf = [p for p in files if p.suffix == ".pdf"]

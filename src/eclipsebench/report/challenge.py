@@ -60,6 +60,21 @@ def _ppm(v) -> str:
     return "n/a" if v is None else f"{v:.1f} ppm"
 
 
+def _analytic_note(summary: dict) -> str:
+    """The analytic photon limit with the inputs that make it differ from the README's 64.5 ppm."""
+    text = _ppm(summary.get("sigma_phot_ppm_analytic"))
+    inputs = (summary.get("photon_limit") or {}).get("analytic") or {}
+    if not inputs:
+        return text
+    return (f"{text}, used for r and a: Eq. photon_noise on this run's own photometry (S/N "
+            f"{inputs['snr_single']:.0f} per frame, N = {inputs['frames']:.0f} frames per epoch, "
+            f"f_in = {inputs['f_in']:.3f} from each epoch's eclipse geometry, D = "
+            f"{inputs['depth_ppm']:.0f} ppm). The README's 64.5 ppm is the same equation on the "
+            "paper's simulated-data inputs (S/N 268, N = 15232, f_in = 1/3); the paper prints "
+            "53 ppm, which its equation does not give (docs/scoring.md, 'The photon limit in a "
+            "run')")
+
+
 def report_task(cfg: Config, root: str, methods: list[str], epochs: list[int]) -> None:
     """Figures, tables and ``report/index.html`` (written last)."""
     # matplotlib (through .build): imported only when a report is asked for
@@ -97,9 +112,11 @@ def report_task(cfg: Config, root: str, methods: list[str], epochs: list[int]) -
         gains = None
     notes = {"challenge": summary.get("challenge"), "seed": summary.get("seed"),
              "epochs": len(epochs), "methods": ", ".join(methods),
-             "sigma_phot (analytic, Section 3.3)": _ppm(summary.get("sigma_phot_ppm_analytic")),
+             "sigma_phot (analytic, Section 3.3)": _analytic_note(summary),
              "sigma_phot (empirical, no pointing motion)":
-                 _ppm(summary.get("sigma_phot_ppm_empirical")),
+                 _ppm(summary.get("sigma_phot_ppm_empirical"))
+                 + " (the SD of one method's depths on twins of the epochs whose star does not "
+                   "move: photon noise and what the method adds; not used for r and a)",
              "true depth": _ppm(summary.get("truth_ppm"))}
     build_report(layout.report.parent, summary=summary, depths=depths,
                  truth_ppm=summary.get("truth_ppm"), photometry=photometry, lightcurves=curves,

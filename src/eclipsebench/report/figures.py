@@ -24,8 +24,13 @@ __all__ = ["save_figure", "bin_mean", "centroid_clouds", "photometry_vs_phase",
            "decorrelated_lightcurves", "depths_per_epoch", "visit_differences",
            "method_differences", "repeatability_vs_reliability", "accuracy_vs_reliability",
            "accuracy_ratio_vs_bias", "coverage_per_method", "normalised_residual_histograms",
-           "fit_inverse", "fit_line"]
+           "fit_inverse", "fit_line", "PAGE_WIDTH_IN", "LIGHTCURVE_POINTS"]
 
+#: The report page's width (1100 px at the 120 dpi of :func:`save_figure`): no figure is
+#: drawn wider, so none is shrunk in the browser.
+PAGE_WIDTH_IN = 9.1
+#: Points per decorrelated light curve, whatever its cadence (frames or a method's bins).
+LIGHTCURVE_POINTS = 150
 
 
 def _finish_grid(fig: Figure, axes, n_used: int, title: str, xlabel: str | None = None,
@@ -39,6 +44,7 @@ def _finish_grid(fig: Figure, axes, n_used: int, title: str, xlabel: str | None 
         fig.supylabel(ylabel, fontsize=8)
     fig.suptitle(title)
     return fig
+
 
 #: Epochs named in legends and labels; a Monte Carlo's hundreds would hide the data.
 MAX_LEGEND_EPOCHS = 20
@@ -163,7 +169,8 @@ def photometry_vs_phase(epochs: Mapping[object, Mapping[str, np.ndarray]], *, bi
 
 def decorrelated_lightcurves(curves: Mapping[str, Mapping[str, np.ndarray]], *,
                              truth: tuple[np.ndarray, np.ndarray] | None = None,
-                             bin_size: int = 64, title: str = "Decorrelated light curves") -> Figure:
+                             points: int = LIGHTCURVE_POINTS,
+                             title: str = "Decorrelated light curves") -> Figure:
     """One panel per method: the decorrelated flux binned and the fitted model (Figs. 5-6).
 
     Parameters
@@ -172,17 +179,25 @@ def decorrelated_lightcurves(curves: Mapping[str, Mapping[str, np.ndarray]], *,
         ``{method: {"phase", "flux_corrected", "astro_model"}}``.
     truth : tuple, optional
         ``(phase, L)``: the input light curve, drawn as a blue line.
+    points : int
+        Binned points per panel: each curve is binned by its own factor, so a
+        method whose light curve holds its bins (GP, SPCA) shows as many
+        points as one that holds every frame.
+    title : str
+        The figure's title.
     """
     n = max(len(curves), 1)
     fig = _figure(7.0, 1.6 * n + 0.8)
     axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, sharey=True, squeeze=False)[:, 0])
     for ax, (method, c) in zip(axes, curves.items(), strict=False):
-        ax.plot(bin_mean(c["phase"], bin_size), bin_mean(c["flux_corrected"], bin_size), ".",
+        size = max(1, round(len(c["phase"]) / points))
+        ax.plot(bin_mean(c["phase"], size), bin_mean(c["flux_corrected"], size), ".",
                 ms=2, color="0.3")
         ax.plot(c["phase"], c["astro_model"], "-", color="tab:red", lw=1, label="fit")
         if truth is not None:
             ax.plot(truth[0], truth[1], "-", color="tab:blue", lw=1, label="input")
-        ax.text(0.01, 0.05, method, transform=ax.transAxes, fontsize=8)
+        ax.text(0.01, 0.05, f"{method} ({len(c['phase'])} rows, binned {size}x)",
+                transform=ax.transAxes, fontsize=8)
         ax.set_ylabel("rel. flux", fontsize=8)
     axes[0].legend(fontsize=7, loc="upper right")
     axes[-1].set_xlabel("orbital phase")
@@ -204,7 +219,7 @@ def depths_per_epoch(groups: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarr
     truth_ppm : float, optional
         The input depth, drawn as a blue line.
     """
-    fig = _figure(8.0, 4.5)
+    fig = _figure(PAGE_WIDTH_IN, 4.5)
     ax = fig.add_subplot()
     names = list(groups)
     width = 0.7 / max(len(names), 1)
@@ -235,13 +250,21 @@ def depths_per_epoch(groups: Mapping[str, tuple[np.ndarray, np.ndarray, np.ndarr
     ax.set_xlabel("epoch")
     ax.set_ylabel("eclipse depth (ppm)")
     ax.set_title(title)
-    ax.legend(fontsize=7, ncols=4)
+    # beside the axes, never over an error bar
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper", fontsize=7)
     return fig
 
 
 def _grid(n: int) -> tuple[int, int]:
-    cols = min(n, 4) if n <= 8 else 5
+    cols = min(n, 4)
     return math.ceil(n / cols), cols
+
+
+def _grid_size(rows: int, cols: int, panel_width: float, panel_height: float
+               ) -> tuple[float, float]:
+    """A grid figure's size: panels shrunk together so the width fits the page."""
+    scale = min(1.0, PAGE_WIDTH_IN / (panel_width * cols))
+    return panel_width * cols * scale, panel_height * rows * scale
 
 
 def visit_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], summary: Mapping, *,
@@ -257,7 +280,7 @@ def visit_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], summa
         ``{method: (epoch, depth_ppm)}``.
     """
     rows, cols = _grid(max(len(groups), 1))
-    fig = _figure(3.2 * cols, 2.8 * rows)
+    fig = _figure(*_grid_size(rows, cols, 3.2, 2.8))
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
     for ax, (name, (ep, d)) in zip(axes, groups.items(), strict=False):
         d = np.asarray(d, float)
@@ -292,7 +315,7 @@ def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttes
     names = list(groups)
     pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
     rows, cols = _grid(max(len(pairs), 1))
-    fig = _figure(3.0 * cols, 2.6 * rows)
+    fig = _figure(*_grid_size(rows, cols, 3.0, 2.6))
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False).ravel())
     for ax, (a, b) in zip(axes, pairs, strict=False):
         ea, da = (np.asarray(v) for v in groups[a])
@@ -316,6 +339,7 @@ def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttes
                     color="tab:red" if p < 0.05 else "k")
         ax.set_title(f"{a} - {b}", fontsize=8)
         ax.tick_params(labelsize=6)
+        ax.ticklabel_format(axis="x", useOffset=False)  # no "+1.832e3" under a small panel
     return _finish_grid(fig, axes, len(pairs), title, "mean depth (ppm)", "difference (ppm)")
 
 
@@ -330,27 +354,54 @@ def _method_points(summary: Mapping, keys: Sequence[str]):
     return names, [np.asarray(c) for c in cols]
 
 
-def _label_points(ax, names, x, y):
-    for name, a, b in zip(names, x, y, strict=True):
-        ax.annotate(name, (a, b), fontsize=7, xytext=(3, 3), textcoords="offset points")
+_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p")
+
+
+def _method_scatter(fig: Figure, ax, names: Sequence[str], x, y, values: str) -> None:
+    """One marker per method and a key beside the axes naming each with its values.
+
+    Labels next to the points overlap where methods cluster (twelve methods
+    with similar r); the key cannot. ``values`` formats a key entry from
+    ``x`` and ``y``, e.g. ``"r = {x:.2f}, R = {y:.0f} ppm"``.
+    """
+    cmap = colormaps["tab10" if len(names) <= 10 else "tab20"]
+    colors = [cmap(i % cmap.N) for i in range(len(names))]
+    handles = []
+    for k, (name, a, b) in enumerate(zip(names, x, y, strict=True)):
+        (h,) = ax.plot([a], [b], _MARKERS[k % len(_MARKERS)], ms=6, color=colors[k],
+                       markeredgecolor="k", markeredgewidth=0.4,
+                       label=f"{name}: {values.format(x=a, y=b)}")
+        handles.append(h)
+    if handles:
+        fig.legend(handles=handles, loc="outside right upper", fontsize=7, title="method",
+                   title_fontsize=7)
+
+
+def _log_when_spread(ax, r: np.ndarray) -> bool:
+    """A log r axis when the reliabilities span more than a decade (a few epochs' outliers)."""
+    spread = r.size >= 2 and r.min() > 0 and r.max() / r.min() > 10.0
+    if spread:
+        ax.set_xscale("log")
+    return bool(spread)
 
 
 def repeatability_vs_reliability(summary: Mapping, sigma_phot_ppm: float, *,
                                  title: str = "Repeatability vs reliability") -> Figure:
     """R against r with ``R = sqrt(2) sigma_phot / r`` and the fit ``R = k / r`` (Figs. 12-13)."""
     names, (r, R) = _method_points(summary, ("r", "R"))
-    fig = _figure(5.0, 4.0)
+    fig = _figure(7.5, 4.2)
     ax = fig.add_subplot()
-    ax.plot(r, R, "o")
-    _label_points(ax, names, r, R)
+    _method_scatter(fig, ax, names, r, R, "r = {x:.2f}, R = {y:.0f} ppm")
     if r.size:
-        grid = np.linspace(0.8 * r.min(), min(1.2 * r.max(), 1.5), 200)
+        log = _log_when_spread(ax, r)
+        grid = (np.geomspace(0.8 * r.min(), 1.2 * r.max(), 200) if log
+                else np.linspace(0.8 * r.min(), min(1.2 * r.max(), 1.5), 200))
         ax.plot(grid, math.sqrt(2) * sigma_phot_ppm / grid, "-", color="k",
                 label=f"R = √2 σ_phot / r = {math.sqrt(2) * sigma_phot_ppm:.1f} / r")
         k = fit_inverse(r, R)
         ax.plot(grid, k / grid, "--", color="tab:red", label=f"fit R = {k:.1f} / r")
-        ax.legend(fontsize=7)
-    ax.set_xlabel("reliability r")
+        ax.legend(handles=ax.get_lines()[len(names):], fontsize=7)
+    ax.set_xlabel("reliability r" + (" (log scale)" if ax.get_xscale() == "log" else ""))
     ax.set_ylabel("repeatability R (ppm)")
     ax.set_title(title)
     return fig
@@ -359,19 +410,21 @@ def repeatability_vs_reliability(summary: Mapping, sigma_phot_ppm: float, *,
 def accuracy_vs_reliability(summary: Mapping, *, title: str = "Accuracy vs reliability") -> Figure:
     """a against r with the line a = r and a linear fit (Fig. 19)."""
     names, (r, a) = _method_points(summary, ("r", "a"))
-    fig = _figure(5.0, 4.0)
+    fig = _figure(7.5, 4.2)
     ax = fig.add_subplot()
-    ax.plot(r, a, "o")
-    _label_points(ax, names, r, a)
+    _method_scatter(fig, ax, names, r, a, "r = {x:.2f}, a = {y:.2f}")
     if r.size:
         top = float(max(r.max(), a.max()) * 1.15)
-        ax.plot([0, top], [0, top], ":", color="0.5", label="a = r")
+        grid = (np.geomspace(0.8 * r.min(), top, 200) if _log_when_spread(ax, r)
+                else np.linspace(0.0, top, 200))
+        ax.plot(grid, grid, ":", color="0.5", label="a = r")
         if r.size >= 2 and np.ptp(r) > 0:
             slope, icpt = fit_line(r, a)
-            ax.plot([0, top], [icpt, slope * top + icpt], "--", color="tab:red",
+            ax.plot(grid, slope * grid + icpt, "--", color="tab:red",
                     label=f"fit a = {slope:.2f} r {icpt:+.2f}")
-        ax.legend(fontsize=7)
-    ax.set_xlabel("reliability r")
+        ax.set_ylim(0.0, 1.3 * float(a.max()) if a.max() > 0 else 1.0)  # the points, not a = r
+        ax.legend(handles=ax.get_lines()[len(names):], fontsize=7)
+    ax.set_xlabel("reliability r" + (" (log scale)" if ax.get_xscale() == "log" else ""))
     ax.set_ylabel("accuracy a")
     ax.set_title(title)
     return fig
@@ -380,17 +433,16 @@ def accuracy_vs_reliability(summary: Mapping, *, title: str = "Accuracy vs relia
 def accuracy_ratio_vs_bias(summary: Mapping, *, title: str = "a/r vs |bias|") -> Figure:
     """a/r against the mean absolute bias with a linear fit (Fig. 20)."""
     names, (r, a, bias) = _method_points(summary, ("r", "a", "bias"))
-    fig = _figure(5.0, 4.0)
+    fig = _figure(7.5, 4.2)
     ax = fig.add_subplot()
     ratio, absb = a / r if r.size else r, np.abs(bias)
-    ax.plot(absb, ratio, "o")
-    _label_points(ax, names, absb, ratio)
+    _method_scatter(fig, ax, names, absb, ratio, "|bias| = {x:.0f} ppm, a/r = {y:.2f}")
     if r.size >= 2 and np.ptp(absb) > 0:
         slope, icpt = fit_line(absb, ratio)
         grid = np.array([0.0, absb.max() * 1.1])
         ax.plot(grid, slope * grid + icpt, "--", color="tab:red",
                 label=f"fit a/r = {icpt:.2f} {slope:+.4f} |B|")
-        ax.legend(fontsize=7)
+        ax.legend(handles=ax.get_lines()[len(names):], fontsize=7)
     ax.set_xlabel("|mean bias| (ppm)")
     ax.set_ylabel("a / r")
     ax.set_title(title)
@@ -428,7 +480,7 @@ def coverage_per_method(summary: Mapping, *, title: str = "Coverage of the truth
     ax.set_xlim(-0.6, max(len(rows), 1) - 0.4)
     ax.set_ylim(0.0, 1.04)
     ax.set_ylabel("fraction of epochs covering the truth")
-    ax.set_title(title + (f" (N = {n[0]} epochs)" if len(n) == 1 else ""))
+    ax.set_title(title + (f", N = {n[0]} epochs" if len(n) == 1 else ""))
     ax.legend(fontsize=7, loc="lower left")
     return fig
 
@@ -455,7 +507,7 @@ def normalised_residual_histograms(residuals: Mapping[str, np.ndarray], *, limit
               if residuals else np.zeros(0)}
     panels.update({m: np.asarray(z, float) for m, z in residuals.items()})
     rows, cols = _grid(len(panels))
-    fig = _figure(2.9 * cols, 2.4 * rows)
+    fig = _figure(*_grid_size(rows, cols, 2.9, 2.4))
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True).ravel())
     edges = np.arange(-limit, limit + bin_width / 2, bin_width)
     grid = np.linspace(-limit, limit, 201)
