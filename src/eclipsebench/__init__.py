@@ -8,7 +8,9 @@
 :class:`eb.Systematics`, :class:`eb.MethodOptions`, :class:`eb.MethodContext`.
 """
 
-__version__ = "0.1.0"
+#: The package version, read by pyproject.toml (``[tool.setuptools.dynamic]``);
+#: CHANGELOG.md lists what each version changed.
+__version__ = "0.2.0"
 
 #: Public name -> the module that defines it.
 _PUBLIC = {
