@@ -7,6 +7,7 @@ import sys
 
 import pytest
 
+from eclipsebench.config import detector as D
 from eclipsebench.config import load_config
 from eclipsebench.detector import constants as C
 from eclipsebench.simulation import challenge
@@ -16,15 +17,15 @@ def test_read_noise_per_model_and_override():
     assert C.read_noise_per_read_e("physical") == C.READ_NOISE_E == 9.4
     assert C.read_noise_per_read_e("iracsim2015") == C.READ_NOISE_IRACSIM2015_E == 16.8
     assert C.read_noise_per_read_e("iracsim2015", 12) == 12.0
-    assert C.read_noise_of(load_config(None, [])) == 9.4
+    assert D.read_noise_of(load_config(None, [])) == 9.4
     cfg = load_config(None, ["simulation.noise_model=iracsim2015"])
-    assert C.read_noise_of(cfg) == 16.8
+    assert D.read_noise_of(cfg) == 16.8
     cfg = load_config(None, ["simulation.read_noise_e=11.5"])
-    assert C.read_noise_of(cfg) == pytest.approx(11.5)
+    assert D.read_noise_of(cfg) == pytest.approx(11.5)
 
 
 def test_simulation_uses_the_one_read_noise_definition():
-    assert challenge.read_noise_of is C.read_noise_of
+    assert challenge.read_noise_of is D.read_noise_of
 
 
 def test_calibration_does_not_import_the_challenge_simulation():

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from eclipsebench.config import load_config
-from eclipsebench.detector.constants import SUB_0P1S, read_noise_of
+from eclipsebench.config.detector import read_noise_of
+from eclipsebench.detector.constants import SUB_0P1S
 from eclipsebench.photometry.measure import measure_stack
 from eclipsebench.simulation.calibration import (
     CALIBRATION_COLUMNS,

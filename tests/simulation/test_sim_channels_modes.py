@@ -21,6 +21,7 @@ from astropy.table import Table
 from eclipsebench.astro.catalogue import system_for
 from eclipsebench.astro.orbit import eclipse_time_bmjd
 from eclipsebench.cli import main
+from eclipsebench.config import detector as D
 from eclipsebench.config import load_config
 from eclipsebench.detector import constants as C
 from eclipsebench.errors import ConfigError
@@ -62,14 +63,14 @@ def test_every_mode_has_a_read_noise_and_a_cadence(name):
 
 def test_read_noise_of_follows_the_channel_and_the_readout():
     cfg = load_config(None, ["observation.channel=1", "observation.readout=sub_0p1s"])
-    assert C.read_noise_of(cfg) == 16.9
-    assert (C.gain_of(cfg), C.fluxconv_of(cfg)) == (3.7, 0.1253)
+    assert D.read_noise_of(cfg) == 16.9
+    assert (D.gain_of(cfg), D.fluxconv_of(cfg)) == (3.7, 0.1253)
     cfg = load_config(None, ["observation.channel=1", "simulation.noise_model=iracsim2015"])
-    assert C.read_noise_of(cfg) == 15.8
+    assert D.read_noise_of(cfg) == 15.8
     cfg = load_config(None, ["observation.readout=full_12s"])
-    assert C.read_noise_of(cfg) == 10.4
+    assert D.read_noise_of(cfg) == 10.4
     cfg = load_config(None, ["simulation.fluxconv=0.1447", "simulation.gain_e_per_dn=3.8"])
-    assert (C.gain_of(cfg), C.fluxconv_of(cfg)) == (3.8, 0.1447)
+    assert (D.gain_of(cfg), D.fluxconv_of(cfg)) == (3.8, 0.1447)
 
 
 # ----------------------------------------------------------------------------- configuration

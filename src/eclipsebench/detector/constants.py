@@ -25,12 +25,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from eclipsebench.errors import InputError
-
-if TYPE_CHECKING:  # annotations only: the configuration package imports this module
-    from eclipsebench.config import Config
 
 __all__ = [
     "PIXEL_SCALE_ARCSEC", "PIXEL_SCALE_X_ARCSEC", "PIXEL_SCALE_Y_ARCSEC", "PIXEL_SOLID_ANGLE_SR",
@@ -43,7 +39,6 @@ __all__ = [
     "FULL_30S", "FULL_100S", "READOUT_MODES", "readout_mode", "mode_key",
     "frame_interval_default_s", "cube_interval_default_s", "ChannelConstants", "CHANNEL_1",
     "CHANNEL_2", "CHANNELS", "channel_constants", "ronoise_e", "read_noise_per_read_e",
-    "read_noise_of", "gain_of", "fluxconv_of",
 ]
 
 #: Nominal IRAC pixel scale (arcsec per pixel); the brief's 1.2".
@@ -390,53 +385,3 @@ def read_noise_per_read_e(noise_model: str, read_noise_e: float | None = None, *
     if noise_model == "iracsim2015":
         return channel_constants(channel).read_noise_iracsim2015_e
     return ronoise_e(channel, mode)
-
-
-def _observation(cfg: Config) -> tuple[int, ReadoutMode]:
-    obs = getattr(cfg, "observation", None)
-    if obs is None or not hasattr(obs, "readout_mode"):
-        return 2, SUB_2S
-    return int(obs.channel), obs.readout_mode()
-
-
-def read_noise_of(cfg: Config) -> float:
-    """Read noise per read of a configuration: ``simulation.read_noise_e``, or the model's own.
-
-    See :func:`read_noise_per_read_e`, with the channel and readout mode of
-    ``cfg.observation``.
-    """
-    channel, mode = _observation(cfg)
-    return read_noise_per_read_e(cfg.simulation.noise_model, cfg.simulation.read_noise_e,
-                                 channel=channel, mode=mode)
-
-
-def noise_factor_of(cfg: Config) -> float:
-    """IRACSIM's ``NOISE_FACTOR`` of a configuration: ``simulation.noise_factor``, or its default.
-
-    Unset, it is :data:`NOISE_FACTOR_IRACSIM2015` for ``noise_model =
-    "iracsim2015"`` and 1 otherwise (the key applies to ``iracsim2015`` only).
-
-    Examples
-    --------
-    >>> from eclipsebench.config import load_config
-    >>> noise_factor_of(load_config(None, ["simulation.noise_model=iracsim2015"]))
-    0.907
-    >>> noise_factor_of(load_config(None, []))
-    1.0
-    """
-    value = cfg.simulation.noise_factor
-    if value is not None:
-        return float(value)
-    return NOISE_FACTOR_IRACSIM2015 if cfg.simulation.noise_model == "iracsim2015" else 1.0
-
-
-def gain_of(cfg: Config) -> float:
-    """``simulation.gain_e_per_dn``, or the header GAIN of ``observation.channel`` when unset."""
-    value = cfg.simulation.gain_e_per_dn
-    return float(value) if value is not None else channel_constants(_observation(cfg)[0]).gain_e_per_dn
-
-
-def fluxconv_of(cfg: Config) -> float:
-    """``simulation.fluxconv``, or the warm FLUXCONV of ``observation.channel`` when unset."""
-    value = cfg.simulation.fluxconv
-    return float(value) if value is not None else channel_constants(_observation(cfg)[0]).fluxconv

@@ -43,8 +43,9 @@ import numpy as np
 from astropy.table import Table
 
 from ..config import Config
+from ..config.detector import read_noise_of
 from ..config.photometry import PhotometrySection
-from ..detector.constants import SUB_0P1S, ReadoutMode, read_noise_of
+from ..detector.constants import SUB_0P1S, ReadoutMode
 from ..io.atomic import atomic_path
 from ..photometry.estimators import LSQ_GRID_HALF_PX, LSQ_WINDOW_PX
 from ..photometry.measure import measure_stack

@@ -44,14 +44,8 @@ from ..astro.phase_curves import fit_harmonic_light_curve, fit_harmonics, harmon
 from ..astro.thermal import DEFAULT_WAVELENGTH_UM
 from ..config import Config, dump_toml, from_mapping, to_mapping
 from ..config.base import load_toml
-from ..detector.constants import (
-    ReadoutMode,
-    channel_constants,
-    fluxconv_of,
-    gain_of,
-    noise_factor_of,
-    read_noise_of,
-)
+from ..config.detector import fluxconv_of, gain_of, noise_factor_of, read_noise_of
+from ..detector.constants import ReadoutMode, channel_constants
 from ..detector.fowler import bunc_mjysr, electrons_to_mjysr
 from ..engine.tasks import Task, run_tasks
 from ..errors import ConfigError, InputError

@@ -18,7 +18,7 @@ from astropy.table import Table
 from ..astro.catalogue import system_for
 from ..astro.eclipse import EclipseShape
 from ..config import Config
-from ..detector.constants import read_noise_of
+from ..config.detector import read_noise_of
 from ..engine.layout import Layout
 from ..engine.tasks import Task
 from ..errors import DataError
