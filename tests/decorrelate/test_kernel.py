@@ -11,17 +11,16 @@ from scipy.optimize import minimize_scalar
 
 from eclipsebench.decorrelate import get_method
 from eclipsebench.decorrelate.base import EpochData
-from eclipsebench.decorrelate.pmap import (
+from eclipsebench.decorrelate.pmap import interpolate_grid, kernel_occupancy
+from eclipsebench.errors import DataError, InputError
+from eclipsebench.io.pmap_files import (
     CalibrationSet,
     GriddedPmap,
     find_pmap_path,
-    interpolate_grid,
-    kernel_occupancy,
     load_calibration_table,
     load_pmap,
     pmap_versions,
 )
-from eclipsebench.errors import DataError, InputError
 
 
 def _kr_pmap(data, pmap, **options):

@@ -43,16 +43,10 @@ from scipy.spatial import cKDTree
 
 from ..config.base import check
 from ..errors import InputError
+from ..io.pmap_files import find_pmap_path, load_pmap
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 from .bliss import _with_flux
-from .pmap import (
-    CalibrationSet,
-    GriddedPmap,
-    find_pmap_path,
-    interpolate_grid,
-    kernel_occupancy,
-    load_pmap,
-)
+from .pmap import CalibrationSet, GriddedPmap, interpolate_grid, kernel_occupancy
 
 __all__ = ["scale_lengths", "knn_weights", "local_kernel_weights", "smoother_trace",
            "KernelRegressionData", "KernelRegressionPmap", "pmap_gain", "noise_pixels_offset"]

@@ -18,10 +18,10 @@ from ..astro.catalogue import system_for
 from ..astro.orbit import orbital_phase
 from ..config import Config
 from ..decorrelate.kernel import pmap_gain
-from ..decorrelate.pmap import load_pmap
 from ..engine.layout import Layout
 from ..engine.tasks import Task
 from ..errors import InputError
+from ..io.pmap_files import load_pmap
 from ..photometry.table import read_photometry
 from ..progress import get_logger
 from ..stats.challenge import good_frames
