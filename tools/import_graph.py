@@ -1,55 +1,96 @@
-"""Print the package-level import graph of eclipsebench and any cycle in it.
+"""Check the house rule of docs/architecture.md: imports point down the layers.
 
-Usage: python tools/import_graph.py  (exit 1 if a module-level or package-level cycle exists)
-The house rule (docs/architecture.md): imports point down the layers, never back up.
+Usage: python tools/import_graph.py [--root SRC/eclipsebench] [--doc docs/architecture.md]
+
+Prints the package-level import graph, then one line per import that breaks
+the rule, and exits 1 if there is any. The layers are read from the table in
+``docs/architecture.md`` (one source: the page a developer reads is the rule
+the test holds). A package may import its own modules and any package of a
+row above its own in the table (a lower layer, or an earlier row of its
+layer); an import of a package in its own row or below it fails, and so does
+a cycle. Every import statement counts: at module level, inside a
+function, and under ``if TYPE_CHECKING`` (an annotation that names a higher
+layer is a dependency of the reader all the same). The package root
+(``eclipsebench/__init__.py``: the version and the lazily loaded public names)
+is layer 0; ``__main__`` sits with ``cli``.
 """
 
 from __future__ import annotations
 
+import argparse
 import ast
+import re
 import sys
 from collections import defaultdict
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1] / "src" / "eclipsebench"
+REPO = Path(__file__).resolve().parents[1]
+ROOT = REPO / "src" / "eclipsebench"
+DOC = REPO / "docs" / "architecture.md"
+#: Modules that the table does not name, with the (layer, row) they take.
+EXTRA_LAYERS = {"eclipsebench": (0, 0), "__main__": (8, 10**6)}
+_ROW = re.compile(r"^\|\s*(\d+)\s*\|(.+?)\|")
 
 
-def module_name(path: Path) -> str:
-    parts = path.relative_to(ROOT.parent).with_suffix("").parts
+def layers(doc: Path = DOC) -> dict[str, tuple[int, int]]:
+    """Package name -> (layer, row) from the ``| layer | package | ... |`` table of ``doc``.
+
+    Rows are numbered in the table's order: within a layer, a row may import
+    the rows above it (``io`` reads ``detector``'s constants), not its own.
+    """
+    out = {}
+    row = 0
+    for line in doc.read_text(encoding="utf-8").splitlines():
+        match = _ROW.match(line)
+        if match:
+            row += 1
+            for name in re.findall(r"`([A-Za-z_][\w]*)`", match.group(2)):
+                out[name] = (int(match.group(1)), row)
+    if not out:
+        raise SystemExit(f"{doc}: no layer table found")
+    return {**out, **EXTRA_LAYERS}
+
+
+def module_name(path: Path, root: Path) -> str:
+    parts = path.relative_to(root.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imports(path: Path) -> set[str]:
-    """Modules of the package that ``path`` imports at run time (TYPE_CHECKING blocks skipped)."""
+def imports(path: Path, root: Path) -> list[tuple[int, str]]:
+    """(line, module) of every eclipsebench module ``path`` imports, wherever the statement is."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    here = module_name(path).split(".")
+    here = module_name(path, root).split(".")
     if path.name != "__init__.py":
         here = here[:-1]
-    found = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            node.body = []
+    found = []
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = here[:len(here) - node.level + 1]
                 target = ".".join(base + ([node.module] if node.module else []))
+                if not node.module:   # from . import x, y: each name may be a module
+                    found += [(node.lineno, f"{target}.{a.name}") for a in node.names]
+                    continue
             else:
                 target = node.module or ""
-            if target.startswith("eclipsebench"):
-                found.add(target)
+            if target.split(".")[0] == root.name:
+                found.append((node.lineno, target))
         elif isinstance(node, ast.Import):
-            found |= {a.name for a in node.names if a.name.startswith("eclipsebench")}
+            found += [(node.lineno, a.name) for a in node.names
+                      if a.name.split(".")[0] == root.name]
     return found
 
 
 def package(module: str) -> str:
+    """The top-level package of a module (``eclipsebench.fit.reduce`` -> ``fit``)."""
     parts = module.split(".")
     return parts[1] if len(parts) > 1 else parts[0]
 
 
 def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
-    out, state, stack = [], {}, []
+    out: list[list[str]] = []
+    state: dict[str, int] = {}
+    stack: list[str] = []
 
     def visit(n):
         state[n] = 1
@@ -68,20 +109,45 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
-def main() -> int:
-    packages: dict[str, set[str]] = defaultdict(set)
-    for path in ROOT.rglob("*.py"):
-        src = package(module_name(path))
-        for target in imports(path):
+def check(root: Path = ROOT, doc: Path = DOC) -> tuple[dict[str, set[str]], list[str]]:
+    """The package graph and the broken rules (one message per offending import)."""
+    rank = layers(doc)
+    graph: dict[str, set[str]] = defaultdict(set)
+    problems = []
+    for path in sorted(root.rglob("*.py")):
+        src = package(module_name(path, root))
+        for line, target in imports(path, root):
             dst = package(target)
-            if dst != src and src not in ("api", "cli", "__main__", "eclipsebench"):
-                packages[src].add(dst)
-    for src in sorted(packages):
-        print(f"{src:12s} -> {', '.join(sorted(packages[src]))}")
-    found = cycles(packages)
-    for c in found:
-        print("cycle:", " -> ".join(c))
-    return 1 if found else 0
+            if not ((root / dst).is_dir() or (root / f"{dst}.py").exists()):
+                dst = root.name     # a name the root defines ("from .. import __version__")
+            if dst == src:
+                continue
+            graph[src].add(dst)
+            where = path.relative_to(root.parent)
+            unknown = [p for p in (src, dst) if p not in rank]
+            if unknown:
+                problems.append(f"{where}: package '{unknown[0]}' is not in the layer table "
+                                f"of {doc.name}")
+            elif rank[dst] >= rank[src] and dst != root.name:
+                problems.append(f"{where}:{line}: '{src}' (layer {rank[src][0]}) imports "
+                                f"{target} ('{dst}', layer {rank[dst][0]}, not above it in "
+                                f"the table)")
+    for c in cycles(graph):
+        problems.append("cycle: " + " -> ".join(c))
+    return graph, sorted(set(problems))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--root", type=Path, default=ROOT, help="the package folder")
+    parser.add_argument("--doc", type=Path, default=DOC, help="the page with the layer table")
+    args = parser.parse_args(argv)
+    graph, problems = check(args.root, args.doc)
+    for src in sorted(graph):
+        print(f"{src:12s} -> {', '.join(sorted(graph[src]))}")
+    for p in problems:
+        print("broken:", p)
+    return 1 if problems else 0
 
 
 if __name__ == "__main__":
