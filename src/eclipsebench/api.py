@@ -233,7 +233,8 @@ def simulate(out: str | os.PathLike, *, config: Config | str | os.PathLike | Non
         Write the KR/Pmap calibration-star set (default ``simulation.write_calibration``).
     """
     cfg = _config(config)
-    changes = {k: v for k, v in (("seed", seed), ("epochs", epochs)) if v is not None}
+    changes: dict[str, Any] = {k: v for k, v in (("seed", seed), ("epochs", epochs))
+                               if v is not None}
     if changes:
         cfg = replace(cfg, challenge=replace(cfg.challenge, **changes))
         cfg.challenge.validate()

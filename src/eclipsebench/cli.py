@@ -25,6 +25,7 @@ import signal
 import sys
 import threading
 from collections.abc import Iterator, Sequence
+from typing import Any, NoReturn
 
 from . import __version__
 from .errors import InputError
@@ -60,7 +61,7 @@ class _HelpFormatter(argparse.HelpFormatter):
 class _Parser(argparse.ArgumentParser):
     """An ArgumentParser whose usage errors are one line and exit code 2."""
 
-    def error(self, message: str) -> None:  # noqa: D401 - argparse API
+    def error(self, message: str) -> NoReturn:  # noqa: D401 - argparse API
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
@@ -139,7 +140,7 @@ def _one_line_interrupt() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    saved: dict[str, object] = {}
+    saved: dict[str, Any] = {}
 
     def handler(signum, frame):
         if not saved:

@@ -49,6 +49,10 @@ def event_window(clock: OrbitClock, which: str, t_conj_geom: float) -> tuple[flo
 class _EventShape:
     _which = "eclipse"
 
+    def _batman(self, t_geom: np.ndarray, t_conj: float) -> np.ndarray:
+        """The event's shape at geometric times ``t_geom`` (each event class computes its own)."""
+        raise NotImplementedError
+
     def __init__(self, time_bmjd, system, *, grid_step_s: float = _GRID_STEP_S):
         self.time_bmjd = np.ascontiguousarray(time_bmjd, dtype=float)
         self.system = system

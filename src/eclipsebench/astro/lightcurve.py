@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import cast
 
 import numpy as np
 
@@ -76,8 +77,8 @@ class LightCurve:
     _ratio: np.ndarray = field(repr=False)
     _eclipse: EclipseShape = field(repr=False)
     _transit: TransitShape = field(repr=False)
-    _grid: np.ndarray = field(default=None, repr=False)
-    _table: np.ndarray = field(default=None, repr=False)
+    _grid: np.ndarray = field(init=False, repr=False)   # set in __post_init__
+    _table: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         # one table of L over one period (the union of the phase-curve samples and the
@@ -116,7 +117,8 @@ class LightCurve:
         phase = (np.asarray(time_bmjd, dtype=float) - self._t_obs[0]) * (
             1.0 / self.system.period_days)
         phase -= np.floor(phase)
-        return np.interp(phase, self._grid, self._table)
+        # (numpy's stub picks its scalar overload for an array of unknown shape)
+        return cast(np.ndarray, np.interp(phase, self._grid, self._table))
 
     # ------------------------------------------------------------------ events
     def _events(self, t_ref: float, start: float, stop: float) -> list[float]:

@@ -97,7 +97,7 @@ def evaluate(name: str, time, coeffs: Sequence[float], *, t_ref: float = 0.0,
 
 
 # ---------------------------------------------------------------- whole phase curves
-def harmonic_curve(phase_rad, depth: float, harmonics: Sequence[float]) -> np.ndarray:
+def harmonic_curve(phase_rad, depth: float, harmonics: Sequence[float] | np.ndarray) -> np.ndarray:
     """The planet-to-star flux ratio of a harmonic phase curve at orbital phase ``phase_rad``.
 
     ``phase_rad = 2 pi (t - t_ecl) / P`` (0 at mid-eclipse) and ``harmonics`` is

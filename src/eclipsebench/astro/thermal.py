@@ -83,7 +83,7 @@ class Band:
     wavelength_um: tuple[float, ...]
     weight: tuple[float, ...]
 
-    def radiance(self, temperature_k) -> np.ndarray:
+    def radiance(self, temperature_k) -> np.ndarray | float:
         """Band-averaged ``B_lambda`` (photon weighted), same arbitrary units for every T."""
         t = np.asarray(temperature_k, dtype=float)
         lam = np.asarray(self.wavelength_um)

@@ -27,6 +27,7 @@ A lock file (``run.lock``) keeps a second run out of the folder.
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import replace
 from pathlib import Path
 
@@ -118,7 +119,7 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
         tasks += sim_tasks
         tasks += plan_photometry_tasks(vcfg, layout, plans, flat=flat,
                                        after=(sim_tasks[-1].key,))
-        if flat:
+        if flat and plm is not None:
             tasks += plan_reduce_tasks(vcfg, layout, epochs, [plm], flat=True)
         else:
             for profile in cfg.run.profiles:
@@ -156,7 +157,7 @@ def _guard(cfg: Config, layout: Layout) -> None:
     write_text(layout.run_config, text)
 
 
-def run_challenge(cfg: Config, root: str | Path, *, workers: int | None = None,
+def run_challenge(cfg: Config, root: str | os.PathLike[str], *, workers: int | None = None,
                   scheduler: str | None = None) -> tuple[dict, RunReport]:
     """Run (or resume) a challenge in ``root``; return the summary and what ran.
 

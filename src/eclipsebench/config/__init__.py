@@ -10,6 +10,7 @@ Built-in configurations (``eclipsebench/data/configs/<name>.toml``, e.g.
 
 from __future__ import annotations
 
+import os
 import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
@@ -71,7 +72,7 @@ def builtin_config_names() -> list[str]:
     return sorted(f.name[:-5] for f in folder.iterdir() if f.name.endswith(".toml"))
 
 
-def resolve_config(path: str | Path) -> tuple[str, str | None]:
+def resolve_config(path: str | os.PathLike[str]) -> tuple[str, str | None]:
     """Where configuration ``path`` comes from: ``(label, text)``.
 
     A file that exists is read by :func:`load_config` itself (``text`` is
@@ -104,7 +105,7 @@ def resolve_config(path: str | Path) -> tuple[str, str | None]:
                      f"(built-in: {', '.join(names)})")
 
 
-def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> Config:
+def load_config(path: str | os.PathLike[str] | None = None, overrides: list[str] | None = None) -> Config:
     """Read ``path`` (or the defaults), apply ``--set`` overrides, validate.
 
     ``path`` is a TOML file or the name of a built-in configuration
@@ -137,7 +138,7 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     return config
 
 
-def _check_system(config: Config, path: str | Path | None, overrides: list[str]) -> None:
+def _check_system(config: Config, path: str | os.PathLike[str] | None, overrides: list[str]) -> None:
     """The planet must be in a catalogue (or given by value, ``[system.planet]``): one line
     naming ``system.name``, the catalogues searched and where the name was set."""
     try:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import os
 import tomllib
 import types
 import typing
@@ -80,7 +81,7 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         args = get_args(tp)
         inner = args[0] if args else Any
         return tuple(_coerce(v, inner, f"{key}[{i}]") for i, v in enumerate(value))
-    if dataclasses.is_dataclass(tp):
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if not isinstance(value, Mapping):
             raise ConfigError(key, f"expected a table, got {value!r}")
         return from_mapping(tp, value, prefix=key)
@@ -198,7 +199,7 @@ def apply_overrides(mapping: Mapping[str, Any], overrides: list[str]) -> dict[st
     return result
 
 
-def load_toml(path: str | Path) -> dict[str, Any]:
+def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a TOML file, turning any failure into one line naming the file."""
     p = Path(path)
     try:

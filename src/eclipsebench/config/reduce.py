@@ -7,6 +7,11 @@ from typing import Any, Literal
 
 from .base import check
 
+#: The phase-curve models of a single eclipse (``[reduce] phase``).
+PhaseModel = Literal["flat", "linear", "quadratic", "sinusoid"]
+#: The ramp models (``[reduce] ramp``).
+RampModel = Literal["none", "linear", "exponential"]
+
 
 @dataclass(frozen=True)
 class ReduceSection:
@@ -125,8 +130,8 @@ class ReduceSection:
         the catalogue's quadratic coefficients.
     """
 
-    phase: Literal["flat", "linear", "quadratic", "sinusoid"] = "quadratic"
-    ramp: Literal["none", "linear", "exponential"] = "none"
+    phase: PhaseModel = "quadratic"
+    ramp: RampModel = "none"
     eclipse_shape: Literal["physical", "box"] = "physical"
     sampler: Literal["auto", "mcmc", "leastsq"] = "auto"
     mcmc_walkers: int = 16

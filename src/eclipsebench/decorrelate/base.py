@@ -42,7 +42,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Self, TypeVar
 
 import numpy as np
 
@@ -122,6 +122,17 @@ class EpochData:
                          noise_pixels=take(self.noise_pixels), pixels=take(self.pixels),
                          aorkey=take(self.aorkey), meta=dict(self.meta),
                          width_x=take(self.width_x), width_y=take(self.width_y))
+
+    def column(self, name: str) -> np.ndarray:
+        """The optional column ``name`` (``"pixels"``, ``"noise_pixels"``, ...), which must be there.
+
+        A method lists the columns it needs in ``requires`` and the base class
+        refuses data without them; this returns one with its type narrowed.
+        """
+        value = getattr(self, name)
+        if value is None:
+            raise InputError(f"no column {self.table_column(name)} in the photometry table")
+        return value
 
     def table_column(self, name: str) -> str:
         """The photometry-table column behind the attribute ``name``, for messages.
@@ -307,8 +318,9 @@ class Systematics(ABC):
     resources: ClassVar[tuple[str, ...]] = ()
     #: Whether the method draws random numbers (its result then depends on the seed).
     stochastic: ClassVar[bool] = False
-    #: Names of the method's own nonlinear parameters, fitted with the astrophysical ones.
-    param_names: ClassVar[tuple[str, ...]] = ()
+    #: Names of the method's own nonlinear parameters, fitted with the astrophysical ones
+    #: (an instance may set its own when its options add parameters: GP, SPCA's PSF width).
+    param_names: tuple[str, ...] = ()
     description: ClassVar[str] = ""
     #: The emcee move the fitter uses for this method's MCMC: "de" (differential
     #: evolution, ter Braak 2006; the DE-MC of the BLISS team, and the move that
@@ -339,7 +351,9 @@ class Systematics(ABC):
         if kwargs:
             base = parse_method_options(type(self), options).to_dict()
             options = {**base, **kwargs}
-        self.options = parse_method_options(type(self), options)
+        #: The method's options: an instance of ``type(self).Options`` (a subclass
+        #: narrows the annotation to its own dataclass, ``options: BlissOptions``).
+        self.options: MethodOptions = parse_method_options(type(self), options)
         missing = [data.table_column(c) for c in self.requires if getattr(data, c, None) is None]
         if missing:
             raise InputError(f"method '{self.name}' needs the column(s) {', '.join(missing)} "
@@ -350,7 +364,7 @@ class Systematics(ABC):
     @classmethod
     def build(cls, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
               *, seed: int = 0, epoch: int = 0,
-              resources: Mapping[str, Any] | None = None) -> Systematics:
+              resources: Mapping[str, Any] | None = None) -> Self:
         """Build the method as the reducer does: resources loaded, streams from ``seed``.
 
         Parameters
@@ -485,7 +499,7 @@ class Systematics(ABC):
         systematic = self.predict(astro, theta) / astro
         return self.data.flux / systematic
 
-    def with_flux(self, flux: np.ndarray) -> Systematics:
+    def with_flux(self, flux: np.ndarray) -> Self:
         """The same method (same options and context) rebuilt on ``data`` with ``flux`` replaced.
 
         Used by the prayer bead, which refits the model plus shifted residuals.
@@ -506,7 +520,7 @@ class Systematics(ABC):
                              f"{self.data.flux.shape[0]} fluxes, got {flux.shape}")
         return flux
 
-    def _copy_with_flux(self, flux: np.ndarray) -> Systematics:
+    def _copy_with_flux(self, flux: np.ndarray) -> Self:
         """A shallow copy whose ``data.flux`` is ``flux`` (checked), for ``with_flux``
         overrides that reuse the flux-independent work and redo only what the flux enters."""
         flux = self._checked_flux(flux)
@@ -564,12 +578,13 @@ class Systematics(ABC):
 
 
 _REGISTRY: dict[str, type[Systematics]] = {}
+_S = TypeVar("_S", bound=Systematics)
 _PLUGINS_LOADED = False
 #: The paper's seven first, in its order; then every other method by name.
 _PAPER_ORDER = ("bliss", "gp", "ica", "kr-data", "kr-pmap", "pld", "segpoly")
 
 
-def register(cls: type[Systematics]) -> type[Systematics]:
+def register(cls: type[_S]) -> type[_S]:
     """Class decorator: add a Systematics subclass to the registry under ``cls.name``."""
     if not (isinstance(cls, type) and issubclass(cls, Systematics)):
         raise TypeError(f"{cls!r} is not a subclass of eclipsebench.Systematics")

@@ -246,16 +246,6 @@ def bliss_gain(grid: BlissGrid, ratio: np.ndarray) -> np.ndarray:
     return w[0] * k[c[0]] + w[1] * k[c[1]] + w[2] * k[c[2]] + w[3] * k[c[3]]
 
 
-def _with_flux(model: Systematics, flux: np.ndarray) -> Systematics:
-    """A shallow copy of ``model`` whose data (and cached flux) are ``flux``.
-
-    Also used by the kernel-regression methods (:mod:`.kernel`).
-    """
-    new = model._copy_with_flux(flux)
-    new._flux = new.data.flux
-    return new
-
-
 @dataclass(frozen=True)
 class BlissOptions(MethodOptions):
     """Options of ``bliss`` (:class:`Bliss`)."""
@@ -265,7 +255,7 @@ class BlissOptions(MethodOptions):
 
     def validate(self) -> None:
         sp = self.knot_spacing_px
-        check(sp is None or (np.size(sp) in (1, 2) and np.all(np.asarray(sp) > 0)),
+        check(sp is None or (np.size(sp) in (1, 2) and bool(np.all(np.asarray(sp) > 0))),
               "knot_spacing_px", "one or two positive spacings in pixels")
         check(self.min_points_per_knot >= 1, "min_points_per_knot", "an integer >= 1")
 
@@ -302,6 +292,7 @@ class Bliss(Systematics):
     name: ClassVar[str] = "bliss"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = BlissOptions
+    options: BlissOptions
     description: ClassVar[str] = "bilinearly interpolated knot means of flux/astro over (x, y)"
     #: The BLISS team sampled with DE-MC (ter Braak 2006); the fitter uses emcee's DE move.
     preferred_move: ClassVar[str] = "de"
@@ -388,7 +379,9 @@ class Bliss(Systematics):
 
     def with_flux(self, flux: np.ndarray) -> Bliss:
         """The same knot grid and mask on new fluxes of the kept frames."""
-        return _with_flux(self, flux)
+        new = self._copy_with_flux(flux)
+        new._flux = new.data.flux
+        return new
 
     def n_effective_params(self) -> int:
         """The number of knots whose value is fitted (the live knots)."""

@@ -228,6 +228,7 @@ class GaussianProcess(Systematics):
     name: ClassVar[str] = "gp"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = GpOptions
+    options: GpOptions
     # Cyclic shifts of the residuals carry the correlated part the kernel already
     # models, so the prayer bead double-counts it (199 vs 80 ppm on a simulated
     # epoch) and costs one kernel optimisation per shift; Evans et al. (2015)

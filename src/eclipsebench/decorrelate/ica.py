@@ -558,6 +558,7 @@ class IndependentComponents(Systematics):
     name: ClassVar[str] = "ica"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = IcaOptions
+    options: IcaOptions
     stochastic: ClassVar[bool] = True
     description: ClassVar[str] = ("wavelet pixel-ICA: FastICA on DWT coefficients of the pixel "
                                   "light curves, eclipse + the scaled non-eclipse components, "
@@ -605,7 +606,7 @@ class IndependentComponents(Systematics):
         durations = _box_durations(data.time_bmjd, t_pred)
         shape_index, shape_score, box_d = (eclipse_component_by_shape(
             self.all_components, data.time_bmjd, float(t_pred), durations)
-            if durations.size else (None, None, None))
+            if durations.size and t_pred is not None else (None, None, None))
 
         if opts.n_restarts >= 2:
             g = self.context.stream("bootstrap")

@@ -45,7 +45,6 @@ from ..config.base import check
 from ..errors import InputError
 from ..io.pmap_files import find_pmap_path, load_pmap
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .bliss import _with_flux
 from .pmap import CalibrationSet, GriddedPmap, interpolate_grid, kernel_occupancy
 
 __all__ = ["scale_lengths", "knn_weights", "local_kernel_weights", "smoother_trace",
@@ -242,6 +241,7 @@ class KernelRegressionData(Systematics):
     name: ClassVar[str] = "kr-data"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = KrDataOptions
+    options: KrDataOptions
     description: ClassVar[str] = "k-nearest-neighbour Gaussian kernel regression of flux/astro"
 
     def __init__(self, data: EpochData, options: Any = None, *,
@@ -292,7 +292,9 @@ class KernelRegressionData(Systematics):
 
     def with_flux(self, flux: np.ndarray) -> KernelRegressionData:
         """The same neighbours and weights on new fluxes (they depend only on the centroids)."""
-        return _with_flux(self, flux)
+        new = self._copy_with_flux(flux)
+        new._flux = new.data.flux
+        return new
 
     def n_effective_params(self) -> int:
         """Effective degrees of freedom ``tr(S)`` of the smoother with the point included.
@@ -432,6 +434,7 @@ class KernelRegressionPmap(Systematics):
     name: ClassVar[str] = "kr-pmap"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = KrPmapOptions
+    options: KrPmapOptions
     resources: ClassVar[tuple[str, ...]] = ("pmap",)
     description: ClassVar[str] = "fixed gain from kernel regression on a calibration star"
 
@@ -567,7 +570,9 @@ class KernelRegressionPmap(Systematics):
 
     def with_flux(self, flux: np.ndarray) -> KernelRegressionPmap:
         """The same fixed gain on new fluxes."""
-        return _with_flux(self, flux)
+        new = self._copy_with_flux(flux)
+        new._flux = new.data.flux
+        return new
 
     def n_effective_params(self) -> int:
         """One: the flux scale F0 (the gain map is fixed by the calibration data)."""

@@ -128,6 +128,8 @@ class PldDesign:
         self.design = d / self.col_scale
         self.iu = np.triu_indices(self.n_regressors)
         self.outer = None
+        #: (frame order or None, the design in time order), built by the batched likelihood.
+        self._batch_sorted: tuple[np.ndarray | None, np.ndarray] | None = None
         if self.bin_frames == 1:
             self.starts = None
             self.b_flux = np.asarray(flux, float)
@@ -208,7 +210,7 @@ def _binned_design_batch(design: PldDesign, astro: np.ndarray) -> np.ndarray:
     x rows x frames-in-bin times bins x frames-in-bin x regressors); the
     last, partial bin (if any) is added on its own.
     """
-    cache = getattr(design, "_batch_sorted", None)
+    cache = design._batch_sorted
     if cache is None:   # (the frames' order if they are not in time order, the sorted design)
         order = design.order
         if order is not None and np.array_equal(order, np.arange(len(order))):
@@ -220,12 +222,15 @@ def _binned_design_batch(design: PldDesign, astro: np.ndarray) -> np.ndarray:
     m, n = a.shape
     size, p = design.bin_frames, d.shape[1]
     n_full = n // size
-    out = np.empty((m, len(design.starts), p))
+    starts = design.starts
+    if starts is None:
+        raise ValueError("the batched binned product needs a binned design (bin_frames > 1)")
+    out = np.empty((m, len(starts), p))
     if n_full:
         full = np.matmul(a[:, :n_full * size].reshape(m, n_full, size).transpose(1, 0, 2),
                          d[:n_full * size].reshape(n_full, size, p))
         out[:, :n_full] = full.transpose(1, 0, 2)
-    if n_full < len(design.starts):
+    if n_full < len(starts):
         out[:, n_full] = a[:, n_full * size:] @ d[n_full * size:]
     return out / design.counts[None, :, None]
 
@@ -485,6 +490,7 @@ class PixelLevelDecorrelation(Systematics):
     name: ClassVar[str] = "pld"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldOptions
+    options: PldOptions
     description: ClassVar[str] = "linear regression on normalised pixel values, fitted on binned data"
     #: Deming et al. estimated the error from the residuals' rms against bin size.
     reported_error: ClassVar[str] = "time_averaging"
@@ -495,7 +501,7 @@ class PixelLevelDecorrelation(Systematics):
         stamp = int(self.options.stamp)
         degree = int(self.options.time_poly_degree)
         n = len(data)
-        p_hat = normalised_pixels(central_stamp(data.pixels, stamp))
+        p_hat = normalised_pixels(central_stamp(data.column("pixels"), stamp))
         regressors = np.column_stack([p_hat, time_basis(data.time_bmjd, degree)])
         p = regressors.shape[1]
         fixed = self.options.bin_frames

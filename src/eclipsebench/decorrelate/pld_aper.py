@@ -67,11 +67,12 @@ class PldAperture(LinearDetectorModel):
     name: ClassVar[str] = "pld-aper"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldAperOptions
+    options: PldAperOptions
     description: ClassVar[str] = "aperture flux on normalised pixels (SPCA's PLDAper)"
 
     def regressors(self, data: EpochData) -> np.ndarray:
         """The normalised pixels ``P_i / sum P`` of the central stamp."""
-        return normalised_pixels(central_stamp(data.pixels, int(self.options.stamp)))
+        return normalised_pixels(central_stamp(data.column("pixels"), int(self.options.stamp)))
 
     def diagnostics(self) -> dict[str, Any]:
         """The base diagnostics plus the stamp side."""

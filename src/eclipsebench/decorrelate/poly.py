@@ -41,7 +41,7 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol, cast
 
 import numpy as np
 from numpy.polynomial import legendre
@@ -151,6 +151,13 @@ def psf_width_columns(data: EpochData, method: str) -> np.ndarray:
     return w - w.mean(axis=0)
 
 
+class LinearModelOptions(Protocol):
+    """The options every :class:`LinearDetectorModel` reads (its subclasses' dataclasses have them)."""
+
+    bin_frames: int
+    psf_width: bool
+
+
 class LinearDetectorModel(Systematics):
     """A detector model linear in its coefficients, times SPCA's optional PSF-width term.
 
@@ -165,11 +172,16 @@ class LinearDetectorModel(Systematics):
     #: Names of the PSF-width slopes (relative flux change per pixel of width).
     PSFW_PARAMS: ClassVar[tuple[str, ...]] = ("psfw_x_per_px", "psfw_y_per_px")
 
+    @property
+    def linear_options(self) -> LinearModelOptions:
+        """``self.options`` seen as what this class reads (``bin_frames``, ``psf_width``)."""
+        return cast(LinearModelOptions, self.options)
+
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:
         super().__init__(data, options, context=context, **kwargs)
-        bin_frames = int(self.options.bin_frames)
-        self.widths = psf_width_columns(data, self.name) if self.options.psf_width else None
+        bin_frames = int(self.linear_options.bin_frames)
+        self.widths = psf_width_columns(data, self.name) if self.linear_options.psf_width else None
         self.param_names = self.PSFW_PARAMS if self.widths is not None else ()
         raw = self.regressors(data)
         basis, self.n_dropped_directions = whitened_basis(raw, data.flux_err)
@@ -241,9 +253,9 @@ class LinearDetectorModel(Systematics):
         """Regressors, dropped null directions, bins and whether the PSF-width term is on."""
         return {"n_regressors": int(self.n_raw_regressors),
                 "n_dropped_directions": int(self.n_dropped_directions),
-                "bin_frames": int(self.options.bin_frames),
-                "n_fit_points": -(-len(self.data) // int(self.options.bin_frames)),
-                "psf_width": bool(self.options.psf_width)}
+                "bin_frames": int(self.linear_options.bin_frames),
+                "n_fit_points": -(-len(self.data) // int(self.linear_options.bin_frames)),
+                "psf_width": bool(self.linear_options.psf_width)}
 
 
 @dataclass(frozen=True)
@@ -263,6 +275,7 @@ class _Polynomial(LinearDetectorModel):
     order: ClassVar[int] = 0
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = PolyOptions
+    options: PolyOptions
 
     def regressors(self, data: EpochData) -> np.ndarray:
         """Legendre products of the scaled centroids up to total degree ``order``."""

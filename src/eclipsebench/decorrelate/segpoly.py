@@ -320,7 +320,8 @@ def sp_k2_detrend(time_bmjd: np.ndarray, flux: np.ndarray, x: np.ndarray, y: np.
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     n = len(time)
     fit_mask = np.ones(n, dtype=bool) if fit_mask is None else np.asarray(fit_mask, bool)
-    kw = dict(tolerance=tolerance, max_iterations=max_iterations, clip_sigma=clip_sigma)
+    kw: dict[str, Any] = dict(tolerance=tolerance, max_iterations=max_iterations,
+                              clip_sigma=clip_sigma)
 
     one = iterative_poly_detrend(flux, poly_design(x, y, order), fit_mask, **kw)
     stage1 = flux / one.trend
@@ -447,6 +448,7 @@ class SegmentedPolynomial(Systematics):
     name: ClassVar[str] = "segpoly"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = SegpolyOptions
+    options: SegpolyOptions
     description: ClassVar[str] = ("SP(K2): iterated cubic (x, y) polynomial, then ten segmented "
                                   "detrendings combined by the median, blind to the eclipse "
                                   "(Buzasi et al. 2015)")
@@ -464,7 +466,7 @@ class SegmentedPolynomial(Systematics):
             raise InputError("segpoly: the flux must be positive on every frame")
         n_terms1 = (o.order + 1) * (o.order + 2) // 2
         self._min_fit = 3 * n_terms1
-        self._kw = dict(order=o.order, segment_order=o.segment_order,
+        self._kw: dict[str, Any] = dict(order=o.order, segment_order=o.segment_order,
                         segment_fractions=tuple(float(f) for f in o.segment_fractions),
                         tolerance=o.tolerance, max_iterations=o.max_iterations,
                         clip_sigma=o.clip_sigma)

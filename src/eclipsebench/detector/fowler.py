@@ -59,7 +59,7 @@ def _check_readout(fowler: int, wait: int) -> None:
 
 
 def fowler_variance(flux_e, *, fowler: int = SUB_2S.fowler, wait: int = SUB_2S.wait, read_noise_e: float = READ_NOISE_E,
-                    n_pixels: float = 1.0, shot_noise: str = "paper"):
+                    n_pixels: float | np.ndarray = 1.0, shot_noise: str = "paper"):
     """Variance of Fowler-sampled electron counts (Garnett & Forrest 1993).
 
     ``shot_noise="paper"`` implements the paper's Eq. ``gar_for_var``::

@@ -35,6 +35,7 @@ Executors:
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import logging
@@ -408,8 +409,8 @@ def _run_sync(by_key, todo, done, bars, report, keep_going,
         task = by_key[key]
         if _blocked(task, set(failures)) or not all(d in done for d in task.deps):
             continue  # a dependency failed: not run
-        if not _settle(key, lambda t=task: _call(t.func, t.args), by_key, done, bars, report,
-                       hashes, failures) and not keep_going:
+        if not _settle(key, functools.partial(_call, task.func, task.args), by_key, done, bars,
+                       report, hashes, failures) and not keep_going:
             break
     return failures
 

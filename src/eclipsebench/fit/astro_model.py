@@ -186,7 +186,7 @@ def system_period_days(system: Any) -> float | None:
     return None
 
 
-def box_visible_fraction(time_bmjd: np.ndarray, t_ecl_bmjd: float, duration_d: float,
+def box_visible_fraction(time_bmjd: np.ndarray, t_ecl_bmjd: float | np.ndarray, duration_d: float,
                          exposure_d: float) -> np.ndarray:
     """A box eclipse averaged over each exposure.
 
@@ -275,7 +275,8 @@ class _TransitCurve:
         # conjunction minus mid-transit (both geometric: the light delay is common)
         self.offset_d = float(t_conj - clock._mid_event_geom(t_conj, "transit"))
         self.fixed_orbit = fixed_orbit
-        self._tau = self._sep = None
+        # the separation table of a fixed orbit (_tabulate); unused otherwise
+        self._tau, self._sep = np.empty(0), np.empty(0)
         if fixed_orbit:
             self._tabulate(float(system.a_rs), float(system.inc_deg), grid_step_s)
 
@@ -442,7 +443,10 @@ class AstroModel:
         self.exposure_d = float(np.median(np.diff(np.sort(self.time_bmjd))))
         if not self.exposure_d > 0:
             raise InputError("time_bmjd: the frames do not advance in time")
-        self.box_duration_d = None
+        self.box_duration_d: float | None = None
+        self.period_d: float | None = None
+        self.shape: VisibleFraction | None = None
+        self.names: tuple[str, ...] = ()
         if event == "phase-curve":
             if transit_free or transit_priors:
                 raise InputError("transit_free, transit_priors: apply to event 'transit' only "
@@ -455,7 +459,7 @@ class AstroModel:
             self.shape = None
             self.period_d = period_d if period_d is not None else system_period_days(system)
             self._setup_transit(system, transit_free, transit_priors, limb_darkening_q)
-            self.names: tuple[str, ...] = ("rp_rs", "t_transit_bmjd") + self.transit_free \
+            self.names = ("rp_rs", "t_transit_bmjd") + self.transit_free \
                 + _PHASE_NAMES[phase] + _RAMP_NAMES[ramp]
             self.n_phase = len(_PHASE_NAMES[phase])
             self.n_ramp = len(_RAMP_NAMES[ramp])
@@ -480,7 +484,7 @@ class AstroModel:
             if not box_duration_d > 0:
                 raise InputError("box_duration_d: expected a positive duration in days")
             self.box_duration_d = float(box_duration_d)
-        self.names: tuple[str, ...] = ("depth", "t_ecl_bmjd") + _PHASE_NAMES[phase] \
+        self.names = ("depth", "t_ecl_bmjd") + _PHASE_NAMES[phase] \
             + _RAMP_NAMES[ramp]
         self.n_phase = len(_PHASE_NAMES[phase])
         self.n_ramp = len(_RAMP_NAMES[ramp])
@@ -527,7 +531,8 @@ class AstroModel:
         if self.eclipse_shape != "physical":
             raise InputError(f"eclipse_shape {self.eclipse_shape!r}: a phase curve's eclipses "
                              "repeat every orbit; use 'physical'")
-        self.period_d = float(period_d if period_d is not None else system_period_days(system))
+        period = period_d if period_d is not None else system_period_days(system)
+        self.period_d = float(period) if period is not None else float("nan")
         if not self.period_d > 0:
             raise InputError("event 'phase-curve': the orbital period is unknown (give period_d)")
         # the transit exactly as event "transit" makes it, with Rp/R* free and a/R*, b and
@@ -591,6 +596,24 @@ class AstroModel:
     def __len__(self) -> int:
         return len(self.names)
 
+    def _period(self) -> float:
+        """The orbital period (days); the events and phase models that use it require it."""
+        if self.period_d is None:
+            raise InputError("the orbital period is unknown (give period_d)")
+        return self.period_d
+
+    def _shape(self) -> VisibleFraction:
+        """The eclipse's visible fraction (an eclipse or a phase curve has one)."""
+        if self.shape is None:
+            raise InputError(f"event {self.event!r}: no eclipse shape")
+        return self.shape
+
+    def _box_duration(self) -> float:
+        """The box eclipse's duration (days), set with ``eclipse_shape = 'box'``."""
+        if self.box_duration_d is None:
+            raise InputError("eclipse_shape 'box': no box duration")
+        return self.box_duration_d
+
     @property
     def scales(self) -> np.ndarray:
         """Typical magnitude of each parameter (finite-difference steps, MCMC ball)."""
@@ -614,8 +637,8 @@ class AstroModel:
         lo[0], hi[0] = -0.1, 0.1
         lo[1], hi[1] = self.t_start_bmjd, self.t_stop_bmjd
         if self.event == "phase-curve":
-            lo[1] -= 0.5 * self.period_d
-            hi[1] += 0.5 * self.period_d
+            lo[1] -= 0.5 * self._period()
+            hi[1] += 0.5 * self._period()
             lo[2], hi[2] = _TRANSIT_BOUNDS["rp_rs"]
             if self.n_aor:
                 lo[-self.n_aor:], hi[-self.n_aor:] = -0.5, 0.5
@@ -676,12 +699,12 @@ class AstroModel:
         if self.event == "transit":
             return np.ones_like(self.time_bmjd)
         if self.event == "phase-curve":
-            return self._integrated(np.asarray(self.shape.visible_fraction(t_ecl_bmjd),
+            return self._integrated(np.asarray(self._shape().visible_fraction(t_ecl_bmjd),
                                                dtype=float))
         if self.eclipse_shape == "box":
-            return box_visible_fraction(self.time_bmjd, t_ecl_bmjd, self.box_duration_d,
+            return box_visible_fraction(self.time_bmjd, t_ecl_bmjd, self._box_duration(),
                                         self.exposure_d)
-        return np.asarray(self.shape.visible_fraction(t_ecl_bmjd), dtype=float)
+        return np.asarray(self._shape().visible_fraction(t_ecl_bmjd), dtype=float)
 
     def planet(self, theta) -> np.ndarray:
         """p(t), the planet-to-star flux ratio; p(t_ecl) = depth for every phase model.
@@ -705,7 +728,7 @@ class AstroModel:
             return depth + c[0] * dt
         if self.phase == "quadratic":
             return depth + dt * (c[0] + c[1] * dt)
-        arg = (2.0 * np.pi / self.period_d) * dt
+        arg = (2.0 * np.pi / self._period()) * dt
         return depth + c[0] * (np.cos(arg) - 1.0) + c[1] * np.sin(arg)
 
     def ramp_factor(self, theta) -> np.ndarray:
@@ -756,7 +779,7 @@ class AstroModel:
     def _harmonic(self, theta: np.ndarray, time: np.ndarray) -> np.ndarray:
         """p(t) of a phase curve at ``time``: the lead's harmonic curve, phi = 2 pi (t - t_ecl) / P."""
         k = 2 + self.n_shape
-        phase_rad = (2.0 * np.pi / self.period_d) * (time - theta[1])
+        phase_rad = (2.0 * np.pi / self._period()) * (time - theta[1])
         return harmonic_curve(phase_rad, theta[0], theta[k:k + self.n_phase])
 
     def _stellar_sub(self, theta: np.ndarray) -> np.ndarray:
@@ -790,7 +813,7 @@ class AstroModel:
 
     def _phase_curve(self, theta: np.ndarray) -> np.ndarray:
         """A(t) = R(t) O(t) [T(t) + v(t) p(t)], T, v and p averaged over each exposure."""
-        v = np.asarray(self.shape.visible_fraction(theta[1]), dtype=float)
+        v = np.asarray(self._shape().visible_fraction(theta[1]), dtype=float)
         flux = self._integrated(self._stellar_sub(theta) + v * self._harmonic(theta,
                                                                               self._sub_time))
         if self.ramp != "none":
@@ -944,7 +967,7 @@ class AstroModel:
         phase_code = ("flat", "linear", "quadratic").index(self.phase)
         ramp_at = 2 + self.n_phase if self.ramp == "linear" else -1
         if self.eclipse_shape == "box":
-            return (phase_code, ramp_at, self.t_start_bmjd, True, 0.5 * self.box_duration_d,
+            return (phase_code, ramp_at, self.t_start_bmjd, True, 0.5 * self._box_duration(),
                     self.exposure_d, *_NO_TABLE)
         shape = self.shape
         if not (isinstance(shape, EclipseShape) and shape.time_bmjd.shape == self.time_bmjd.shape
@@ -968,7 +991,7 @@ class AstroModel:
             return depth + c[:, :1] * dt
         if self.phase == "quadratic":
             return depth + dt * (c[:, :1] + c[:, 1:2] * dt)
-        arg = (2.0 * np.pi / self.period_d) * dt
+        arg = (2.0 * np.pi / self._period()) * dt
         return depth + c[:, :1] * (np.cos(arg) - 1.0) + c[:, 1:2] * np.sin(arg)
 
     def _ramp_factor_batch(self, thetas: np.ndarray) -> np.ndarray:
@@ -988,7 +1011,7 @@ class AstroModel:
         """
         if self.eclipse_shape == "box":
             return None, box_visible_fraction(self.time_bmjd, t_ecl[:, None],
-                                              self.box_duration_d, self.exposure_d)
+                                              self._box_duration(), self.exposure_d)
         shape = self.shape
         if not isinstance(shape, EclipseShape):
             return None, np.stack([self.visible_fraction(t) for t in t_ecl])
@@ -1031,7 +1054,8 @@ class AstroModel:
         (or starting) a_rs, b, q1, q2 and the conjunction's offset from
         mid-transit.
         """
-        out = {"phase": self.phase, "ramp": self.ramp, "eclipse_shape": self.eclipse_shape,
+        out: dict[str, Any] = {"phase": self.phase, "ramp": self.ramp,
+                               "eclipse_shape": self.eclipse_shape,
                "box_duration_d": self.box_duration_d, "period_d": self.period_d}
         if self.event == "transit":
             out.update({"event": "transit", "eclipse_shape": None,

@@ -111,7 +111,7 @@ class PerAorSystematics(Systematics):
             raise InputError(f"method '{first.name}': its depth-separation error cannot be "
                              "combined over AORs; set [reduce] systematics_per_aor = false")
         self.parts = parts
-        self.name = first.name
+        self.name = first.name  # type: ignore[misc]  # the wrapper answers to its parts' registry name
         self.options = first.options
         self.context = first.context
         for attr in ("preferred_move", "use_prayer_bead",

@@ -78,7 +78,7 @@ def rms_vs_bin_size(residuals: np.ndarray, sizes) -> tuple[np.ndarray, np.ndarra
 
 
 def red_noise_beta(residuals: np.ndarray, time_bmjd: np.ndarray, *,
-                   bin_minutes: tuple[float, float] = (10.0, 30.0), n_sizes: int = 10,
+                   bin_minutes: tuple[float, ...] = (10.0, 30.0), n_sizes: int = 10,
                    min_bins: int = 8) -> float:
     """The time-averaging red-noise factor beta (Winn et al. 2008, Sect. 3).
 
@@ -245,7 +245,7 @@ def _covariance(jac: np.ndarray, chi2_red: float) -> np.ndarray:
 
 def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro, *,
                 theta0_sys=None, max_nfev: int | None = 200,
-                beta_bin_minutes: tuple[float, float] = (10.0, 30.0),
+                beta_bin_minutes: tuple[float, ...] = (10.0, 30.0),
                 max_alternations: int = 5) -> FitResult:
     """Fit astro and systematics parameters jointly by least squares.
 
@@ -320,7 +320,7 @@ def has_own_likelihood(systematics: Systematics) -> bool:
 
 
 def _summarise(problem: _Problem, theta: np.ndarray, nfev: int, success: bool, message: str,
-               beta_bin_minutes: tuple[float, float]) -> FitResult:
+               beta_bin_minutes: tuple[float, ...]) -> FitResult:
     sys = problem.sys
     theta_a, theta_s = problem.split(theta)
     astro = problem.astro(theta_a)

@@ -205,7 +205,7 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     lo_s, hi_s = systematics.param_bounds()
     lower = np.concatenate([lo_a, np.asarray(lo_s, dtype=float)])
     upper = np.concatenate([hi_a, np.asarray(hi_s, dtype=float)])
-    move = move or getattr(systematics, "preferred_move", "stretch")
+    move = move or systematics.preferred_move
     n_walkers = max(int(n_walkers), 2 * ndim + 2)
     n_walkers += n_walkers % 2
     scale = np.where(np.isfinite(scale_start) & (np.asarray(scale_start) > 0),

@@ -32,6 +32,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ..config.reduce import PhaseModel, RampModel
 from ..errors import InputError
 
 __all__ = ["PROFILES", "PaperProfile", "paper_profile", "register_paper_profile",
@@ -86,8 +87,8 @@ class PaperProfile:
 
     team: str
     centroid: Literal["col", "gauss", "gauss-fixed"]
-    phases: tuple[str, ...]
-    ramps: tuple[str, ...]
+    phases: tuple[PhaseModel, ...]
+    ramps: tuple[RampModel, ...]
     eclipse_shape: Literal["physical", "box"]
     sampler: Literal["leastsq", "mcmc"]
     reported_error: tuple[str, ...]

@@ -277,7 +277,7 @@ def _largest(estimates: dict[str, float | None]) -> tuple[float, str]:
     usable = {k: v for k, v in estimates.items() if v is not None and np.isfinite(v)}
     if not usable:
         return float("nan"), "none"
-    name = max(usable, key=usable.get)
+    name = max(usable, key=lambda k: usable[k])
     return float(usable[name]), name
 
 
@@ -397,10 +397,11 @@ def _phase_curve_choice(prep: PreparedEpoch, method: str, options: ReduceSection
     """
     if options.event != "phase-curve" or options.phase_curve_model != "bic":
         return options, {}
-    bic = {phase: float(fit_prepared(prep, method, options=options, seed=seed, phase=phase,
-                                     errors=False).bic)
-           for phase in PHASE_CURVE_MODELS}
-    return replace(options, phase_curve_model=min(bic, key=bic.get)), bic
+    bic: dict[str, float] = {phase: float(fit_prepared(prep, method, options=options, seed=seed,
+                                                       phase=phase, errors=False).bic)
+                             for phase in PHASE_CURVE_MODELS}
+    best = min(PHASE_CURVE_MODELS, key=lambda phase: bic[phase])
+    return replace(options, phase_curve_model=best), bic
 
 
 def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
@@ -431,12 +432,13 @@ def _fit_paper_profile(prep: PreparedEpoch, method: str, team: PaperProfile, *,
     """The team's fit: its phase and ramp (least BIC among its candidates), its error."""
     bic: dict[str, float] = {}
     if len(team.phases) * len(team.ramps) > 1:
-        for ramp in team.ramps:
-            for phase in team.phases:
-                trial = fit_prepared(prep, method, options=replace(options, ramp=ramp),
-                                     seed=seed, phase=phase, errors=False)
-                bic[f"{phase}/{ramp}"] = float(trial.bic)
-        phase, ramp = min(bic, key=bic.get).split("/")
+        candidates = {f"{phase}/{ramp}": (phase, ramp)
+                      for ramp in team.ramps for phase in team.phases}
+        for key, (phase, ramp) in candidates.items():
+            trial = fit_prepared(prep, method, options=replace(options, ramp=ramp),
+                                 seed=seed, phase=phase, errors=False)
+            bic[key] = float(trial.bic)
+        phase, ramp = candidates[min(bic, key=lambda k: bic[k])]
         options = replace(options, phase=phase, ramp=ramp)
     result = fit_prepared(prep, method, options=options, seed=seed,
                           reported=team.reported_error)
@@ -726,7 +728,7 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
                          columns=columns, time_column=time_column, time_format=time_format)
     if options.event == "phase-curve" and phases == PHASE_MODELS:
         phases = PHASE_CURVE_MODELS
-    rows = []
+    rows: list[dict[str, Any]] = []
     for phase in phases:
         res = fit_prepared(prep, method, options=options, seed=seed, phase=phase, errors=False)
         rows.append({"phase": phase, "k": res.k, "depth_ppm": res.depth_ppm,
@@ -887,7 +889,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                         method="trf", max_nfev=options.max_nfev, xtol=1e-10, ftol=1e-10,
                         gtol=1e-10)
     theta = sol.x
-    per_epoch, betas, loglike, chi2, k, n = [], [], 0.0, 0.0, 1, 0
+    per_epoch: list[dict[str, Any]] = []
+    betas, loglike, chi2, k, n = [], 0.0, 0.0, 1, 0
     for i, (p, prep) in enumerate(zip(problems, preps, strict=True)):
         s = _summarise(p, joint.epoch_theta(theta, i), sol.nfev, bool(sol.success),
                        str(sol.message), tuple(options.beta_bin_minutes))

@@ -124,7 +124,7 @@ class ParamRange:
 
     def draw(self, rng: np.random.Generator) -> float:
         """One value."""
-        if self.kind == "C":
+        if self.kind == "C" or self.hi is None:   # (__post_init__ refuses hi = None otherwise)
             return float(self.lo)
         if self.kind == "U":
             return float(rng.uniform(self.lo, self.hi))

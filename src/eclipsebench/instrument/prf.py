@@ -402,6 +402,10 @@ def irsa_prf_channel(folder) -> int | None:
 class IrsaPRF(PRF):
     """A PRF from the IRSA/IRACSIM file set (see :meth:`from_files`)."""
 
+    #: The file it was read from, and its channel (set by :meth:`from_files`).
+    path: Path
+    channel: int
+
     @classmethod
     def from_files(cls, folder, *, array_position=None, gain_rescale: bool = False,
                    subarray: bool = True, channel: int | None = None) -> IrsaPRF:
@@ -444,8 +448,9 @@ class IrsaPRF(PRF):
         x, y = (15.0, 15.0) if array_position is None else map(float, array_position)
         if subarray:
             x, y = x + constants.SUBARRAY_ORIGIN_FULL[0], y + constants.SUBARRAY_ORIGIN_FULL[1]
-        pos = np.array([[int(m.group(1)) - 1, int(m.group(2)) - 1]
-                        for m in (_IRSA_NAME.search(p.name) for p in files)], float)
+        names = [_IRSA_NAME.search(p.name) for p in files]   # every file matched the glob's filter
+        pos = np.array([[int(m.group(1)) - 1, int(m.group(2)) - 1] for m in names if m is not None],
+                       dtype=float)
         best = files[int(np.argmin(np.hypot(pos[:, 0] - x, pos[:, 1] - y)))]
         try:
             with warnings.catch_warnings():

@@ -43,6 +43,7 @@ import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from astropy.io import fits
@@ -156,15 +157,23 @@ def find_bcd_files(input_dir: str | os.PathLike, channel: int | None = None) -> 
     else:
         files = sorted(_walk_bcd(root), key=lambda p: p.name)
     if channel is not None:
-        files = [p for p in files if int(BCD_NAME.match(p.name)["ch"]) == int(channel)]
+        files = [p for p in files if _name_channel(p) == int(channel)]
     if not files:
         what = f"channel {channel} " if channel is not None else ""
         raise InputError(f"{root}: no IRAC {what}BCD files (SPITZER_I<ch>_<AORKEY>_<EXPID>_"
                          "<DCE>_<ver>_bcd.fits) found")
-    channels = sorted({int(BCD_NAME.match(p.name)["ch"]) for p in files})
+    channels = sorted({_name_channel(p) for p in files})
     if len(channels) > 1:
         raise InputError(f"{root}: files of channels {channels}; choose one with --channel")
     return files
+
+
+def _name_channel(path: Path) -> int:
+    """The IRAC channel in a BCD file name (``SPITZER_I<ch>_...``); the walk keeps only such names."""
+    match = BCD_NAME.match(path.name)
+    if match is None:
+        raise InputError(f"{path}: not an IRAC BCD file name")
+    return int(match["ch"])
 
 
 def _walk_bcd(root: Path) -> list[Path]:
@@ -178,7 +187,7 @@ def _walk_bcd(root: Path) -> list[Path]:
 
     if not os.access(root, os.R_OK | os.X_OK):
         refuse(PermissionError(13, "Permission denied", str(root)))
-    found = []
+    found: list[Path] = []
     for folder, dirs, names in os.walk(root, onerror=refuse, followlinks=True):
         dirs.sort()
         found.extend(Path(folder) / n for n in names if BCD_NAME.match(n))
@@ -215,6 +224,7 @@ def _card(header: fits.Header, key: str, path: Path, kind=float, default=_MISSIN
         unparsable (``BMJD_OBS = NaN``), not a number or not finite.
     """
     expected = _EXPECTED.get(kind, kind.__name__)
+    value: Any = None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # astropy "fixes" some bad cards with a warning
@@ -499,7 +509,7 @@ def group_epochs(infos: list[BcdInfo], gap_days: float = 1.0) -> list[Epoch]:
     groups: dict[int, list[int]] = {}
     if all(has_epoch):
         for a in aors:
-            epochs = {i.epoch for i in by_aor[a]}
+            epochs = {i.epoch for i in by_aor[a] if i.epoch is not None}   # all are, here
             if len(epochs) != 1:
                 raise InputError(f"AOR {a}: its files carry different EPOCH headers {sorted(epochs)}")
             groups.setdefault(epochs.pop(), []).append(a)

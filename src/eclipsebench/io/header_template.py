@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,7 +40,7 @@ CD_MATRIX_DEG = ((0.000144772485275896, -0.000302888712014758),
                  (-0.000302008826913906, -0.000147183662865151))
 #: What the header says per channel: FOV ids and names (subarray, full array),
 #: the CD matrix (deg/px) and PXSCAL1/2 of the channel's real header.
-CHANNEL_CARDS = {
+CHANNEL_CARDS: dict[int, dict[str, Any]] = {
     1: {"fov_sub": (70, "IRAC_Center_of_3.6umSub-array"),
         "fov_full": (67, "IRAC_Center_of_3.6&5.8umArray"),
         "cd": ((-9.96078618101942e-05, 0.000327975181020821),

@@ -33,7 +33,7 @@ def bin_indices(time_bmjd: np.ndarray, *, n_frames: int | None = None,
         if int(n_frames) < 1:
             raise ValueError(f"n_frames: expected an integer >= 1, got {n_frames}")
         return np.arange(t.size) // int(n_frames)
-    if not width_days > 0:
+    if width_days is None or not width_days > 0:
         raise ValueError(f"width_days: expected a positive number, got {width_days}")
     if t.size and np.any(np.diff(t) < 0):
         raise ValueError("time_bmjd: expected samples in time order")

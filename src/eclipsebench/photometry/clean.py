@@ -7,6 +7,8 @@ into every table's metadata (``FLAGBITS``).
 
 from __future__ import annotations
 
+from typing import overload
+
 import numpy as np
 from scipy.ndimage import median_filter
 
@@ -139,7 +141,11 @@ def nanmedian0(values: np.ndarray) -> np.ndarray:
     return np.where(allnan, np.nan, out)
 
 
-def robust_sigma(resid: np.ndarray, axis=None) -> np.ndarray:
+@overload
+def robust_sigma(resid: np.ndarray, axis: None = None) -> float: ...
+@overload
+def robust_sigma(resid: np.ndarray, axis: int) -> np.ndarray: ...
+def robust_sigma(resid: np.ndarray, axis: int | None = None) -> float | np.ndarray:
     """1.4826 x the median absolute deviation about zero of ``resid`` (NaNs skipped).
 
     With ``axis=None`` the whole array is used; with ``axis=0`` one value per

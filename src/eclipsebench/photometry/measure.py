@@ -25,6 +25,8 @@ frames passed in.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..config.photometry import PhotometrySection
@@ -66,7 +68,7 @@ def flux_uncertainty(aperture_sum_e, background_e, area_px, n_annulus, *,
     s = np.clip(np.asarray(aperture_sum_e, float), 0.0, None)
     b = np.clip(np.asarray(background_e, float), 0.0, None)
     area = np.asarray(area_px, float)
-    kw = {"fowler": fowler, "wait": wait, "read_noise_e": read_noise_e}
+    kw: dict[str, Any] = {"fowler": fowler, "wait": wait, "read_noise_e": read_noise_e}
     if read == "paper":
         var = fowler_variance(s, **kw) + fowler_variance(b * area, **kw)
     elif read == "pixels":

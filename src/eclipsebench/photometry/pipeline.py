@@ -101,7 +101,8 @@ def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
     data = np.concatenate([c.data * np.float32(c.info.electrons_per_mjysr) for c in cubes])
     masks = None
     if all(c.mask is not None for c in cubes):
-        masks = np.concatenate([(c.mask & int(options.bimsk_bits)) != 0 for c in cubes])
+        masks = np.concatenate([(c.mask & int(options.bimsk_bits)) != 0 for c in cubes
+                                if c.mask is not None])
     first = np.concatenate([(np.arange(i.n_frames) == 0) & i.subarray for i in infos])
     valid = ~first if options.drop_first_frame and (~first).any() else np.ones(first.size, bool)
     x_off = y_off = 0

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from astropy.table import Table
@@ -21,7 +22,7 @@ from ..decorrelate.kernel import pmap_gain
 from ..engine.layout import Layout
 from ..engine.tasks import Task
 from ..errors import InputError
-from ..io.pmap_files import load_pmap
+from ..io.pmap_files import load_calibration_table
 from ..photometry.table import read_photometry
 from ..progress import get_logger
 from ..stats.challenge import good_frames
@@ -48,7 +49,7 @@ def gain_map(calibration: Path, *, n: int = 41, k: int = 50):
     """
     if not Path(calibration).is_file():
         return None
-    cal = load_pmap(calibration)
+    cal = load_calibration_table(calibration)
     gx = np.linspace(float(np.percentile(cal.x, 1)), float(np.percentile(cal.x, 99)), n)
     gy = np.linspace(float(np.percentile(cal.y, 1)), float(np.percentile(cal.y, 99)), n)
     xx, yy = np.meshgrid(gx, gy)
@@ -85,7 +86,7 @@ def report_task(cfg: Config, root: str, methods: list[str], epochs: list[int]) -
     profile = cfg.run.profiles[0]   # the summary's top level (a run may ask for the paper one only)
     depths = Table.read(layout.depths_of(profile), format="ascii.ecsv")
     system = system_for(cfg.system)
-    photometry = {}
+    photometry: dict[object, dict[str, Any]] = {}
     for e in epochs:
         t = read_photometry(layout.photometry(e))
         good = good_frames(t)

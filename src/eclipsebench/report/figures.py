@@ -344,7 +344,8 @@ def method_differences(groups: Mapping[str, tuple[np.ndarray, np.ndarray]], ttes
 
 
 def _method_points(summary: Mapping, keys: Sequence[str]):
-    names, cols = [], [[] for _ in keys]
+    names: list[str] = []
+    cols: list[list[float]] = [[] for _ in keys]
     for name, s in summary["methods"].items():
         vals = [s.get(k) for k in keys]
         if all(v is not None and np.isfinite(v) for v in vals):

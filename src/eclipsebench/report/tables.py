@@ -59,7 +59,7 @@ def stats_table(summary: dict) -> Table:
         row = {"method": name, "closest_match": s.get("closest_match") or ""}
         row.update({k: _num(s.get(k)) for k in _NUMERIC})
         rows.append(row)
-    avg = {"method": "Average", "closest_match": ""}
+    avg: dict[str, str | float] = {"method": "Average", "closest_match": ""}
     avg.update({k: _num(summary.get("average", {}).get(k)) for k in _NUMERIC})
     rows.append(avg)
     cols = ["method", *_NUMERIC[:20], "closest_match", *_NUMERIC[20:]]

@@ -29,10 +29,12 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from astropy.table import Table
@@ -231,7 +233,7 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
     ny, nx = model.shape
     fluxconv, gain = fluxconv_of(cfg), gain_of(cfg)
 
-    truth = {k: [] for k in ("time_bmjd", "flux_true", "x_true", "y_true", "expid", "frame",
+    truth: dict[str, list[Any]] = {k: [] for k in ("time_bmjd", "flux_true", "x_true", "y_true", "expid", "frame",
                              "sky_e_per_px")}
     cubes = range(aor.n_cubes)
     if show_progress:
@@ -284,7 +286,7 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
     out["aorkey"] = np.full(out["time_bmjd"].size, aor.aorkey)
     with atomic_path(aor_state_path(out_dir, aor.aorkey)) as tmp:
         with open(tmp, "wb") as fh:
-            np.savez(fh, **out)
+            np.savez(fh, **out)  # type: ignore[arg-type]  # numpy's stub types **kwds as allow_pickle
     return out
 
 
@@ -400,7 +402,7 @@ def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray],
     eclipses = lc.eclipse_times_bmjd(t0, t1)
     mains = [a.aorkey for a in plan.aors if a.label.startswith("Main")]
     pre = [a.aorkey for a in plan.aors if a.label == "Pre"]
-    row = {"epoch": plan.epoch, "aorkey_pre": pre[0] if pre else -1,
+    row: dict[str, Any] = {"epoch": plan.epoch, "aorkey_pre": pre[0] if pre else -1,
            "aorkey_main": mains[0], "start_bmjd": t0,
            "t_ecl_bmjd": float(eclipses[0]) if eclipses else float("nan"),
            "depth_ppm": float(lc.depth_ppm), "x_mean": float(x.mean()), "x_sd": float(x.std()),
@@ -624,7 +626,7 @@ class ChallengeResult:
                 "truth": self.truth_rows}
 
 
-def simulate_challenge(cfg: Config, out_dir: str | Path, *, workers: int | None = None,
+def simulate_challenge(cfg: Config, out_dir: str | os.PathLike[str], *, workers: int | None = None,
                        calibration: bool | None = None) -> ChallengeResult:
     """Simulate ``cfg.challenge.epochs`` epochs (and the calibration set) into ``out_dir``.
 

@@ -216,4 +216,5 @@ def make_star_imager(cfg: Config) -> StarImager:
     extra = IRACSIM2015_ANNULUS_WING_PER_E if cfg.simulation.noise_model == "iracsim2015" else 0.0
     return StarImager(prf, x_ref_px=cfg.observation.x0_px, y_ref_px=cfg.observation.y0_px,
                       radius_px=cfg.simulation.aperture_radius_px,
-                      annulus_px=tuple(cfg.photometry.annulus_px), annulus_extra_per_e=extra)
+                      annulus_px=(cfg.photometry.annulus_px[0], cfg.photometry.annulus_px[1]),
+                      annulus_extra_per_e=extra)

@@ -142,7 +142,8 @@ def stats_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
         [np.asarray(t["background"], float)[good_frames(t)] for t in tables.values()],
         depth_ppm=depth_for_noise, f_in=in_eclipse_fraction_of(cfg, tables, truth),
         aperture_radius_px=cfg.photometry.radius_px,
-        annulus_px=tuple(cfg.photometry.annulus_px), **readout_of(cfg))
+        annulus_px=(cfg.photometry.annulus_px[0], cfg.photometry.annulus_px[1]),
+        **readout_of(cfg))
     empirical = None
     if plm is not None:
         flat, flat_failures = collect_depths(layout, [plm], epochs, flat=True)

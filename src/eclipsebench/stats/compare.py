@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from scipy import stats as _sps
@@ -99,7 +100,7 @@ def closest_matches(groups: Mapping[str, MethodDepths]) -> dict[str, dict]:
     """
     out = {}
     for name, g in groups.items():
-        best = {"method": None, "mean_ppm": None, "sd_ppm": None, "n": 0}
+        best: dict[str, Any] = {"method": None, "mean_ppm": None, "sd_ppm": None, "n": 0}
         best_score = math.inf
         for other, h in groups.items():
             if other == name:
@@ -135,8 +136,8 @@ def ttest_matrix(groups: Mapping[str, MethodDepths]) -> dict:
         diagonal and degenerate pairs (both constant) are ``None``.
     """
     names = list(groups)
-    t = {a: {} for a in names}
-    p = {a: {} for a in names}
+    t: dict[str, dict[str, float | None]] = {a: {} for a in names}
+    p: dict[str, dict[str, float | None]] = {a: {} for a in names}
     for a in names:
         for b in names:
             if a == b:
@@ -170,7 +171,8 @@ def anova(groups: Mapping[str, MethodDepths], methods: Iterable[str] | None = No
     samples = [groups[m].depth_ppm for m in names]
     k = len(samples)
     n_total = int(sum(s.size for s in samples))
-    out = {"methods": names, "F": None, "p": None, "df_between": k - 1, "df_within": n_total - k}
+    out: dict[str, Any] = {"methods": names, "F": None, "p": None, "df_between": k - 1,
+                           "df_within": n_total - k}
     if k < 2 or n_total - k < 1 or all(np.ptp(s) == 0 for s in samples):
         return out
     res = _sps.f_oneway(*samples)
@@ -183,7 +185,7 @@ def _reject_greedily(p: Mapping[str, Mapping[str, float | None]], names: list[st
     left, rejected = list(names), []
 
     def failures(a: str) -> list[float]:
-        return [p[a][b] for b in left if b != a and p[a][b] is not None and p[a][b] < alpha]
+        return [v for b in left if b != a and (v := p[a][b]) is not None and v < alpha]
 
     def badness(a: str) -> tuple[int, float]:
         fails = failures(a)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -64,7 +65,7 @@ def check_depth_table(table: Table, source: object = "depth table") -> Table:
     return out
 
 
-def read_depth_table(path: str | Path) -> Table:
+def read_depth_table(path: str | os.PathLike[str]) -> Table:
     """Read ``path`` (ECSV when it ends in .ecsv, otherwise CSV) and validate it."""
     p = Path(path)
     if not p.is_file():
