@@ -134,7 +134,7 @@ def test_class_options_and_effective_params(epoch_sys):
     default = get_method("bliss")(data)
     dx = np.sqrt(np.mean(np.diff(data.x) ** 2))
     assert default.knot_spacing_px[0] == pytest.approx(dx)
-    assert get_method("bliss").preferred_move == "de"
+    assert get_method("bliss").record.policy.preferred_move == "de"
     with pytest.raises(InputError, match="knot_spacing_px"):
         get_method("bliss")(data, knot_spacing_px=-0.01)
     with pytest.raises(InputError, match="unknown option"):

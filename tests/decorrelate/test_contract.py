@@ -108,7 +108,7 @@ def test_refit_path_equals_a_fresh_build(method, epoch_small):
     g = np.random.default_rng(0)
     flux = model.data.flux * (1 + 1e-4 * g.standard_normal(len(model.data)))
     refit = model.with_flux(flux)
-    if method.with_flux_rebuilds:
+    if method.record.policy.with_flux_rebuilds:
         fresh = type(model)(dataclasses.replace(model.data, flux=flux), model.options,
                             context=model.context)
     else:   # a fixed pre-processing step: the refit keeps it and changes only the fluxes
@@ -116,7 +116,7 @@ def test_refit_path_equals_a_fresh_build(method, epoch_small):
     astro = np.interp(refit.data.time_bmjd, epoch_small.data.time_bmjd, epoch_small.astro)
     got = refit.predict(astro, refit.initial_params())
     np.testing.assert_allclose(refit.data.flux, flux, rtol=0, atol=0)
-    if method.with_flux_rebuilds:
+    if method.record.policy.with_flux_rebuilds:
         # GP keeps its flux normalisation (the median) on refits: 3e-9 relative here.
         np.testing.assert_allclose(got, fresh.predict(astro, fresh.initial_params()),
                                    rtol=1e-8)
@@ -136,7 +136,7 @@ def test_seed_reaches_stochastic_methods_only(method, epoch_small, synth):
     assert d1 == d1b
     np.testing.assert_array_equal(p1, p1b)
     d2, p2 = state(2)
-    if method.stochastic:
+    if method.record.policy.stochastic:
         assert d1 != d2 or not np.array_equal(p1, p2), f"{method.name}: the seed changes nothing"
     else:
         assert d1 == d2

@@ -9,6 +9,7 @@ import pytest
 
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.decorrelate import base
+from eclipsebench.decorrelate.record import FitterPolicy, MethodRecord
 from eclipsebench.fit.reduce import reduce_epoch
 
 MCMC = ReduceSection(phase="flat", sampler="mcmc", mcmc_walkers=16, mcmc_steps=3000,
@@ -49,7 +50,8 @@ def test_same_seed_same_chain_different_seed_different(polygain, small_table):
 def test_stretch_move_when_the_method_prefers_it(monkeypatch, polygain, small_table):
     class DePoly(polygain):
         name: ClassVar[str] = "test-polygain-stretch"
-        preferred_move: ClassVar[str] = "stretch"
+        record: ClassVar[MethodRecord] = MethodRecord(
+            policy=FitterPolicy(preferred_move="stretch"))
 
     monkeypatch.setitem(base._REGISTRY, DePoly.name, DePoly)
     opts = ReduceSection(phase="flat", sampler="mcmc", mcmc_walkers=16, mcmc_steps=2000,

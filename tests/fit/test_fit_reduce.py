@@ -159,10 +159,11 @@ def test_method_can_opt_out_of_the_prayer_bead(monkeypatch, polygain, xo3_epoch)
     from typing import ClassVar
 
     from eclipsebench.decorrelate import base
+    from eclipsebench.decorrelate.record import FitterPolicy, MethodRecord
 
     class NoBead(polygain):
         name: ClassVar[str] = "test-polygain-nobead"
-        use_prayer_bead: ClassVar[bool] = False
+        record: ClassVar[MethodRecord] = MethodRecord(policy=FitterPolicy(use_prayer_bead=False))
 
     monkeypatch.setitem(base._REGISTRY, NoBead.name, NoBead)
     table = xo3_epoch["table"](seed=9)[::4]

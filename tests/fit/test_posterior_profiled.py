@@ -39,7 +39,7 @@ from eclipsebench.astro.catalogue import get_system
 from eclipsebench.astro.eclipse import EclipseShape
 from eclipsebench.astro.orbit import eclipse_time_bmjd
 from eclipsebench.decorrelate.base import EpochData, Systematics, get_method
-from eclipsebench.decorrelate.pld import _binned_design_batch
+from eclipsebench.decorrelate.linear import binned_design_batch
 from eclipsebench.decorrelate.pmap import CalibrationSet
 from eclipsebench.fit.astro_model import AstroModel
 from eclipsebench.fit.leastsq import fit_leastsq
@@ -116,7 +116,7 @@ class Explicit(Systematics):
             return self._white_log_likelihood_batch(astro * (theta @ self.design.T), noise_scale)
         if self.kind == "bins":
             d = self.method.design
-            gw = _binned_design_batch(d, astro) * d.b_ivar_sqrt[None, :, None]
+            gw = binned_design_batch(d, astro) * d.b_ivar_sqrt[None, :, None]
             r = (d.b_target - np.matmul(gw, theta[:, :, None])[:, :, 0]) / noise_scale
             return (-0.5 * np.sum(r * r, axis=1)
                     - np.sum(np.log(noise_scale / d.b_ivar_sqrt)))
@@ -135,7 +135,7 @@ class Explicit(Systematics):
             return np.array([gp._gls_w @ yrel]), np.array([[1.0 / (cinv1 @ cinv1)]])
         if self.kind == "bins":
             d = self.method.design
-            g = _binned_design_batch(d, astro[None, :])[0] * d.b_ivar_sqrt[:, None]
+            g = binned_design_batch(d, astro[None, :])[0] * d.b_ivar_sqrt[:, None]
             target = d.b_target
         else:
             g = astro[:, None] * self.design / self.data.flux_err[:, None]

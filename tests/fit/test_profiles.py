@@ -19,7 +19,7 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "methods.md"
 
 
 @pytest.mark.parametrize("method", eb.methods())
-def test_every_registered_method_has_a_paper_profile(method):
+def test_every_built_in_method_has_a_paper_profile(method):
     entry = profiles.paper_profile(method)
     assert entry.phases and entry.ramps and entry.reported_error
     for cell in ("centroid", "phase", "ramp", "fit", "error"):
@@ -36,9 +36,12 @@ def test_docs_hold_the_generated_table():
     assert profiles.profile_markdown() in DOCS.read_text(encoding="utf-8")
 
 
-def test_a_method_without_an_entry_is_one_line(polygain):
-    with pytest.raises(InputError, match="test-polygain.*no paper profile"):
-        resolve_profile(polygain.name, profile="paper")
+def test_a_method_without_an_entry_runs_as_controlled(polygain):
+    """A method whose record has no team's pipeline (a plugin) runs in both profiles."""
+    options = ReduceSection(profile="paper")
+    assert resolve_profile(polygain.name, options) == (replace(options, profile="controlled"),
+                                                       None)
+    assert profiles.paper_profile(polygain.name) is None
     with pytest.raises(InputError, match="profile 'team'"):
         resolve_profile("pld", profile="team")
 
@@ -53,10 +56,10 @@ def test_centroid_columns_and_the_fixed_width_fallback():
 
 def test_paper_profile_takes_the_team_choices(polygain, xo3_epoch, monkeypatch):
     """Phase and ramp by BIC among the team's candidates, its centroid, its error rule."""
-    monkeypatch.setitem(profiles._PROFILES, polygain.name, profiles.PaperProfile(
+    monkeypatch.setattr(polygain, "record", replace(polygain.record, paper=profiles.PaperProfile(
         team="test", centroid="gauss", phases=("flat", "quadratic"), ramps=("none",),
         eclipse_shape="physical", sampler="leastsq", reported_error=("jacobian",),
-        fit="least squares"))
+        fit="least squares")))
     table = xo3_epoch["table"](noise=3e-4)
     # the Gaussian centroid differs from x/y: the paper profile must regress on it
     table["x_gauss"] = table["x"] + 1e-3

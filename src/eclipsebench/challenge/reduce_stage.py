@@ -93,7 +93,7 @@ def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: l
     fit_reduce.check_method_options(cfg.reduce)
     if profile != "controlled":
         for m in methods:
-            fit_reduce.resolve_profile(m, cfg.reduce, profile)  # every method has an entry
+            fit_reduce.resolve_profile(m, cfg.reduce, profile)  # an unknown method stops here
     seed = cfg.challenge.seed
     tasks = []
     for e in epochs:

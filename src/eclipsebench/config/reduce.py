@@ -84,8 +84,9 @@ class ReduceSection:
         default) the MCMC posterior's 16-84 % half-width when the sampler ran,
         else the larger of the Jacobian error times ``max(1, beta_red)`` and
         the prayer bead; ``largest`` the largest of those three; ``method``
-        the estimate each method's authors reported (its ``reported_error``,
-        e.g. PLD's time-averaging extrapolation).
+        the estimate each method's authors reported (its record's paper profile,
+        ``reported_error``, e.g. PLD's time-averaging extrapolation; the largest
+        of the three for a method without one).
     options : dict
         Per-method options, ``[reduce.options.<method>]`` tables (the keys of
         each method's ``Options``; ``docs/methods.md``). Checked against the

@@ -49,8 +49,10 @@ import numpy as np
 from ..config.base import from_mapping
 from ..errors import ConfigError, InputError
 from ..seeding import rng, spawn_ints
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
-__all__ = ["EpochData", "MethodOptions", "MethodContext", "Systematics", "register",
+__all__ = ["EpochData", "MethodOptions", "MethodContext", "Systematics", "MethodRecord",
+           "FitterPolicy", "PaperProfile", "register",
            "get_method", "method_class", "available_methods", "parse_method_options",
            "ENTRY_POINT_GROUP"]
 
@@ -316,35 +318,15 @@ class Systematics(ABC):
     Options: ClassVar[type[MethodOptions]] = MethodOptions
     #: Names of the context resources the method needs (see ``load_resources``).
     resources: ClassVar[tuple[str, ...]] = ()
-    #: Whether the method draws random numbers (its result then depends on the seed).
-    stochastic: ClassVar[bool] = False
     #: Names of the method's own nonlinear parameters, fitted with the astrophysical ones
     #: (an instance may set its own when its options add parameters: GP, SPCA's PSF width).
     param_names: tuple[str, ...] = ()
     description: ClassVar[str] = ""
-    #: The emcee move the fitter uses for this method's MCMC: "de" (differential
-    #: evolution, ter Braak 2006; the DE-MC of the BLISS team, and the move that
-    #: mixes fastest here: integrated autocorrelation times of 11-14 steps against
-    #: 38-55 for the stretch move, BENCHMARKS.md "mcmc") or "stretch" (emcee's
-    #: affine-invariant move, Goodman & Weare 2010). Both sample the same posterior.
-    preferred_move: ClassVar[str] = "de"
-    #: Whether the fitter's prayer-bead error applies to this method. A method
-    #: whose model follows the correlated noise itself (a GP's conditional
-    #: mean) leaves residuals that are not the noise the bead should shift,
-    #: and may set this to False (its errors then come from the Jacobian and MCMC).
-    use_prayer_bead: ClassVar[bool] = True
-    #: Whether :meth:`log_likelihood` models the white noise itself (GP's fitted
-    #: noise term); otherwise the fitter rescales the flux errors to chi2_red = 1.
-    likelihood_models_noise: ClassVar[bool] = False
-    #: The depth error its authors reported: a key of the fit's estimates
-    #: ("jacobian_beta", "prayer_bead", "mcmc") or of :meth:`depth_error_estimates`
-    #: (PLD: "time_averaging"). Used when ``[reduce] error_rule = "method"``;
-    #: "largest" is the shared rule (the largest of the fit's three, Wong et al. 2014).
-    reported_error: ClassVar[str] = "largest"
-    #: Whether :meth:`with_flux` equals a fresh build on the new fluxes. A method
-    #: whose data-derived state is a fixed pre-processing step (SP(K2)'s detrend)
-    #: may keep it on refits and set this to False.
-    with_flux_rebuilds: ClassVar[bool] = True
+    #: The method's facts beside its code: label, fitter policy, paper profile, docs
+    #: anchor (:class:`~eclipsebench.decorrelate.record.MethodRecord`). :func:`register`
+    #: gives a class that sets none its own default record (its parent's policy, no
+    #: paper profile: it runs in the paper profile as in the controlled one).
+    record: ClassVar[MethodRecord] = MethodRecord()
 
     def __init__(self, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
                  *, context: MethodContext | None = None, **kwargs: Any) -> None:
@@ -390,6 +372,11 @@ class Systematics(ABC):
         :attr:`MethodContext.resources`. The default takes ``sources`` as they are.
         """
         return {k: v for k, v in sources.items() if k in cls.resources and v is not None}
+
+    @property
+    def policy(self) -> FitterPolicy:
+        """How the shared fitter treats this method (``record.policy``)."""
+        return self.record.policy
 
     def diagnostics(self) -> dict[str, Any]:
         """What the build found, JSON-able (written under ``diagnostics`` in results)."""
@@ -595,6 +582,10 @@ def register(cls: type[_S]) -> type[_S]:
         raise TypeError(f"{cls.__name__}.Options is not a MethodOptions dataclass")
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise TypeError(f"method name '{cls.name}' is registered twice")
+    if not isinstance(cls.__dict__.get("record"), MethodRecord):
+        # a class with no record of its own (a plugin subclassing a built-in method):
+        # its parent's policy (the code it runs), no team's profile, no docs section
+        cls.record = MethodRecord(policy=cls.record.policy)
     _REGISTRY[cls.name] = cls
     return cls
 
@@ -605,7 +596,9 @@ def load_plugins(*, refresh: bool = False) -> None:
     Called the first time the registry is read. A plugin that fails to load,
     is not a Systematics subclass, or whose class names itself differently
     from its entry point is left out with a warning naming it, so that one
-    broken package does not take the built-in methods down with it.
+    broken package does not take the built-in methods down with it. A class
+    that does not set ``name`` itself (a subclass of a built-in method) takes
+    its entry point's name.
     """
     global _PLUGINS_LOADED
     if _PLUGINS_LOADED and not refresh:
@@ -618,10 +611,10 @@ def load_plugins(*, refresh: bool = False) -> None:
             cls = ep.load()
             if not (isinstance(cls, type) and issubclass(cls, Systematics)):
                 raise TypeError(f"{ep.value} is not a subclass of eclipsebench.Systematics")
-            if cls.name and cls.name != ep.name:
-                raise TypeError(f"{ep.value} is named '{cls.name}', not '{ep.name}'")
-            if not cls.name:
-                cls.name = ep.name
+            own = cls.__dict__.get("name")   # a name inherited from a parent does not count
+            if own and own != ep.name:
+                raise TypeError(f"{ep.value} is named '{own}', not '{ep.name}'")
+            cls.name = ep.name   # the entry point names the method
             if _REGISTRY.get(ep.name) not in (None, cls):
                 raise TypeError(f"method name '{ep.name}' is already registered")
             register(cls)

@@ -35,6 +35,7 @@ import scipy.sparse as sp
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
 __all__ = ["BlissGrid", "knot_spacing_from_data", "poet_axis_knots", "bliss_setup",
            "bliss_knot_values", "bliss_gain", "Bliss"]
@@ -260,6 +261,22 @@ class BlissOptions(MethodOptions):
         check(self.min_points_per_knot >= 1, "min_points_per_knot", "an integer >= 1")
 
 
+#: How the 2015 challenge's team ran ``bliss`` (paper, Appendix B): the paper profile.
+_BLISS_PAPER = PaperProfile(
+    team="H. Diamond-Lowe, K. Stevenson (POET)", centroid="gauss-fixed",
+    phases=("flat", "linear", "quadratic", "sinusoid"), ramps=("none", "linear"),
+    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
+    fit="least squares, then DE-MC",
+    why={"centroid": "App. B.1: 'Centroid positions were measured by fitting a 2D Gaussian "
+                     "profile with fixed width'",
+         "phase": "App. B.1: 'flat, linear, quadratic, or sinusoidal phase variations' ... "
+                  "'Acceptance of model parameters was decided by minimizing the BIC'",
+         "ramp": "App. B.1: 'a flat or possible linear detector ramp', chosen by BIC",
+         "fit": "App. B.1: 'A Differential Evolution Markov Chain (DE-MC) routine ... was used "
+                "to explore the phase space of parameters'",
+         "error": "App. B.1: DE-MC '... and estimate their uncertainties'"})
+
+
 @register
 class Bliss(Systematics):
     """BLISS mapping (Stevenson et al. 2012; paper Appendix B.1), with POET's rules.
@@ -293,13 +310,15 @@ class Bliss(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = BlissOptions
     options: BlissOptions
+    #: DE-MC, as the BLISS team sampled (ter Braak 2006). The grid and the mask depend
+    #: only on the centroids, which a refit does not change; a rebuild on the kept subset
+    #: would re-derive the spacing from other frame-to-frame differences, so refits keep
+    #: the grid (``with_flux_rebuilds=False``).
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="BLISS", paper=_BLISS_PAPER,
+        policy=FitterPolicy(preferred_move="de", with_flux_rebuilds=False),
+        docs_anchor="bliss-bliss", in_paper=True)
     description: ClassVar[str] = "bilinearly interpolated knot means of flux/astro over (x, y)"
-    #: The BLISS team sampled with DE-MC (ter Braak 2006); the fitter uses emcee's DE move.
-    preferred_move: ClassVar[str] = "de"
-    #: The grid and the mask depend only on the centroids, which a refit does not
-    #: change; a rebuild on the kept subset would re-derive the spacing from other
-    #: frame-to-frame differences, so refits keep the grid.
-    with_flux_rebuilds: ClassVar[bool] = False
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:

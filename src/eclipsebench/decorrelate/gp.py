@@ -62,6 +62,7 @@ from scipy.optimize import minimize
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
 __all__ = ["GaussianProcess", "bin_epoch", "bin_index", "kernel_matrix", "KERNELS", "HYPER_NAMES",
            "OFFSET_NAMES"]
@@ -200,6 +201,23 @@ class GpOptions(MethodOptions):
               f"5 finite numbers ({', '.join(HYPER_NAMES)}) or none")
 
 
+#: How the 2015 challenge's team ran ``gp`` (paper, Appendix B): the paper profile.
+_GP_PAPER = PaperProfile(
+    team="T. Evans", centroid="col", phases=("linear",), ramps=("none",),
+    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
+    fit="ML hyperparameters on 30 s bins, then MCMC with the kernel fixed",
+    method_options={"bin_seconds": 30.0},
+    why={"centroid": "Appendix B is silent; Evans et al. (2015) not read here; the centre of light "
+                               "(the paper's Section 3.1 default)",
+         "phase": "Sect. 5: 'eclipse fits using a linear (BLISS, GP, ICA, KR/Data) ... "
+                  "phase curve'",
+         "ramp": "Appendix B is silent; none (B.2 lists no ramp among the parameters)",
+         "fit": "App. B.2: 'maximum likelihood fit ... fluxes and centroids were binned ... "
+                "in groups of ~30 s'",
+         "error": "App. B.2: 'MCMC with Metropolis-Hastings ... the covariance kernel "
+                  "parameters and white noise variance were held fixed'"})
+
+
 @register
 class GaussianProcess(Systematics):
     """GP systematics over (x, y, t) on binned data (Evans et al. 2015).
@@ -229,13 +247,15 @@ class GaussianProcess(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = GpOptions
     options: GpOptions
-    # Cyclic shifts of the residuals carry the correlated part the kernel already
-    # models, so the prayer bead double-counts it (199 vs 80 ppm on a simulated
-    # epoch) and costs one kernel optimisation per shift; Evans et al. (2015)
-    # took their errors from MCMC with the kernel fixed, which `--sampler mcmc` does.
-    use_prayer_bead: ClassVar[bool] = False
-    #: The kernel's white-noise term ``s`` models the noise.
-    likelihood_models_noise: ClassVar[bool] = True
+    # No prayer bead: cyclic shifts of the residuals carry the correlated part the kernel
+    # already models, so the bead double-counts it (199 vs 80 ppm on a simulated epoch)
+    # and costs one kernel optimisation per shift; Evans et al. (2015) took their errors
+    # from MCMC with the kernel fixed, which `--sampler mcmc` does. The kernel's
+    # white-noise term ``s`` models the noise (likelihood_models_noise).
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="GP", paper=_GP_PAPER,
+        policy=FitterPolicy(use_prayer_bead=False, likelihood_models_noise=True),
+        docs_anchor="gp-gp", in_paper=True)
     description: ClassVar[str] = ("Gaussian process over (x, y, t) with white noise on ~30 s "
                                   "bins; kernel by maximum likelihood (Evans et al. 2015)")
 

@@ -56,6 +56,8 @@ import pywt
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .linear import weighted_lstsq
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
 __all__ = ["IndependentComponents", "IcaOptions", "wavelet_coefficients", "separate",
            "time_domain_components", "common_mode_gains", "eclipse_component_by_gain",
@@ -273,7 +275,7 @@ def eclipse_box_amplitudes(series: np.ndarray, time_bmjd: np.ndarray, t_ecl_bmjd
     tn = (t - t.mean()) / max(float(np.ptp(t)), 1e-300)
     box = (np.abs(t - t_ecl_bmjd) < 0.5 * duration_d).astype(float)
     design = np.column_stack([np.ones_like(tn), tn, tn**2, box])
-    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    coef = weighted_lstsq(design, y)
     resid = y - design @ coef
     dof = max(len(t) - design.shape[1], 1)
     cov_box = np.linalg.pinv(design.T @ design)[-1, -1]
@@ -336,7 +338,7 @@ def eclipse_leak(systematics: np.ndarray, eclipse_per_depth: np.ndarray,
     tn = (t - t.mean()) / max(float(np.ptp(t)), 1e-300)
     design = np.column_stack([np.ones_like(tn), tn, tn**2,
                               np.asarray(eclipse_per_depth, dtype=float)])
-    coef, *_ = np.linalg.lstsq(design, np.asarray(systematics, dtype=float), rcond=None)
+    coef = weighted_lstsq(design, np.asarray(systematics, dtype=float))
     return float(coef[-1])
 
 
@@ -351,7 +353,7 @@ def _box_durations(time_bmjd: np.ndarray, t_ecl_bmjd: float | None) -> np.ndarra
 
 
 def _weighted_chi2(design: np.ndarray, y: np.ndarray, w: np.ndarray) -> float:
-    coef, *_ = np.linalg.lstsq(design * w[:, None], y * w, rcond=None)
+    coef = weighted_lstsq(design, y, w)
     r = (y - design @ coef) * w
     return float(r @ r)
 
@@ -523,6 +525,20 @@ class IcaOptions(MethodOptions):
         check(self.tol > 0, "tol", "a positive tolerance")
 
 
+#: How the 2015 challenge's team ran ``ica`` (paper, Appendix B): the paper profile.
+_ICA_PAPER = PaperProfile(
+    team="G. Morello", centroid="col", phases=("linear",), ramps=("none",),
+    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
+    fit="eclipse plus scaled components, adaptive-Metropolis MCMC",
+    why={"centroid": "App. B.3: pixel light curves; no centroid enters the model",
+         "phase": "App. B.3: 'an eclipse light curve model (including a linear phase "
+                  "variation)'",
+         "ramp": "Appendix B is silent; none",
+         "fit": "App. B.3: 'An Adaptive Metropolis MCMC algorithm with delayed rejection'",
+         "error": "App. B.3: 'The final error bars were then increased to include the ICA "
+                  "component separation error' (added in quadrature)"})
+
+
 @register
 class IndependentComponents(Systematics):
     """Wavelet pixel-ICA systematics (Morello et al. 2014, 2015, 2016).
@@ -559,7 +575,10 @@ class IndependentComponents(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = IcaOptions
     options: IcaOptions
-    stochastic: ClassVar[bool] = True
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="ICA", paper=_ICA_PAPER,
+        policy=FitterPolicy(stochastic=True),
+        docs_anchor="ica-ica", in_paper=True)
     description: ClassVar[str] = ("wavelet pixel-ICA: FastICA on DWT coefficients of the pixel "
                                   "light curves, eclipse + the scaled non-eclipse components, "
                                   "ISR separation error (Morello et al. 2016)")
@@ -687,8 +706,7 @@ class IndependentComponents(Systematics):
     def _solve(self, astro: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Weighted least-squares ``(F0, o_1, ...)`` and the model, for ``astro``."""
         design = self._design(astro)
-        coef, *_ = np.linalg.lstsq(design * self._sw[:, None], self.data.flux * self._sw,
-                                   rcond=None)
+        coef = weighted_lstsq(design, self.data.flux, self._sw)
         return coef, design @ coef
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:

@@ -46,6 +46,7 @@ from ..errors import InputError
 from ..io.pmap_files import find_pmap_path, load_pmap
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
 from .pmap import CalibrationSet, GriddedPmap, interpolate_grid, kernel_occupancy
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
 __all__ = ["scale_lengths", "knn_weights", "local_kernel_weights", "smoother_trace",
            "KernelRegressionData", "KernelRegressionPmap", "pmap_gain", "noise_pixels_offset"]
@@ -210,6 +211,21 @@ class KrDataOptions(MethodOptions):
         check(self.k >= 1, "k", "an integer >= 1")
 
 
+#: How the 2015 challenge's team ran ``kr-data`` (paper, Appendix B): the paper profile.
+_KR_DATA_PAPER = PaperProfile(
+    team="I. Wong", centroid="col", phases=("linear",), ramps=("none",),
+    eclipse_shape="physical", sampler="mcmc", reported_error=("prayer_bead", "mcmc"),
+    fit="Levenberg-Marquardt", method_options={"k": 50},
+    why={"centroid": "App. B.4: 'only the x and y centroids (as measured using the center of "
+                     "light technique ...) were used in the kernel's distance metric'",
+         "phase": "App. B.4: 'eclipse depth, time of mid-eclipse, and linear slope of phase "
+                  "curve'",
+         "ramp": "Appendix B is silent; none (B.4 lists the fitted parameters without one)",
+         "fit": "App. B.4: 'Levenberg-Marquardt (L-M) nonlinear least squares'",
+         "error": "App. B.4: 'both a prayer-bead method and an MCMC routine ... reported the "
+                  "largest uncertainty of the two'"})
+
+
 @register
 class KernelRegressionData(Systematics):
     """KR/Data: leave-one-out Gaussian kernel regression on the science frames.
@@ -242,6 +258,10 @@ class KernelRegressionData(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = KrDataOptions
     options: KrDataOptions
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="KR/Data", paper=_KR_DATA_PAPER,
+        policy=FitterPolicy(),
+        docs_anchor="krdata-kr-data", in_paper=True)
     description: ClassVar[str] = "k-nearest-neighbour Gaussian kernel regression of flux/astro"
 
     def __init__(self, data: EpochData, options: Any = None, *,
@@ -377,6 +397,20 @@ class KrPmapOptions(MethodOptions):
         check(self.occupancy_sigma_px > 0, "occupancy_sigma_px", "a positive width in pixels")
 
 
+#: How the 2015 challenge's team ran ``kr-pmap`` (paper, Appendix B): the paper profile.
+_KR_PMAP_PAPER = PaperProfile(
+    team="J. Krick, J. Ingalls", centroid="col", phases=("flat",), ramps=("none",),
+    eclipse_shape="physical", sampler="leastsq", reported_error=("jacobian",),
+    fit="Levenberg-Marquardt, Mandel & Agol shape", method_options={"k": 50},
+    why={"centroid": "App. B.4: 'Euclidean distance in x and y centroid and noise pixels'; "
+                     "Sect. 3.1 centre of light",
+         "phase": "App. B.4: 'a Mandel & Agol light curve shape with no phase trend'",
+         "ramp": "Appendix B is silent; none",
+         "fit": "App. B.4: 'using an L-M nonlinear least squares algorithm'",
+         "error": "App. B.4: 'The uncertainties returned were solely the formal "
+                  "uncertainties in the L-M fit'"})
+
+
 @register
 class KernelRegressionPmap(Systematics):
     """KR/Pmap: kernel regression trained on a calibration star (Krick et al. 2016).
@@ -435,6 +469,10 @@ class KernelRegressionPmap(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = KrPmapOptions
     options: KrPmapOptions
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="KR/Pmap", paper=_KR_PMAP_PAPER,
+        policy=FitterPolicy(),
+        docs_anchor="krpmap-kr-pmap", in_paper=True)
     resources: ClassVar[tuple[str, ...]] = ("pmap",)
     description: ClassVar[str] = "fixed gain from kernel regression on a calibration star"
 

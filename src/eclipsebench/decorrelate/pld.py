@@ -38,7 +38,6 @@ rms is the depth error the PLD team reported
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal
 
@@ -47,10 +46,16 @@ import numpy as np
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .linear import (
+    LinearDesign,
+    fit_log_likelihood,
+    fit_log_likelihood_batch,
+    fit_residuals,
+    solve_coefficients,
+)
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
-__all__ = ["normalised_pixels", "central_stamp", "time_basis", "PldDesign", "pld_solve",
-           "pld_binned_residuals", "pld_log_likelihood", "pld_log_likelihood_batch",
-           "residual_scatter_curve", "scatter_slope",
+__all__ = ["normalised_pixels", "central_stamp", "time_basis", "residual_scatter_curve", "scatter_slope",
            "eclipse_frames", "time_averaging_error", "PixelLevelDecorrelation"]
 
 #: The rms of N-frame means is kept in the slope fit while there are at least
@@ -97,217 +102,6 @@ def time_basis(time: np.ndarray, degree: int) -> np.ndarray:
     span = t.max() - t.min()
     tau = (2.0 * (t - t.min()) / span - 1.0) if span > 0 else np.zeros_like(t)
     return np.column_stack([tau**d for d in range(1, degree + 1)]) if degree else np.empty((len(t), 0))
-
-
-_OUTER_BYTES_MAX = 64 * 2**20
-
-
-class PldDesign:
-    """Parameter-independent pieces of the PLD regression.
-
-    Parameters
-    ----------
-    regressors : ndarray, shape (n, p)
-        Normalised pixels and any time terms.
-    flux, flux_err : ndarray, shape (n,)
-    bin_frames : int
-        Frames per bin for the coefficient fit (1 = unbinned).
-    time : ndarray, shape (n,), optional
-        Frame times; bins hold consecutive frames in time order.
-    """
-
-    def __init__(self, regressors: np.ndarray, flux: np.ndarray, flux_err: np.ndarray,
-                 bin_frames: int = 1, time: np.ndarray | None = None) -> None:
-        d = np.asarray(regressors, float)
-        n = d.shape[0]
-        self.n_regressors = d.shape[1]
-        self.bin_frames = int(bin_frames)
-        # Unit-rms columns keep the normal equations well conditioned.
-        self.col_scale = np.sqrt(np.mean(d**2, axis=0))
-        self.col_scale[self.col_scale == 0] = 1.0
-        self.design = d / self.col_scale
-        self.iu = np.triu_indices(self.n_regressors)
-        self.outer = None
-        #: (frame order or None, the design in time order), built by the batched likelihood.
-        self._batch_sorted: tuple[np.ndarray | None, np.ndarray] | None = None
-        if self.bin_frames == 1:
-            self.starts = None
-            self.b_flux = np.asarray(flux, float)
-            self.b_ivar_sqrt = 1.0 / np.asarray(flux_err, float)
-            # Per-frame products D_i D_j (upper triangle): the normal matrix is
-            # then one weighted sum per evaluation, with no BLAS call (BLAS
-            # threads stall on a loaded machine for arrays this small).
-            if n * len(self.iu[0]) * 8 <= _OUTER_BYTES_MAX:
-                self.outer = self.design[:, self.iu[0]] * self.design[:, self.iu[1]]
-        else:
-            self.order = None if time is None else np.argsort(np.asarray(time), kind="stable")
-            self.starts = np.arange(0, n, self.bin_frames)
-            counts = np.diff(np.append(self.starts, n)).astype(float)
-            self.counts = counts
-            self.b_flux = self._binned(np.asarray(flux, float))
-            var = self._binned(np.asarray(flux_err, float) ** 2) / counts
-            self.b_ivar_sqrt = 1.0 / np.sqrt(var)
-        self.b_target = self.b_flux * self.b_ivar_sqrt
-
-    def with_flux(self, flux: np.ndarray) -> PldDesign:
-        """A copy whose target is ``flux`` (same regressors, errors and bins)."""
-        new = copy.copy(self)
-        new.b_flux = self._binned(np.asarray(flux, float))
-        new.b_target = new.b_flux * self.b_ivar_sqrt
-        return new
-
-    def _binned(self, a: np.ndarray) -> np.ndarray:
-        if self.starts is None:
-            return a
-        if self.order is not None:
-            a = a[self.order]
-        s = np.add.reduceat(a, self.starts, axis=0)
-        return s / (self.counts[:, None] if s.ndim == 2 else self.counts)
-
-
-def pld_solve(design: PldDesign, astro: np.ndarray) -> np.ndarray:
-    """Weighted least-squares coefficients (of the scaled columns) for ``astro``.
-
-    Minimises ``sum_b ((F_b - (astro D)_b c) / sigma_b)^2`` over bins ``b``
-    (frames when unbinned) through the p x p normal equations.
-    """
-    astro = np.asarray(astro, float)
-    if design.outer is not None:
-        s = astro * design.b_ivar_sqrt
-        tri = np.einsum("n,nk->k", s * s, design.outer)
-        a = np.empty((design.n_regressors, design.n_regressors))
-        a[design.iu] = tri
-        a.T[design.iu] = tri
-        b = np.einsum("n,nk->k", s * design.b_target, design.design)
-    else:
-        gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
-        a = np.einsum("bi,bj->ij", gw, gw)
-        b = np.einsum("bi,b->i", gw, design.b_target)
-    try:
-        return np.linalg.solve(a, b)
-    except np.linalg.LinAlgError:
-        return np.linalg.lstsq(a, b, rcond=None)[0]
-
-
-def pld_binned_residuals(design: PldDesign, astro: np.ndarray, coef: np.ndarray) -> np.ndarray:
-    """Normalised residuals of the fitted points (bins, or frames when unbinned).
-
-    ``(F_b - (astro D)_b c) / sigma_b``: the quantity whose sum of squares
-    :func:`pld_solve` minimises over ``c``.
-    """
-    astro = np.asarray(astro, float)
-    if design.starts is None:
-        model = astro * np.einsum("nk,k->n", design.design, coef)
-        return (design.b_flux - model) * design.b_ivar_sqrt
-    gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
-    return design.b_target - gw @ coef
-
-
-def _binned_design_batch(design: PldDesign, astro: np.ndarray) -> np.ndarray:
-    """``design._binned(design.design * a[:, None])`` for every row ``a`` of ``astro``.
-
-    Shape (m, n_bins, p). The full bins are one stacked matrix product (bins
-    x rows x frames-in-bin times bins x frames-in-bin x regressors); the
-    last, partial bin (if any) is added on its own.
-    """
-    cache = design._batch_sorted
-    if cache is None:   # (the frames' order if they are not in time order, the sorted design)
-        order = design.order
-        if order is not None and np.array_equal(order, np.arange(len(order))):
-            order = None
-        cache = design._batch_sorted = (order, design.design if order is None
-                                        else design.design[order])
-    order, d = cache
-    a = astro if order is None else astro[:, order]
-    m, n = a.shape
-    size, p = design.bin_frames, d.shape[1]
-    n_full = n // size
-    starts = design.starts
-    if starts is None:
-        raise ValueError("the batched binned product needs a binned design (bin_frames > 1)")
-    out = np.empty((m, len(starts), p))
-    if n_full:
-        full = np.matmul(a[:, :n_full * size].reshape(m, n_full, size).transpose(1, 0, 2),
-                         d[:n_full * size].reshape(n_full, size, p))
-        out[:, :n_full] = full.transpose(1, 0, 2)
-    if n_full < len(starts):
-        out[:, n_full] = a[:, n_full * size:] @ d[n_full * size:]
-    return out / design.counts[None, :, None]
-
-
-def _solve_batch(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.linalg.solve`` of each (p, p) system, with :func:`pld_solve`'s lstsq fallback."""
-    try:
-        return np.linalg.solve(a, b[..., None])[..., 0]
-    except np.linalg.LinAlgError:
-        out = np.empty_like(b)
-        for i in range(len(b)):
-            try:
-                out[i] = np.linalg.solve(a[i], b[i])
-            except np.linalg.LinAlgError:
-                out[i] = np.linalg.lstsq(a[i], b[i], rcond=None)[0]
-        return out
-
-
-def _pld_solve_batch(design: PldDesign, astro: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray | None] | None:
-    """:func:`pld_solve` for every row of ``astro`` (m, n): ``(coef (m, p), gw)``.
-
-    ``gw`` is the weighted binned design of each row (m, n_bins, p) when the
-    fit is binned, else None. Returns None where no batched form is kept
-    (unbinned without the per-frame products): the caller then loops.
-    """
-    astro = np.atleast_2d(np.asarray(astro, float))
-    p = design.n_regressors
-    if design.outer is not None:
-        s = astro * design.b_ivar_sqrt
-        tri = (s * s) @ design.outer
-        a = np.empty((len(astro), p, p))
-        a[:, design.iu[0], design.iu[1]] = tri
-        a[:, design.iu[1], design.iu[0]] = tri
-        b = (s * design.b_target) @ design.design
-        return _solve_batch(a, b), None
-    if design.starts is None:
-        return None
-    gw = _binned_design_batch(design, astro)
-    gw *= design.b_ivar_sqrt[None, :, None]
-    a = np.matmul(gw.transpose(0, 2, 1), gw)
-    b = design.b_target @ gw
-    return _solve_batch(a, b), gw
-
-
-def pld_log_likelihood(design: PldDesign, residuals: np.ndarray,
-                       noise_scale: float = 1.0) -> float:
-    """Gaussian log-likelihood of the fitted points from their normalised residuals.
-
-    ``residuals`` are :func:`pld_binned_residuals` (one per bin, or per frame
-    when unbinned); each point's sigma is the bin's error times ``noise_scale``.
-    """
-    r = np.asarray(residuals, float) / noise_scale
-    sigma = noise_scale / design.b_ivar_sqrt
-    return float(-0.5 * np.dot(r, r) - np.sum(np.log(sigma)) - 0.5 * len(r) * np.log(2 * np.pi))
-
-
-def pld_log_likelihood_batch(design: PldDesign, astro: np.ndarray,
-                             noise_scale: float = 1.0) -> np.ndarray | None:
-    """:func:`pld_log_likelihood` of the fit of every row of ``astro`` (m, n), or None.
-
-    The coefficients of all rows are solved together (:func:`_pld_solve_batch`);
-    None where no batched form is kept (the caller then loops).
-    """
-    solved = _pld_solve_batch(design, astro)
-    if solved is None:
-        return None
-    coef, gw = solved
-    astro = np.atleast_2d(np.asarray(astro, float))
-    if gw is None:
-        r = (design.b_flux - astro * (coef @ design.design.T)) * design.b_ivar_sqrt
-    else:
-        r = design.b_target - np.matmul(gw, coef[:, :, None])[:, :, 0]
-    r = r / noise_scale
-    sigma = noise_scale / design.b_ivar_sqrt
-    return (-0.5 * np.einsum("ij,ij->i", r, r) - np.sum(np.log(sigma))
-            - 0.5 * r.shape[1] * np.log(2 * np.pi))
 
 
 def residual_scatter_curve(residual: np.ndarray, *, min_bins: int = SLOPE_MIN_BINS
@@ -451,6 +245,22 @@ class PldOptions(MethodOptions):
               "bin_candidates", "one or more integers >= 1")
 
 
+#: How the 2015 challenge's team ran ``pld`` (paper, Appendix B): the paper profile.
+_PLD_PAPER = PaperProfile(
+    team="D. Deming", centroid="gauss", phases=("quadratic",), ramps=("none",),
+    eclipse_shape="physical", sampler="leastsq", reported_error=("time_averaging",),
+    fit="binned, Deming et al. 2015",
+    why={"centroid": "App. B.5: '2D Gaussian centroiding ... only to determine where to "
+                     "place the circular aperture, but not as a decorrelation variable'",
+         "phase": "App. B.5: 'simultaneously with the pixel coefficients and a quadratic "
+                  "phase curve'",
+         "ramp": "Appendix B is silent; none",
+         "fit": "App. B.5; Deming et al. (2015) Sect. 3: fitted on binned data",
+         "error": "App. B.5: 'error bars were estimated using the slope of the standard "
+                  "deviation vs. bin size relationship ... to extrapolate to bins the width "
+                  "of the eclipse duration'"})
+
+
 @register
 class PixelLevelDecorrelation(Systematics):
     """PLD (Deming et al. 2015; paper Appendix B.5), fitted on binned data.
@@ -491,9 +301,11 @@ class PixelLevelDecorrelation(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldOptions
     options: PldOptions
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="PLD", paper=_PLD_PAPER,
+        policy=FitterPolicy(),
+        docs_anchor="pld-pld", in_paper=True)
     description: ClassVar[str] = "linear regression on normalised pixel values, fitted on binned data"
-    #: Deming et al. estimated the error from the residuals' rms against bin size.
-    reported_error: ClassVar[str] = "time_averaging"
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:
@@ -520,13 +332,13 @@ class PixelLevelDecorrelation(Systematics):
                                  f"{p} regressors)")
         self.stamp = stamp
         self.order = np.argsort(np.asarray(data.time_bmjd), kind="stable")
-        self.designs = {b: PldDesign(regressors, data.flux, data.flux_err, b,
+        self.designs = {b: LinearDesign(regressors, data.flux, data.flux_err, b,
                                      time=data.time_bmjd) for b in sizes}
         self.bin_frames = sizes[0]
         self.bin_scores: dict[int, float] = {}
 
     @property
-    def design(self) -> PldDesign:
+    def design(self) -> LinearDesign:
         """The regression of the current bin size."""
         return self.designs[self.bin_frames]
 
@@ -540,28 +352,28 @@ class PixelLevelDecorrelation(Systematics):
 
     def coefficients(self, astro: np.ndarray) -> np.ndarray:
         """The PLD coefficients ``c_i`` (of the unscaled regressors) for ``astro``."""
-        return pld_solve(self.design, astro) / self.design.col_scale
+        return solve_coefficients(self.design, astro) / self.design.col_scale
 
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``astro * (P_hat c [+ poly])`` at every frame, ``c`` fitted on the bins."""
         astro = np.asarray(astro, float)
-        return astro * np.einsum("nk,k->n", self.design.design, pld_solve(self.design, astro))
+        return astro * np.einsum("nk,k->n", self.design.design, solve_coefficients(self.design, astro))
 
     def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Normalised residuals of the binned fit (one per bin; per frame when unbinned)."""
         astro = np.asarray(astro, float)
-        return pld_binned_residuals(self.design, astro, pld_solve(self.design, astro))
+        return fit_residuals(self.design, astro, solve_coefficients(self.design, astro))
 
     def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
                        noise_scale: float = 1.0) -> float:
         """Gaussian log-likelihood of the binned points the fit is made on."""
-        return pld_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
+        return fit_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
 
     def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
                              noise_scale: float = 1.0) -> np.ndarray:
         """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)): the binned
         normal equations of all rows are built and solved together."""
-        out = (pld_log_likelihood_batch(self.design, astro, noise_scale)
+        out = (fit_log_likelihood_batch(self.design, astro, noise_scale)
                if self._batch_is_exact(PixelLevelDecorrelation) else None)
         return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out
 

@@ -33,7 +33,8 @@ import numpy as np
 from ..config.base import check
 from .base import EpochData, MethodOptions, register
 from .pld import central_stamp, normalised_pixels
-from .poly import LinearDetectorModel
+from .poly import SPCA_DOCS_ANCHOR, SPCA_PAPER, LinearDetectorModel
+from .record import MethodRecord
 
 __all__ = ["PldAperOptions", "PldAperture"]
 
@@ -68,6 +69,8 @@ class PldAperture(LinearDetectorModel):
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldAperOptions
     options: PldAperOptions
+    record: ClassVar[MethodRecord] = MethodRecord(label="pld-aper", paper=SPCA_PAPER,
+                                                  docs_anchor=SPCA_DOCS_ANCHOR)
     description: ClassVar[str] = "aperture flux on normalised pixels (SPCA's PLDAper)"
 
     def regressors(self, data: EpochData) -> np.ndarray:

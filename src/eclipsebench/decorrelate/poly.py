@@ -49,13 +49,14 @@ from numpy.polynomial import legendre
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .pld import (
-    PldDesign,
-    pld_binned_residuals,
-    pld_log_likelihood,
-    pld_log_likelihood_batch,
-    pld_solve,
+from .linear import (
+    LinearDesign,
+    fit_log_likelihood,
+    fit_log_likelihood_batch,
+    fit_residuals,
+    solve_coefficients,
 )
+from .record import MethodRecord, PaperProfile
 
 __all__ = ["polynomial_terms", "legendre_design", "scaled_coordinate", "psf_width_columns",
            "whitened_basis", "LinearDetectorModel", "PolyOptions", "Poly2", "Poly3", "Poly4",
@@ -151,6 +152,23 @@ def psf_width_columns(data: EpochData, method: str) -> np.ndarray:
     return w - w.mean(axis=0)
 
 
+#: SPCA's pipeline (Bell et al. 2021) for the paper profile: not a team of the paper.
+SPCA_PAPER = PaperProfile(
+    team="SPCA (Bell et al. 2021)", centroid="col", phases=("quadratic",), ramps=("none",),
+    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
+    fit="emcee, 64-frame bins",
+    why={"centroid": "Not a team of the paper (Appendix B is silent); Bell et al. (2021) "
+                     "re-scored the XO-3b eclipses with SPCA; we use the centre of light "
+                     "(Sect. 3.1 default)",
+         "phase": "Appendix B is silent; the quadratic phase of the controlled profile (the "
+                  "challenge's phase curve is curved, Sect. 4.2)",
+         "ramp": "Appendix B is silent; none",
+         "fit": "SPCA fits with emcee (Bell et al. 2021), 64-frame bins (the method's default)",
+         "error": "SPCA reports the posterior width"})
+#: The section of docs/methods.md on SPCA's family.
+SPCA_DOCS_ANCHOR = "spcas-model-family-poly2--poly5-pld-aper"
+
+
 class LinearModelOptions(Protocol):
     """The options every :class:`LinearDetectorModel` reads (its subclasses' dataclasses have them)."""
 
@@ -190,7 +208,7 @@ class LinearDetectorModel(Systematics):
         if n_points <= basis.shape[1]:
             raise InputError(f"method '{self.name}': {n_points} (binned) points for "
                              f"{basis.shape[1]} regressors; use fewer bin_frames")
-        self.design = PldDesign(basis, data.flux, data.flux_err, bin_frames,
+        self.design = LinearDesign(basis, data.flux, data.flux_err, bin_frames,
                                 time=data.time_bmjd)
 
     @abstractmethod
@@ -207,7 +225,7 @@ class LinearDetectorModel(Systematics):
     def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """``astro * W * (R c)`` with ``c`` solved by weighted least squares."""
         scaled = self._gain_astro(astro, theta)
-        return scaled * np.einsum("nk,k->n", self.design.design, pld_solve(self.design, scaled))
+        return scaled * np.einsum("nk,k->n", self.design.design, solve_coefficients(self.design, scaled))
 
     def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Normalised residuals of the fitted points (one per bin; per frame when unbinned).
@@ -216,12 +234,12 @@ class LinearDetectorModel(Systematics):
         the coefficients minimise these residuals, and so does the outer fit.
         """
         scaled = self._gain_astro(astro, theta)
-        return pld_binned_residuals(self.design, scaled, pld_solve(self.design, scaled))
+        return fit_residuals(self.design, scaled, solve_coefficients(self.design, scaled))
 
     def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
                        noise_scale: float = 1.0) -> float:
         """Gaussian log-likelihood of the binned points the fit is made on."""
-        return pld_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
+        return fit_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
 
     def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
                              noise_scale: float = 1.0) -> np.ndarray:
@@ -235,7 +253,7 @@ class LinearDetectorModel(Systematics):
                               + self.widths[:, 1] * theta[:, 1:2])
         else:
             scaled = astro
-        out = (pld_log_likelihood_batch(self.design, scaled, noise_scale)
+        out = (fit_log_likelihood_batch(self.design, scaled, noise_scale)
                if self._batch_is_exact(LinearDetectorModel) else None)
         return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out
 
@@ -301,6 +319,8 @@ def _polynomial_method(order: int) -> type[_Polynomial]:
     cls = type(f"Poly{order}", (_Polynomial,), {
         "__doc__": _poly_doc(order), "__module__": __name__, "name": f"poly{order}",
         "order": order,
+        "record": MethodRecord(label=f"poly{order}", paper=SPCA_PAPER,
+                               docs_anchor=SPCA_DOCS_ANCHOR),
         "description": f"2-D polynomial of degree {order} in the centroid (SPCA)"})
     return register(cls)
 

@@ -62,6 +62,8 @@ import numpy as np
 from ..config.base import check
 from ..errors import InputError
 from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .linear import gram_lstsq
+from .record import FitterPolicy, MethodRecord, PaperProfile
 
 __all__ = ["SegmentedPolynomial", "SegpolyOptions", "PolyDetrend", "SPK2Detrend", "hf_scatter",
            "poly_design", "iterative_poly_detrend", "segment_slices", "sp_k2_detrend",
@@ -181,7 +183,7 @@ def iterative_poly_detrend(flux: np.ndarray, design: np.ndarray, fit_mask: np.nd
     n_done = 0
     for _ in range(max_iterations):
         level = np.median(current[use])
-        coef = _lstsq_small(design[use], current[use] / level)
+        coef = gram_lstsq(design[use], current[use] / level)
         fit = np.einsum("ij,j->i", design, coef)
         fit /= np.mean(fit[fit_mask])
         if not np.all(fit > 0):
@@ -200,19 +202,6 @@ def iterative_poly_detrend(flux: np.ndarray, design: np.ndarray, fit_mask: np.nd
         if use.sum() < design.shape[1]:
             use = fit_mask.copy()
     return PolyDetrend(trend, n_done, int(fit_mask.sum() - use.sum()))
-
-
-def _lstsq_small(design: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Least squares through the normal equations, without multithreaded BLAS.
-
-    The Gram matrix is formed with ``einsum`` (OpenBLAS threads made ``lstsq``
-    on these tall, thin matrices 30x slower on a loaded machine) and solved by
-    SVD (minimum norm, so all-zero columns get zero coefficients).
-    """
-    gram = np.einsum("ni,nj->ij", design, design)
-    rhs = np.einsum("ni,n->i", design, target)
-    coef, *_ = np.linalg.lstsq(gram, rhs, rcond=1e-12)
-    return coef
 
 
 def segment_slices(time_bmjd: np.ndarray, length_d: float, min_points: int = 1) -> list[slice]:
@@ -389,6 +378,18 @@ class SegpolyOptions(MethodOptions):
         check(0 <= self.initial_mask_fraction < 0.9, "initial_mask_fraction", "a number 0-0.9")
 
 
+#: How the 2015 challenge's team ran ``segpoly`` (paper, Appendix B): the paper profile.
+_SEGPOLY_PAPER = PaperProfile(
+    team="D. Buzasi", centroid="col", phases=("flat",), ramps=("none",),
+    eclipse_shape="box", sampler="leastsq", reported_error=("jacobian",),
+    fit="two-stage detrend, then box fit",
+    why={"centroid": "Appendix B is silent; the centre of light (Sect. 3.1 default)",
+         "phase": "Sect. 5: 'a ... flat [KR/Pmap, SP(K2)] phase curve'",
+         "ramp": "Appendix B is silent; none",
+         "fit": "App. B.6: 'a simple box function was used to fit the eclipse profile'",
+         "error": "App. B.6: 'the uncertainties reported are formal fit errors'"})
+
+
 @register
 class SegmentedPolynomial(Systematics):
     """SP(K2): stage-1 global and stage-2 segmented polynomial detrending (Buzasi et al. 2015).
@@ -449,11 +450,14 @@ class SegmentedPolynomial(Systematics):
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = SegpolyOptions
     options: SegpolyOptions
+    #: The prayer bead's refits keep the detrend of the original data (see with_flux).
+    record: ClassVar[MethodRecord] = MethodRecord(
+        label="SP(K2)", paper=_SEGPOLY_PAPER,
+        policy=FitterPolicy(with_flux_rebuilds=False),
+        docs_anchor="spk2-segpoly", in_paper=True)
     description: ClassVar[str] = ("SP(K2): iterated cubic (x, y) polynomial, then ten segmented "
                                   "detrendings combined by the median, blind to the eclipse "
                                   "(Buzasi et al. 2015)")
-    #: The prayer bead's refits keep the detrend of the original data (see with_flux).
-    with_flux_rebuilds: ClassVar[bool] = False
 
     def __init__(self, data: EpochData, options: Any = None, *,
                  context: MethodContext | None = None, **kwargs: Any) -> None:

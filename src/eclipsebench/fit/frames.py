@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..decorrelate.base import EpochData, Systematics
+from ..decorrelate.record import FitterPolicy
 from ..errors import InputError
 
 __all__ = ["settling_aor", "SETTLING_MAX_FRACTION", "PerAorSystematics", "per_aor_systematics"]
@@ -114,9 +115,6 @@ class PerAorSystematics(Systematics):
         self.name = first.name  # type: ignore[misc]  # the wrapper answers to its parts' registry name
         self.options = first.options
         self.context = first.context
-        for attr in ("preferred_move", "use_prayer_bead",
-                     "likelihood_models_noise", "reported_error", "stochastic"):
-            setattr(self, attr, getattr(first, attr))
         self.param_names = tuple(f"aor{k}_{n}" for k, p in enumerate(parts)
                                  for n in p.param_names)
         sizes = [len(p.data) for p in parts]
@@ -137,6 +135,11 @@ class PerAorSystematics(Systematics):
         if np.any(np.diff(self.data.time_bmjd) < 0):
             raise InputError("per-AOR systematics: the AORs overlap in time; set [reduce] "
                              "systematics_per_aor = false")
+
+    @property
+    def policy(self) -> FitterPolicy:
+        """The parts' fitter policy (their method's record), ``with_flux_rebuilds`` included."""
+        return self.parts[0].policy
 
     def _theta(self, theta, k: int):
         if not len(self.param_names) or theta is None:

@@ -316,7 +316,7 @@ def has_own_likelihood(systematics: Systematics) -> bool:
     Such a likelihood is used as it is; any other (also a method's own, such as
     PLD's on bins) has its flux errors rescaled to chi2_red = 1 for the MCMC.
     """
-    return bool(systematics.likelihood_models_noise)
+    return bool(systematics.policy.likelihood_models_noise)
 
 
 def _summarise(problem: _Problem, theta: np.ndarray, nfev: int, success: bool, message: str,

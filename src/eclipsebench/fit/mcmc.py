@@ -162,7 +162,7 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
         Multiplies the flux errors in the likelihood (the fitter passes
         ``sqrt(chi2_red)`` so that the white-noise level matches the residuals).
     move : {"stretch", "de"} or None
-        Default ``systematics.preferred_move``.
+        Default ``systematics.policy.preferred_move`` (the method's record).
     cov_start : ndarray, shape (ndim, ndim), optional
         Covariance of the least-squares solution: the initial ball is then
         10 % of it (its correlations included) instead of 10 % of
@@ -205,7 +205,7 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     lo_s, hi_s = systematics.param_bounds()
     lower = np.concatenate([lo_a, np.asarray(lo_s, dtype=float)])
     upper = np.concatenate([hi_a, np.asarray(hi_s, dtype=float)])
-    move = move or systematics.preferred_move
+    move = move or systematics.policy.preferred_move
     n_walkers = max(int(n_walkers), 2 * ndim + 2)
     n_walkers += n_walkers % 2
     scale = np.where(np.isfinite(scale_start) & (np.asarray(scale_start) > 0),

@@ -32,6 +32,7 @@ from ..photometry.table import read_table
 from .astro_model import PHASE_CURVE_MODELS, PHASE_MODELS, AstroModel
 from .data import epoch_data_from_table, median_cadence_s, standardise_table
 from .display import html_repr, text_repr
+from .error_rule import largest_estimate, reported_depth_error
 from .frames import per_aor_systematics, settling_aor
 from .leastsq import (
     FitResult,
@@ -273,14 +274,6 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
 
 
 # --------------------------------------------------------------------------- one epoch
-def _largest(estimates: dict[str, float | None]) -> tuple[float, str]:
-    usable = {k: v for k, v in estimates.items() if v is not None and np.isfinite(v)}
-    if not usable:
-        return float("nan"), "none"
-    name = max(usable, key=lambda k: usable[k])
-    return float(usable[name]), name
-
-
 def _mcmc_noise_scale(systematics: Systematics, fit: FitResult) -> float:
     """Flux-error scale of the MCMC likelihood: ``sqrt(chi2_red) max(1, beta_red)``.
 
@@ -369,6 +362,7 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         Missing columns, all frames flagged, an eclipse outside the time span,
         an unknown method, option or profile.
     """
+    requested = options.profile if profile is None else profile
     options, team = resolve_profile(method, options, profile)
     if team is not None and not isinstance(method_options, MethodOptions):
         method_options = {**team.method_options, **dict(method_options or {})}
@@ -379,7 +373,9 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     options, bic = _phase_curve_choice(prep, method, options, seed)
     if team is None:
         result = replace(fit_prepared(prep, method, options=options, seed=seed),
-                         profile="controlled")
+                         profile=requested)
+        if requested == "paper":
+            result = replace(result, profile_detail={"team": None, "settings": "controlled"})
     else:
         result = _fit_paper_profile(prep, method, team, options=options, seed=seed)
     if bic:
@@ -408,6 +404,9 @@ def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
                     profile: str | None = None) -> tuple[ReduceSection, PaperProfile | None]:
     """The ``[reduce]`` settings a profile gives ``method``, and its team's entry (paper only).
 
+    A method whose record has no paper profile gets the controlled settings
+    in the paper profile too (and no entry).
+
     Examples
     --------
     >>> opts, team = resolve_profile("kr-pmap", profile="paper")
@@ -422,6 +421,8 @@ def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
     if profile == "controlled":
         return options, None
     team = paper_profile(method)
+    if team is None:   # no team's pipeline (a plugin): the controlled settings
+        return replace(options, profile="controlled"), None
     return replace(options, phase=team.phases[0], ramp=team.ramps[0],
                    eclipse_shape=team.eclipse_shape, sampler=team.sampler,
                    prayer_bead_mode="all", profile="paper"), team
@@ -485,7 +486,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     bead_wanted = ("prayer_bead" in reported if reported is not None
                    else not (sample and options.error_rule == "posterior"))
     pb_depth = pb_tecl = None
-    if (errors and options.prayer_bead_shifts > 0 and getattr(systematics, "use_prayer_bead", True)
+    if (errors and options.prayer_bead_shifts > 0 and systematics.policy.use_prayer_bead
             and bead_wanted):
         if options.prayer_bead_mode == "all":
             beads = prayer_bead(systematics, astro_model, fit, n_shifts=None,
@@ -526,22 +527,12 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     own = {name: float(v) * scale for name, v in systematics.depth_error_estimates(
         astro_fit, dastro, fit.theta[fit.n_astro:] if len(systematics.param_names) else None
     ).items()} if errors else {}
-    depth_err, err_method = _largest(shared)
-    wanted = systematics.reported_error
-    if reported is None and options.error_rule == "method" and wanted != "largest":
-        reported = (wanted,)
-    if reported is None and options.error_rule == "posterior" and mc is not None:
-        reported = ("mcmc",)
-    if errors and reported is not None:
-        every = {"jacobian": jac_depth, **shared, **own}
-        depth_err, err_method = _largest({k: every.get(k) for k in reported})
-        if not np.isfinite(depth_err):
-            raise InputError(f"method '{method}': its reported error "
-                             f"'{' or '.join(reported)}' was not computed")
-    if separation_var > 0:
-        depth_err = float(np.hypot(depth_err, np.sqrt(separation_var)))
-        err_method += "+separation"
-    t_err, _ = _largest({"jacobian_beta": jac_tecl * inflate, "prayer_bead": pb_tecl,
+    team = paper_profile(method)   # the errors the method's authors reported, if known
+    depth_err, err_method = reported_depth_error(
+        shared, error_rule=options.error_rule, jacobian=jac_depth, own=own, reported=reported,
+        authors=team.reported_error if team is not None else None, sampled=mc is not None,
+        errors=errors, separation_var=separation_var, method=method)
+    t_err, _ = largest_estimate({"jacobian_beta": jac_tecl * inflate, "prayer_bead": pb_tecl,
                          "mcmc": mc.error(when) if mc is not None else None})
     if mc is not None and err_method.split("+")[0] == "mcmc":
         t_err = mc.error(when)

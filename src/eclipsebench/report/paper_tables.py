@@ -18,12 +18,28 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-__all__ = ["TABLE3", "TABLE4", "PAPER_NAMES", "COMPARED_KEYS", "comparison_rows",
+from ..decorrelate.base import get_method
+from ..errors import InputError
+
+__all__ = ["TABLE3", "TABLE4", "paper_name", "COMPARED_KEYS", "comparison_rows",
            "comparison_markdown"]
 
-#: Registry name -> the paper's name of the method.
-PAPER_NAMES = {"bliss": "BLISS", "gp": "GP", "ica": "ICA", "kr-data": "KR/Data",
-               "kr-pmap": "KR/Pmap", "pld": "PLD", "segpoly": "SP(K2)"}
+
+
+def paper_name(method: str) -> str:
+    """The paper's name of a registered method (its record's label), "" if not one of the seven.
+
+    Examples
+    --------
+    >>> paper_name("kr-data"), paper_name("poly2"), paper_name("no-such-method")
+    ('KR/Data', '', '')
+    """
+    try:
+        record = get_method(method).record
+    except InputError:
+        return ""
+    return record.label if record.in_paper else ""
+
 
 _T4_KEYS = ("D_mean", "sigma_mean", "SD", "sigma_orig", "f_dis", "sigma_tot", "R", "r", "RMSE",
             "bias", "a")
@@ -81,8 +97,8 @@ def comparison_rows(summary: Mapping, table: Mapping[str, Mapping[str, float]],
     """
     rows = []
     for name, stats in summary["methods"].items():
-        paper = table.get(PAPER_NAMES.get(name, ""), {})
-        row = [name, PAPER_NAMES.get(name, "")]
+        paper = table.get(paper_name(name), {})
+        row = [name, paper_name(name)]
         for k in keys:
             row += [_fmt(stats.get(k), k), _fmt(paper[k], k) if k in paper else ""]
         rows.append(row)
