@@ -81,9 +81,9 @@ from collections.abc import Mapping, Sequence
 from typing import Any, Protocol
 
 import numpy as np
-from batman import _quadratic_ld, _rsky
 from numba import njit
 
+from ..astro.batman_core import quadratic_transit, sky_separation
 from ..astro.eclipse import EclipseShape
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..astro.phase_curves import harmonic_curve, harmonic_summary
@@ -282,13 +282,13 @@ class _TransitCurve:
 
     def separation(self, t0_bmjd: float, a_rs: float, inc_deg: float) -> np.ndarray:
         """batman's rsky (stellar radii; 100 behind the star) at the data times."""
-        return _rsky._rsky(self.time_bmjd, t0_bmjd, self.period_d, a_rs, math.radians(inc_deg),
-                           self.ecc, math.radians(self.omega_deg), 1, 1)
+        return sky_separation(self.time_bmjd, t0_bmjd, self.period_d, a_rs,
+                              math.radians(inc_deg), self.ecc, math.radians(self.omega_deg))
 
     def _tabulate(self, a_rs: float, inc_deg: float, grid_step_s: float) -> None:
         coarse = np.linspace(-0.25, 0.25, 20001) * self.period_d
-        sep = _rsky._rsky(coarse, 0.0, self.period_d, a_rs, math.radians(inc_deg), self.ecc,
-                          math.radians(self.omega_deg), 1, 1)
+        sep = sky_separation(coarse, 0.0, self.period_d, a_rs, math.radians(inc_deg), self.ecc,
+                             math.radians(self.omega_deg))
         near = np.flatnonzero(sep < 2.0)
         if len(near) == 0:   # no transit at all: T = 1 everywhere
             self._tau, self._sep = np.array([-1.0, 1.0]), np.full(2, _FAR)
@@ -296,8 +296,8 @@ class _TransitCurve:
         lo, hi = coarse[max(near[0] - 1, 0)], coarse[min(near[-1] + 1, len(coarse) - 1)]
         n = max(int(math.ceil((hi - lo) * 86400.0 / grid_step_s)) + 1, 3)
         self._tau = np.linspace(lo, hi, n)
-        self._sep = _rsky._rsky(self._tau, 0.0, self.period_d, a_rs, math.radians(inc_deg),
-                                self.ecc, math.radians(self.omega_deg), 1, 1)
+        self._sep = sky_separation(self._tau, 0.0, self.period_d, a_rs, math.radians(inc_deg),
+                                   self.ecc, math.radians(self.omega_deg))
 
     def __call__(self, rp_rs: float, t_transit_bmjd: float, a_rs: float, inc_deg: float,
                  u1: float, u2: float) -> np.ndarray:
@@ -310,7 +310,7 @@ class _TransitCurve:
             sep = np.interp(tau, self._tau, self._sep, left=_FAR, right=_FAR)
         else:
             sep = self.separation(t0, a_rs, inc_deg)
-        return _quadratic_ld._quadratic_ld(sep, abs(rp_rs), u1, u2, 1)
+        return quadratic_transit(sep, abs(rp_rs), u1, u2)
 
 
 def _transit_fixed_values(system: Any, q: Sequence[float] | None) -> dict[str, float]:

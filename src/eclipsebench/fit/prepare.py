@@ -1,0 +1,251 @@
+"""Preparing a table for a fit: its frames, its system and predicted eclipse, the method built.
+
+:func:`prepare_epoch` turns a photometry table (a file or a table, with the
+columns a pipeline names) into a :class:`PreparedEpoch`: the frames a fit
+uses (flags, the settling AOR), the system and its predicted event time, and
+the systematics model built on them with its options and resources.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from astropy.table import Table
+
+from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+from ..config.reduce import ReduceSection
+from ..decorrelate import available_methods, get_method
+from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
+from ..errors import ConfigError, InputError
+from ..photometry.table import read_table
+from .astro_model import PHASE_CURVE_MODELS, AstroModel
+from .data import epoch_data_from_table, standardise_table
+from .frames import per_aor_systematics, settling_aor
+from .profiles import centroid_columns
+from .target import system_of_table
+
+__all__ = ["prepare_epoch", "PreparedEpoch", "resolve_system", "predicted_eclipse_bmjd",
+           "resolve_method_options", "check_method_options"]
+
+#: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
+_DEFAULT_OPTIONS = ReduceSection()
+
+
+def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: str | None = None,
+              time_format: str | None = None):
+    """An astropy Table with the package's column names from a Table or a path.
+
+    A path is read as FITS, ECSV or CSV (:func:`read_table`); ``columns``,
+    ``time_column`` and ``time_format`` map another pipeline's names and time
+    format (:func:`~eclipsebench.fit.data.standardise_table`).
+    """
+    if isinstance(table, (str, os.PathLike)):
+        path = os.fspath(table)
+        if not os.path.exists(path):
+            raise InputError(f"{path}: no such photometry table")
+        table = read_table(path)
+        table.meta.setdefault("FILENAME", path)
+    elif not isinstance(table, Table):
+        raise InputError("table: expected an astropy Table or the path of a photometry table")
+    return standardise_table(table, columns=columns, time_column=time_column,
+                             time_format=time_format)
+
+
+def resolve_system(system: Any, meta: Mapping[str, Any] | None = None,
+                   source: str = "the photometry table"):
+    """A PlanetSystem from a name, a mapping of the planet's values (with ``name``) or a
+    PlanetSystem; None: the planet the table's metadata name (``SYSTEM``, ``OBJECT``:
+    :func:`~eclipsebench.fit.target.system_of_table`), never the challenge's by default."""
+    return system_of_table(meta or {}, system=system, source=source,
+                           hint="system=NAME")
+
+
+def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
+                           event: str = "eclipse") -> float:
+    """The catalogue ephemeris's eclipse (or transit) nearest the data; InputError if it is
+    outside them.
+
+    A whole phase curve (``event="phase-curve"``): the first eclipse whose
+    centre lies in the data, else (no eclipse centre inside) the one nearest
+    their middle; the others follow from the period.
+    """
+    t0, t1 = float(np.min(time_bmjd)), float(np.max(time_bmjd))
+    if event == "phase-curve":
+        period = float(system.period_days)
+        first = float(eclipse_time_bmjd(system, t0))
+        first += period * np.ceil((t0 - first) / period - 1e-12)   # first at or after t0
+        return first if first <= t1 else float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
+    when = transit_time_bmjd if event == "transit" else eclipse_time_bmjd
+    t_ecl = float(when(system, 0.5 * (t0 + t1)))
+    if not t0 <= t_ecl <= t1:
+        name = getattr(system, "name", "the system")
+        raise InputError(f"{source}: the {name} {event} nearest the data is at "
+                         f"{t_ecl:.5f} BMJD, outside the time span {t0:.5f}-{t1:.5f} "
+                         f"(wrong system, or no {event} in these frames)")
+    return t_ecl
+
+
+def _epoch_number(table, epoch):
+    if epoch is not None:
+        return int(epoch)
+    value = (getattr(table, "meta", {}) or {}).get("EPOCH")
+    try:
+        return int(value) if value is not None else None
+    except (TypeError, ValueError):
+        return None
+
+
+@dataclass
+class PreparedEpoch:
+    """One epoch ready to fit: the method built on the data, and the predicted eclipse
+    (``t_ecl_predicted_bmjd``: the predicted mid-transit when ``[reduce] event`` is a transit)."""
+
+    table: Any
+    systematics: Systematics
+    system: Any
+    epoch: int | None
+    t_ecl_predicted_bmjd: float
+    source: str
+    n_frames_dropped: dict[str, int]
+    #: The centroid columns the method regresses on when a profile chose them ("" otherwise).
+    centroid: str = ""
+
+    @property
+    def n_frames(self) -> int:
+        """Frames the method fits (after every drop)."""
+        return self.systematics.n_frames
+
+    def astro_model(self, options: ReduceSection, *, phase: str | None = None) -> AstroModel:
+        """The shared astrophysical model at the method's data times."""
+        shape = options.eclipse_shape
+        if options.event == "phase-curve":
+            # a whole phase curve: its own phase models, the physical eclipse repeated each
+            # orbit, an offset per AOR unless each AOR has its own systematics
+            data = self.systematics.data
+            return AstroModel(
+                data.time_bmjd, self.system, event="phase-curve",
+                phase=phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model,
+                ramp=options.ramp, eclipse_shape=shape,
+                limb_darkening_q=options.limb_darkening_q,
+                aorkey=(data.aorkey if options.aor_offsets and not options.systematics_per_aor
+                        else None),
+                exposure_s=options.exposure_s or None,
+                nonnegative_planet=options.nonnegative_planet)
+        return AstroModel(self.systematics.data.time_bmjd, self.system,
+                          phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape,
+                          event=options.event, transit_free=options.transit_free,
+                          transit_priors=options.transit_priors,
+                          limb_darkening_q=options.limb_darkening_q)
+
+
+def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
+                           method_options: Mapping[str, Any] | MethodOptions | None = None,
+                           ) -> MethodOptions:
+    """The effective options of ``method``: ``[reduce.options.<method>]`` overlaid by
+    ``method_options``, checked against the method's options dataclass.
+
+    Raises
+    ------
+    InputError
+        An unknown method; an unknown or ill-typed option, naming the
+        configuration key (``reduce.options.<method>.<key>``) or the option.
+
+    Examples
+    --------
+    >>> resolve_method_options("kr-data", method_options={"k": 20}).k
+    20
+    """
+    cls = get_method(method)
+    configured = options.options.get(method, {})
+    base = parse_method_options(cls, configured, prefix=f"reduce.options.{method}")
+    if method_options is None:
+        return base
+    if isinstance(method_options, MethodOptions):
+        return parse_method_options(cls, method_options)
+    return parse_method_options(cls, {**base.to_dict(), **dict(method_options)})
+
+
+def check_method_options(options: ReduceSection) -> None:
+    """Every ``[reduce.options.<method>]`` table names a registered method and its options.
+
+    Called before any work (the runner's planner, the reduce command), so that
+    a typo in a configuration file is one line naming the dotted key.
+
+    Raises
+    ------
+    ConfigError
+        ``reduce.options.<name>`` for an unknown method, or
+        ``reduce.options.<name>.<key>`` for an unknown or ill-typed option.
+    """
+    known = available_methods()
+    for name, table in options.options.items():
+        if name not in known:
+            raise ConfigError(f"reduce.options.{name}",
+                              f"unknown method (known: {', '.join(known)})")
+        parse_method_options(get_method(name), table, prefix=f"reduce.options.{name}")
+
+
+def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
+                  epoch=None, seed: int = 0, method_options=None,
+                  resources: Mapping[str, Any] | None = None,
+                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
+                  time_format: str | None = None,
+                  centroid: str | None = None) -> PreparedEpoch:
+    """Read the table, keep the good frames, build the method and predict the eclipse time.
+
+    The method gets its options (:func:`resolve_method_options`) and a
+    :class:`~eclipsebench.decorrelate.base.MethodContext` with the run seed,
+    the epoch and the resources it declares, loaded by its ``load_resources``
+    from ``resources`` (paths or loaded objects). ``centroid`` ("col",
+    "gauss", "gauss-fixed") makes those columns the method's ``x``/``y``
+    (the paper profile); None keeps the table's ``x``/``y``.
+    """
+    table = _as_table(table, columns=columns, time_column=time_column, time_format=time_format)
+    source = str((table.meta or {}).get("FILENAME", "the photometry table"))
+    centroid_note = ""
+    if centroid is not None:
+        (cx, cy), centroid_note = centroid_columns(table.colnames, centroid)
+        if (cx, cy) != ("x", "y"):
+            table = table.copy(copy_data=False)
+            table["x"], table["y"] = table[cx], table[cy]
+        centroid_note = f"{cx}/{cy}" + (f" ({centroid_note})" if centroid_note else "")
+    cls = get_method(method)
+    method_opts = resolve_method_options(method, options, method_options)
+    data = epoch_data_from_table(table, radius_px=options.radius_px or None, stamp=options.stamp)
+    dropped = {"flagged": int(data.meta.get("n_frames_flagged", 0)),
+               "nonfinite": int(data.meta.get("n_frames_nonfinite", 0)), "settling_aor": 0}
+    if options.settling_aor == "drop":
+        settling = settling_aor(data.time_bmjd, data.aorkey)
+        if settling.any():
+            dropped["settling_aor"] = int(settling.sum())
+            data = data.subset(~settling)
+    system = resolve_system(system, table.meta, source)
+    t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source, options.event)
+    # What the ephemeris predicts (never the truth): a method may use it to find the
+    # eclipse's signature in its own decomposition (ICA's eclipse component).
+    data = replace(data, meta={**data.meta, "t_ecl_predicted_bmjd": t_pred})
+    epoch_number = _epoch_number(table, epoch)
+
+    def build(frames):
+        return cls.build(frames, method_opts, seed=seed, epoch=epoch_number or 0,
+                         resources=resources)
+
+    if options.systematics_per_aor:   # a whole phase curve: one method per AOR
+        systematics = per_aor_systematics(data, build)
+    else:
+        systematics = build(data)
+    dropped.update({k: int(v) for k, v in systematics.dropped_frames().items()})
+    return PreparedEpoch(table=table, systematics=systematics, system=system,
+                         epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
+                         source=source, n_frames_dropped=dropped, centroid=centroid_note)
+
+
+def _resources(resources: Mapping[str, Any] | None, pmap) -> dict[str, Any]:
+    out = dict(resources or {})
+    if pmap is not None:
+        out["pmap"] = pmap
+    return out
