@@ -140,6 +140,33 @@ def _checked_stamp(col, name: str, size: int, n: int) -> np.ndarray:
     return cube.reshape(n, size, size)
 
 
+def _column_mapping(table, columns: Mapping[str, str] | None, time_column: str | None,
+                    labels: Mapping[str, str]) -> dict[str, str]:
+    """The package's column name -> the table's, checked (``columns`` and ``time_column``)."""
+    mapping = dict(columns or {})
+    for new, old in mapping.items():
+        if not isinstance(new, str) or not isinstance(old, str) or not new or not old:
+            raise InputError(f"{labels['columns']}: expected names NEW=OLD, got {new!r}={old!r}")
+        if not _known_name(new):
+            raise InputError(f"{labels['columns']}: unknown column name {new!r} (known: "
+                             f"{', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)}, flux_r<R>, "
+                             "p0..p24)")
+        if old not in table.colnames:
+            raise InputError(f"{labels['columns']}: {new}={old}: the table has no column "
+                             f"{old!r} (it has {_names_list(table)})")
+    if time_column is not None:
+        if not isinstance(time_column, str) or not time_column:
+            raise InputError(f"{labels['time_column']}: expected a column name")
+        if mapping.get("time_bmjd", time_column) != time_column:
+            raise InputError(f"{labels['time_column']} {time_column!r} and "
+                             f"{labels['columns']} time_bmjd={mapping['time_bmjd']} disagree")
+        if time_column not in table.colnames:
+            raise InputError(f"{labels['time_column']}: the table has no column "
+                             f"{time_column!r} (it has {_names_list(table)})")
+        mapping["time_bmjd"] = time_column
+    return mapping
+
+
 def standardise_table(table, *, columns: Mapping[str, str] | None = None,
                       time_column: str | None = None, time_format: str | None = None,
                       labels: Mapping[str, str] | None = None) -> Table:
@@ -184,27 +211,7 @@ def standardise_table(table, *, columns: Mapping[str, str] | None = None,
     ([57000.0, 57000.25], [1.0, 1.1])
     """
     labels = {**_ARGUMENTS, **dict(labels or {})}
-    mapping = dict(columns or {})
-    for new, old in mapping.items():
-        if not isinstance(new, str) or not isinstance(old, str) or not new or not old:
-            raise InputError(f"{labels['columns']}: expected names NEW=OLD, got {new!r}={old!r}")
-        if not _known_name(new):
-            raise InputError(f"{labels['columns']}: unknown column name {new!r} (known: "
-                             f"{', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)}, flux_r<R>, "
-                             "p0..p24)")
-        if old not in table.colnames:
-            raise InputError(f"{labels['columns']}: {new}={old}: the table has no column "
-                             f"{old!r} (it has {_names_list(table)})")
-    if time_column is not None:
-        if not isinstance(time_column, str) or not time_column:
-            raise InputError(f"{labels['time_column']}: expected a column name")
-        if mapping.get("time_bmjd", time_column) != time_column:
-            raise InputError(f"{labels['time_column']} {time_column!r} and "
-                             f"{labels['columns']} time_bmjd={mapping['time_bmjd']} disagree")
-        if time_column not in table.colnames:
-            raise InputError(f"{labels['time_column']}: the table has no column "
-                             f"{time_column!r} (it has {_names_list(table)})")
-        mapping["time_bmjd"] = time_column
+    mapping = _column_mapping(table, columns, time_column, labels)
     fmt = "bmjd" if time_format is None else time_format
     if fmt not in TIME_FORMATS:
         raise InputError(f"{labels['time_format']}: {fmt!r} is not one of "
@@ -255,6 +262,29 @@ def _source(table) -> str:
     return str(meta.get("FILENAME", meta.get("filename", "the photometry table")))
 
 
+def _require_columns(src: str, names, flux_name: str | None) -> None:
+    """InputError naming the required columns a table lacks (``flux_name``: another radius)."""
+    required = [c for c in REQUIRED_COLUMNS if c not in ("flux", "flux_err")] + ["flux", "flux_err"]
+    if flux_name is not None:
+        required.append(flux_name)
+    missing = [c for c in required if c not in names]
+    if missing:
+        raise InputError(f"{src}: missing column(s) {', '.join(missing)} "
+                         f"(a photometry table needs {', '.join(required)})")
+
+
+def _epoch_meta(table, stamp: str, flux_name: str, *, cadence_s: float, n_frames_table: int,
+                n_frames_flagged: int, n_frames_nonfinite: int) -> dict[str, Any]:
+    """The table's provenance plus the frame counts and the columns behind the epoch's data."""
+    meta: dict[str, Any] = {str(k): v for k, v in (getattr(table, "meta", {}) or {}).items()}
+    pixel_source = (f"{stamp} pixels (or {'p0..p8' if stamp == 'stamp3' else 'p0..p24'})"
+                    if stamp != "none" else "stamp3 or stamp5 pixels ([reduce] stamp is 'none')")
+    meta.update(n_frames_table=n_frames_table, n_frames_flagged=n_frames_flagged,
+                n_frames_nonfinite=n_frames_nonfinite, flux_column=flux_name,
+                cadence_s=cadence_s, table_columns={"pixels": pixel_source, "flux": flux_name})
+    return meta
+
+
 def epoch_data_from_table(table, *, radius_px: float | None = None,
                           stamp: str = "stamp3") -> EpochData:
     """The good frames of one photometry table as an :class:`EpochData`.
@@ -298,13 +328,7 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
     if radius_px is not None:
         flux_name = aperture_column(radius_px)
         err_name = flux_name.replace("flux_", "flux_err_")
-    required = [c for c in REQUIRED_COLUMNS if c not in ("flux", "flux_err")] + ["flux", "flux_err"]
-    if radius_px is not None:
-        required.append(flux_name)
-    missing = [c for c in required if c not in names]
-    if missing:
-        raise InputError(f"{src}: missing column(s) {', '.join(missing)} "
-                         f"(a photometry table needs {', '.join(required)})")
+    _require_columns(src, names, flux_name if radius_px is not None else None)
     if stamp not in ("stamp3", "stamp5", "none"):
         raise InputError(f"stamp {stamp!r}: expected 'stamp3', 'stamp5' or 'none'")
 
@@ -352,14 +376,9 @@ def epoch_data_from_table(table, *, radius_px: float | None = None,
     aorkey = _column(table, "aorkey") if "aorkey" in names else None
     width_x = _column(table, "width_x").astype(float) if "width_x" in names else None
     width_y = _column(table, "width_y").astype(float) if "width_y" in names else None
-
-    meta: dict[str, Any] = {str(k): v for k, v in (getattr(table, "meta", {}) or {}).items()}
-    pixel_source = (f"{stamp} pixels (or {'p0..p8' if stamp == 'stamp3' else 'p0..p24'})"
-                    if stamp != "none" else "stamp3 or stamp5 pixels ([reduce] stamp is 'none')")
-    meta.update(n_frames_table=n_table, n_frames_flagged=n_flagged,
-                n_frames_nonfinite=n_nonfinite, flux_column=flux_name,
-                cadence_s=median_cadence_s(time[index]),
-                table_columns={"pixels": pixel_source, "flux": flux_name})
+    meta = _epoch_meta(table, stamp, flux_name, cadence_s=median_cadence_s(time[index]),
+                       n_frames_table=n_table, n_frames_flagged=n_flagged,
+                       n_frames_nonfinite=n_nonfinite)
     return EpochData(time_bmjd=pick(time), flux=pick(flux), flux_err=pick(flux_err),
                      x=pick(x), y=pick(y), noise_pixels=pick(noise_pixels), pixels=pick(pixels),
                      aorkey=pick(aorkey), meta=meta, width_x=pick(width_x),
