@@ -37,7 +37,10 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
     """Real results, twin ``(depths, errors)`` per method, skipped methods, failed twins."""
     layout = TrustLayout(Path(root))
-    real, twins, skipped, failed = {}, {}, {}, {}
+    real: dict = {}
+    twins: dict = {}
+    skipped: dict[str, str] = {}
+    failed: dict[str, int] = {}
     for m in methods:
         data = _load(layout.real(m))
         if data.get("failed"):

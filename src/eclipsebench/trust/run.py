@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
@@ -230,7 +231,7 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
         return read_trust(layout.result), report
 
 
-def make_settings(table: str | Path, *, reduce: ReduceSection, system: Any = None,
+def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, system: Any = None,
                   system_section: Any = None, methods: Sequence[str] | None = None,
                   n_twins: int = 50, depth_ppm: float | None = None, seed: int = 0,
                   method_options: Mapping[str, Mapping[str, Any]] | None = None,
