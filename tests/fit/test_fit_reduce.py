@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -174,3 +176,17 @@ def test_method_can_opt_out_of_the_prayer_bead(monkeypatch, polygain, xo3_epoch)
     with_bead = reduce_epoch(table, polygain.name,
                              options=ReduceSection(prayer_bead_shifts=4, sampler="leastsq"))
     assert with_bead.depth_err_prayer_bead_ppm > 0
+
+
+def test_gp_hyperparameters_given_are_held_by_the_fit(xo3_epoch):
+    """GP's option ``hyperparameters`` "skips the optimisation": the fitter's alternation of
+    kernel and astrophysical fit leaves given values as they are (trust's twins rely on it)."""
+    from eclipsebench.decorrelate.gp import HYPER_NAMES
+
+    table = xo3_epoch["table"](seed=4, noise=1e-3)
+    given = [-6.0, -2.0, -2.5, 1.0, 0.0]
+    res = reduce_epoch(table, "gp", options=replace(ReduceSection(), sampler="leastsq",
+                                                    prayer_bead_shifts=0),
+                       method_options={"hyperparameters": given})
+    held = res.diagnostics["hyperparameters"]
+    assert [held[n] for n in HYPER_NAMES] == given

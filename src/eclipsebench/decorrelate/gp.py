@@ -245,6 +245,8 @@ class GaussianProcess(Systematics):
 
     name: ClassVar[str] = "gp"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
+    #: the order of option ``hyperparameters`` (and of ``diagnostics()["hyperparameters"]``)
+    hyperparameter_names: ClassVar[tuple[str, ...]] = HYPER_NAMES
     Options: ClassVar[type[MethodOptions]] = GpOptions
     options: GpOptions
     # No prayer bead: cyclic shifts of the residuals carry the correlated part the kernel
@@ -298,6 +300,8 @@ class GaussianProcess(Systematics):
         self._offset_cache: tuple[np.ndarray, tuple] | None = None
         self._factorise(h)
         self.ml_info: dict[str, Any] = {}
+        #: given hyperparameters are held: the fitter's alternation leaves them as they are
+        self.fixed_hyperparameters = hyperparameters is not None
         if hyperparameters is None and optimise:
             self.optimise_hyperparameters(np.ones(n))
 
@@ -380,7 +384,7 @@ class GaussianProcess(Systematics):
         grad = np.array([-0.5 * (alpha @ g @ alpha - np.sum(cinv * g)) for g in grads])
         return float(nll), grad
 
-    def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any]:
+    def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:
         """Maximum-likelihood kernel and white-noise parameters for a given ``astro``.
 
         Parameters
@@ -390,10 +394,14 @@ class GaussianProcess(Systematics):
 
         Returns
         -------
-        dict
+        dict or None
             ``hyperparameters`` (the new ``ln`` values), ``neg_log_ml`` and
-            ``converged``; the covariance is refactorised with them.
+            ``converged``; the covariance is refactorised with them. None when
+            the hyperparameters were given (option ``hyperparameters``): they
+            are held, as that option says.
         """
+        if self.fixed_hyperparameters:
+            return None
         yrel = self.flux_rel / np.asarray(astro, dtype=float)
         h0 = np.clip(self.hyper, self._lo + 1e-6, self._hi - 1e-6)
         res = minimize(self._neg_log_ml, h0, args=(yrel,), jac=True, method="L-BFGS-B",

@@ -123,13 +123,24 @@ def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twin: int,
 
 def shared_options(method: str, real: Mapping[str, Any], asked: Mapping[str, Any]
                    ) -> dict[str, Any]:
-    """What the twins take from the method's real fit: its fitted hyperparameters, when its
-    options have a ``hyperparameters`` field that the user left unset (GP's kernel)."""
-    names = {f.name for f in dataclasses.fields(get_method(method).Options)}
+    """What the twins take from the method's real fit: its fitted hyperparameters (GP's kernel),
+    when its options have a ``hyperparameters`` field the user left unset and the class names
+    their order (``hyperparameter_names``).
+
+    Examples
+    --------
+    >>> real = {"diagnostics": {"hyperparameters": {"gp_ln_white": 0.1, "gp_ln_amp": -5.0,
+    ...         "gp_ln_len_t": 3.0, "gp_ln_len_x": -2.0, "gp_ln_len_y": -2.5}}}
+    >>> shared_options("gp", real, {})
+    {'hyperparameters': [-5.0, -2.0, -2.5, 3.0, 0.1]}
+    """
+    cls = get_method(method)
+    names = {f.name for f in dataclasses.fields(cls.Options)}
+    order = getattr(cls, "hyperparameter_names", None)
     fitted = (real.get("diagnostics") or {}).get("hyperparameters")
-    if "hyperparameters" in names and "hyperparameters" not in asked \
-            and isinstance(fitted, Mapping) and fitted:
-        return {"hyperparameters": [float(v) for v in fitted.values()]}
+    if "hyperparameters" in names and "hyperparameters" not in asked and order \
+            and isinstance(fitted, Mapping) and set(order) <= set(fitted):
+        return {"hyperparameters": [float(fitted[n]) for n in order]}
     return {}
 
 
