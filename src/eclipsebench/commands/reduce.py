@@ -22,6 +22,7 @@ from ..fit.names import (
 from ..fit.target import system_of_table
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
+from ..limits import MAX_MCMC_WALKERS
 from .options import (
     add_planet_options,
     check_output_path,
@@ -72,7 +73,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="cyclic residual shifts for the prayer-bead error (0: none; default "
                         "16; computed where the error rule can report it: with --sampler "
                         "leastsq, error_rule largest, or a team that used it)")
-    p.add_argument("--walkers", type=positive_int(minimum=4), default=None, metavar="N",
+    p.add_argument("--walkers", type=positive_int(minimum=4, maximum=MAX_MCMC_WALKERS),
+                   default=None, metavar="N",
                    help="MCMC walkers (even; default 16)")
     p.add_argument("--steps", type=positive_int(minimum=100), default=None, metavar="N",
                    help="MCMC step cap (default 5000)")

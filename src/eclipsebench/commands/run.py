@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ..config import load_config
 from ..io.paths import check_output_path
+from ..limits import MAX_EPOCHS, MAX_WORKERS
 from .options import (
     add_config_options,
     add_planet_options,
@@ -28,14 +29,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "the same command resumes it")
     p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
                    help="challenge seed (challenge.seed)")
-    p.add_argument("--epochs", type=positive_int(), metavar="K",
+    p.add_argument("--epochs", type=positive_int(maximum=MAX_EPOCHS), metavar="K",
                    help="number of simulated epochs (challenge.epochs); e.g. 200 for Monte Carlo")
     p.add_argument("--methods", type=method_list, metavar="A,B,...",
                    help="methods to run (run.methods; default: every registered method)")
     p.add_argument("--profiles", type=_profile_list, metavar="P[,P]",
                    help="controlled, paper or both (run.profiles; default both)")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=positive_int(), metavar="N",
+    g.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), metavar="N",
                    help="Dask worker processes of a local cluster; 1 runs in this process")
     g.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of an existing Dask scheduler, e.g. tcp://host:8786")

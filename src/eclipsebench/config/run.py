@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..limits import MAX_BOOTSTRAP, MAX_EPOCHS, MAX_WORKERS, check_size
 from .base import check
 
 
@@ -19,6 +20,7 @@ class ChallengeSection:
         check(bool(self.name.strip()), "name", "a non-empty name")
         check(self.seed >= 0, "seed", "a non-negative integer")
         check(self.epochs >= 1, "epochs", "at least 1 epoch")
+        check_size("epochs", self.epochs, MAX_EPOCHS, "epochs", config=True)
 
 
 @dataclass(frozen=True)
@@ -70,6 +72,8 @@ class RunSection:
               and all(p in ("controlled", "paper") for p in self.profiles), "profiles",
               'one or both of "controlled" and "paper", each once')
         check(self.workers >= 1, "workers", "at least 1 worker")
+        check_size("workers", self.workers, MAX_WORKERS, "workers", config=True)
         check(0.0 <= self.f_in < 1.0, "f_in", "0 (from the eclipse geometry) or a fraction in (0, 1)")
         check(self.bootstrap >= 0, "bootstrap", "a non-negative number of resamples")
+        check_size("bootstrap", self.bootstrap, MAX_BOOTSTRAP, "resamples", config=True)
         check(self.lightcurve_epoch >= 1, "lightcurve_epoch", "an epoch number >= 1")
