@@ -38,10 +38,10 @@ from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
 from ..engine.layout import Layout
 from ..engine.lock import run_lock
-from ..engine.tasks import RunReport, Task, run_tasks
+from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
-from ..io.paths import check_output_path
+from ..io.paths import check_links_inside, check_output_path
 from ..report.challenge import plan_report_tasks
 from ..simulation.challenge import challenge_plans, plan_simulate_tasks
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
@@ -181,6 +181,8 @@ def run_challenge(cfg: Config, root: str | os.PathLike[str], *, workers: int | N
     """
     layout = Layout(check_output_path(root, "root", "folder"))
     tasks = build_tasks(cfg, layout.root)  # every configuration error before any work
+    check_links_inside(layout.root)
+    check_outputs_inside(tasks, layout.root)
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
         _guard(cfg, layout)

@@ -271,10 +271,13 @@ def chain_file(result_path: str | Path) -> Path:
 
 def run(args: argparse.Namespace) -> dict:
     paths = _table_paths(args.table)
-    if len(paths) > 1:
-        return _run_joint(args, paths)
     # The fitter pulls in every method (numba, scikit-learn, about 2 s): imported once the
     # table is found, not for `eclipsebench --help` or a misspelt path.
+    from ..decorrelate import get_method
+
+    get_method(args.method)  # "unknown method" (listing the known ones) before any path is made
+    if len(paths) > 1:
+        return _run_joint(args, paths)
     from ..fit.data import standardise_table
     from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
     from ..photometry.table import read_table

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..io.paths import SAFE_NAME, is_safe_name
 from ..limits import MAX_BOOTSTRAP, MAX_EPOCHS, MAX_WORKERS, check_size
 from .base import check
 
@@ -18,6 +19,9 @@ class ChallengeSection:
 
     def validate(self) -> None:
         check(bool(self.name.strip()), "name", "a non-empty name")
+        check(is_safe_name(self.name), "name",
+              f"a name that can be a folder name ({SAFE_NAME.pattern}, at most 100 "
+              f"characters), got {self.name!r}")
         check(self.seed >= 0, "seed", "a non-negative integer")
         check(self.epochs >= 1, "epochs", "at least 1 epoch")
         check_size("epochs", self.epochs, MAX_EPOCHS, "epochs", config=True)

@@ -53,10 +53,11 @@ from threadpoolctl import threadpool_limits
 
 from ..errors import InputError
 from ..io.atomic import write_json
+from ..io.paths import check_inside
 from ..progress import ProgressLines, get_logger, lines_enabled, progress
 
 __all__ = ["Task", "TaskTiming", "RunReport", "TaskFailed", "run_tasks", "stamp_path",
-           "is_done"]
+           "is_done", "check_outputs_inside"]
 
 #: Suffix of a task's stamp, written beside its last output as ``.<name>.task.json``.
 STAMP_SUFFIX = ".task.json"
@@ -220,6 +221,30 @@ class TaskFailed(RuntimeError):
         first_key, first = next(iter(failures.items()))
         super().__init__(f"{len(failures)} task(s) failed; first {first_key}: "
                          f"{type(first).__name__}: {first}")
+
+
+def check_outputs_inside(tasks: Sequence[Task], root: str | Path) -> None:
+    """Refuse, before any work, an output that resolves outside ``root``.
+
+    Each output is resolved with its symbolic links followed: a run folder
+    holding ``results -> elsewhere`` (from an unpacked archive, say) would
+    otherwise have its results written through the link. The folders already
+    resolved are remembered, so a run of thousands of tasks resolves each
+    folder once.
+
+    Raises
+    ------
+    InputError
+        One line naming the first such output and where it leads.
+    """
+    seen: set[Path] = set()
+    for task in tasks:
+        for path in task.outputs:
+            folder = Path(path).parent
+            if folder not in seen:
+                check_inside(folder, root)
+                seen.add(folder)
+            check_inside(path, root)
 
 
 def _check_graph(tasks: Sequence[Task]) -> dict[str, Task]:
