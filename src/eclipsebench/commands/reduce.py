@@ -144,6 +144,52 @@ def _column_map(items: list[str]) -> dict[str, str]:
     return out
 
 
+#: Lower-case column names of other pipelines, by the package's name they likely hold.
+_LIKELY_NAMES = {
+    "time_bmjd": ("bmjd", "bjd", "bjd_tdb", "bmjd_tdb", "time", "mjd", "jd", "t"),
+    "flux": ("flux", "f", "phot", "aper_flux", "flux_aper"),
+    "flux_err": ("flux_err", "fluxerr", "flux_error", "err", "error", "sigma", "eflux"),
+    "x": ("x", "xc", "xcen", "x_cen", "xpos", "x_centroid", "centroid_x"),
+    "y": ("y", "yc", "ycen", "y_cen", "ypos", "y_centroid", "centroid_y"),
+}
+
+
+def check_columns(table, source: str, *, radius_px: float | None = None) -> None:
+    """Refuse a table without the columns a fit needs, saying how to map them.
+
+    Another pipeline's table names its columns its own way: the message names
+    the missing ones, the table's columns, and the ``--columns`` (and
+    ``--time-column``/``--time-format``) options that map them, with the
+    likely candidates filled in.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the missing columns and the options.
+    """
+    needed = [c for c in ("time_bmjd", "flux", "flux_err", "x", "y")
+              if not (c == "flux" and radius_px is not None)]
+    missing = [c for c in needed if c not in table.colnames]
+    if not missing:
+        return
+    by_lower = {name.lower(): name for name in table.colnames}
+    maps, time_hint = [], ""
+    for name in missing:
+        found = next((by_lower[c] for c in _LIKELY_NAMES[name] if c in by_lower), None)
+        if name == "time_bmjd":
+            fmt = "bjd" if found and "jd" in found.lower() and "mjd" not in found.lower() \
+                else "bmjd"
+            time_hint = (f" and --time-column {found} --time-format {fmt} (one of "
+                         f"{', '.join(TIME_FORMATS)})" if found else
+                         f" and --time-column NAME --time-format {'|'.join(TIME_FORMATS)}")
+        else:
+            maps.append(f"{name}={found or 'NAME'}")
+    how = (f"map them with --columns {','.join(maps)}" if maps else "map it") + time_hint
+    shown = ", ".join(table.colnames[:12]) + (" ..." if len(table.colnames) > 12 else "")
+    raise InputError(f"{source}: missing column(s) {', '.join(missing)} (the table has "
+                     f"{shown}); {how}")
+
+
 #: How errors about the table's names and time format name the options.
 _TABLE_LABELS = {"columns": "--columns", "time_column": "--time-column",
                  "time_format": "--time-format"}
@@ -248,6 +294,7 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
         tables.append(standardise_table(table, columns=_column_map(args.columns),
                                         time_column=args.time_column,
                                         time_format=args.time_format, labels=_TABLE_LABELS))
+        check_columns(tables[-1], str(path), radius_px=args.radius)
     systems = [_system(args, section, t, p) for t, p in zip(tables, paths, strict=True)]
     system = systems[0]
     for other, path in zip(systems[1:], paths[1:], strict=True):
@@ -299,6 +346,12 @@ def run(args: argparse.Namespace) -> dict:
     table = standardise_table(table, columns=_column_map(args.columns),
                               time_column=args.time_column, time_format=args.time_format,
                               labels=_TABLE_LABELS)
+    check_columns(table, str(table_path), radius_px=args.radius)
+    if get_method(args.method).name == "kr-pmap" and args.pmap is None \
+            and not (table.meta.get("SIMDIR") or table.meta.get("simdir")):
+        raise InputError(f"--method kr-pmap: needs --pmap PATH (a calibration-star table, the "
+                         f"SSC pmap, or a folder of its versions); {table_path} names no "
+                         "simulation folder (SIMDIR) to find one in")
     system = _system(args, section, table, table_path)
     result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
