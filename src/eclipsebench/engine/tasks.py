@@ -444,6 +444,10 @@ def _is_fatal(exc: BaseException) -> bool:
     return isinstance(exc, (EnvironmentFailure, MemoryError))
 
 
+#: File times come from the kernel's coarse clock (a few ms behind ``time.time_ns``).
+_MTIME_SLACK_NS = 50_000_000
+
+
 @dataclass
 class _Run:
     """The state of one invocation of :func:`run_tasks` shared by its executors."""
@@ -467,11 +471,13 @@ class _Run:
     def settle(self, key: str, outcome: Callable[[], Any]) -> bool:
         """Record a task's outcome (its timing, its stamp) or its failure; True if it succeeded."""
         task = self.by_key[key]
-        self.in_flight.pop(key, None)
         try:
-            self.report.record(key, outcome())
+            timing = outcome()  # an interrupt here leaves the task in flight
+            self.in_flight.pop(key, None)
+            self.report.record(key, timing)
             _finish(task, self.by_key, self.hashes)
         except Exception as exc:  # collected and re-raised after the others ran
+            self.in_flight.pop(key, None)
             self.failures[key] = exc
             if not _is_fatal(exc):  # said once, by whoever catches it
                 log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
@@ -492,7 +498,7 @@ class _Run:
         for key, submitted_ns in list(self.in_flight.items()):
             task = self.by_key[key]
             with contextlib.suppress(OSError):
-                if os.stat(task.outputs[-1]).st_mtime_ns < submitted_ns:
+                if os.stat(task.outputs[-1]).st_mtime_ns < submitted_ns - _MTIME_SLACK_NS:
                     continue
                 if not all(Path(p).is_file() for p in task.outputs):
                     continue

@@ -1,0 +1,169 @@
+"""Issue 28: faults during a run are one line, stop or resume cleanly, and keep the bytes.
+
+Before: SIGTERM (a batch scheduler's wall-time limit) killed ``run`` with exit
+143, no message and ``run.lock`` left behind; ``--quiet`` printed Dask's
+"Restarting worker" lines and multiprocessing's "leaked semaphore" warning
+when a worker died; a full disk gave 25-57 lines, went on for 30 s and
+exited 2 as bad input; and a result written while Ctrl-C was unwinding had
+no stamp and was redone.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+import eclipsebench
+from eclipsebench.challenge.runner import Layout, run_challenge
+from eclipsebench.cli import main
+from eclipsebench.config import load_config
+from eclipsebench.engine.tasks import Task, run_tasks, stamp_path
+from eclipsebench.errors import EXIT_ENVIRONMENT
+
+# The tiny challenge of tests/challenge/test_runner.py, one method, one profile, no
+# calibration set: the fewest tasks that still simulate, measure, reduce and score.
+SMALL = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
+         "simulation.subsamples=1", "simulation.write_calibration=false",
+         'run.methods=["pld"]', 'run.profiles=["controlled"]', "run.bootstrap=50",
+         "run.report=false", "run.empirical_photon_limit=false"]
+#: generous: how long a step of the small run may take on a loaded machine
+WAIT_S = 600.0
+
+
+def _argv(out: Path, *extra: str) -> list[str]:
+    argv = ["run", "--out", str(out), "--quiet", *extra]
+    for item in SMALL:
+        argv += ["--set", item]
+    return argv
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> bytes:
+    """summary.json of an undisturbed run, in this process."""
+    root = tmp_path_factory.mktemp("reference")
+    run_challenge(load_config(None, SMALL), root, workers=1)
+    return (root / "summary.json").read_bytes()
+
+
+def _start(argv: list[str], stderr_path: Path) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(Path(eclipsebench.__file__).parents[1])}
+    with open(stderr_path, "wb") as err:
+        return subprocess.Popen([sys.executable, "-m", "eclipsebench.cli", *argv],
+                                stdout=subprocess.DEVNULL, stderr=err, env=env)
+
+
+def _wait_for(path: Path, proc: subprocess.Popen) -> None:
+    deadline = time.monotonic() + WAIT_S
+    while not path.exists():
+        assert proc.poll() is None, f"the run ended (exit {proc.returncode}) before {path}"
+        assert time.monotonic() < deadline, f"no {path} after {WAIT_S:.0f} s"
+        time.sleep(0.05)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(1800)
+def test_sigterm_is_one_line_releases_the_lock_and_the_rerun_gives_the_same_bytes(
+        tmp_path, reference, capsys):
+    out = tmp_path / "run"
+    proc = _start(_argv(out, "--workers", "1"), tmp_path / "stderr.txt")
+    try:
+        _wait_for(Layout(out).truth(), proc)
+        proc.send_signal(signal.SIGTERM)
+        code = proc.wait(timeout=WAIT_S)
+    finally:
+        proc.kill()
+        proc.wait()
+    err = (tmp_path / "stderr.txt").read_text().splitlines()
+    assert code == 143, err
+    assert err == ["eclipsebench run: interrupted by SIGTERM; rerun the same command to resume"]
+    assert not Layout(out).lock.exists() and not Layout(out).summary.exists()
+    assert main(_argv(out, "--workers", "1")) == 0
+    capsys.readouterr()
+    assert Layout(out).summary.read_bytes() == reference
+
+
+def _worker_processes(pid: int) -> list[psutil.Process]:
+    """The Dask worker processes under ``pid`` (spawned by multiprocessing, not its tracker)."""
+    found = []
+    for child in psutil.Process(pid).children(recursive=True):
+        try:
+            line = " ".join(child.cmdline())
+        except psutil.NoSuchProcess:
+            continue
+        if "spawn_main" in line and "resource_tracker" not in line:
+            found.append(child)
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(1800)
+def test_a_worker_killed_mid_run_is_silent_with_quiet(tmp_path, reference):
+    out = tmp_path / "run"
+    proc = _start(_argv(out, "--workers", "2"), tmp_path / "stderr.txt")
+    try:
+        _wait_for(Layout(out).truth(), proc)  # the photometry and reductions are next
+        workers = _worker_processes(proc.pid)
+        assert len(workers) == 2
+        workers[0].kill()
+        code = proc.wait(timeout=WAIT_S)
+    finally:
+        proc.kill()
+        proc.wait()
+    assert code == 0
+    assert (tmp_path / "stderr.txt").read_text() == ""
+    assert Layout(out).summary.read_bytes() == reference
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(1800)
+def test_a_full_disk_is_one_line_stops_the_run_and_the_rerun_gives_the_same_bytes(
+        tmp_path, reference, capsys, monkeypatch):
+    out = tmp_path / "run"
+    real_replace = os.replace
+    refused = []
+
+    def replace(src, dst, *args, **kwargs):  # the disk fills when the results are written
+        if f"{os.sep}results{os.sep}" in str(dst):
+            refused.append(str(dst))
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_replace(src, dst, *args, **kwargs)
+
+    monkeypatch.setattr(os, "replace", replace)
+    code = main(_argv(out, "--workers", "1"))
+    monkeypatch.setattr(os, "replace", real_replace)
+    err = capsys.readouterr().err.splitlines()
+    assert code == EXIT_ENVIRONMENT, err
+    assert len(err) == 1 and "no space left" in err[0] and str(out / "results" / "pld") in err[0]
+    assert "Traceback" not in err[0] and "internal error" not in err[0]
+    assert len(refused) == 1  # stopped at the first: the other epoch was not tried
+    assert not Layout(out).lock.exists() and not Layout(out).summary.exists()
+    assert main(_argv(out, "--workers", "1")) == 0
+    capsys.readouterr()
+    assert Layout(out).summary.read_bytes() == reference
+
+
+def write_then_interrupt(path: str) -> None:
+    """A task whose output is whole when Ctrl-C arrives (as during a run's shutdown)."""
+    Path(path).write_text("whole\n")
+    raise KeyboardInterrupt
+
+
+def write(path: str) -> None:
+    Path(path).write_text("whole\n")
+
+
+def test_a_result_written_while_interrupted_gets_its_stamp(tmp_path):
+    out = tmp_path / "a.txt"
+    with pytest.raises(KeyboardInterrupt):
+        run_tasks([Task("a", "a", write_then_interrupt, (str(out),), (out,))])
+    task = Task("a", "a", write, (str(out),), (out,))
+    assert stamp_path(task).is_file()
+    assert run_tasks([task]).skipped == ["a"]  # before: redone once
