@@ -13,7 +13,7 @@ import pytest
 
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
-from eclipsebench.errors import ConfigError, InputError
+from eclipsebench.errors import EXIT_ENVIRONMENT, ConfigError, InputError
 from eclipsebench.limits import (
     MAX_BOOTSTRAP,
     MAX_EPOCHS,
@@ -102,3 +102,19 @@ def test_check_size_names_key_value_and_limit():
     check_size("k", 3, 3)
     with pytest.raises(ConfigError, match=r"config key 'k': 4 x is above the limit of 3"):
         check_size("k", 4, 3, "x", config=True)
+
+
+def test_a_memory_error_is_one_line_naming_the_step(tmp_path, capsys, monkeypatch):
+    """Before: "internal error: MemoryError ..." (exit 1)."""
+    import eclipsebench.stats.summary as summary_module
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError("Unable to allocate 36.4 TiB for an array")
+
+    monkeypatch.setattr(summary_module, "method_statistics", exhausted)
+    depths = tmp_path / "d.csv"
+    depths.write_text("method,epoch,depth_ppm,error_ppm\na,1,1800,50\na,2,1850,50\n")
+    code, out, err = _cli(capsys, "stats", depths)
+    assert code == EXIT_ENVIRONMENT and len(err) == 1 and out == "", err
+    assert "out of memory in eclipsebench.stats.summary.summarize" in err[0]
+    assert "36.4 TiB" in err[0] and "internal error" not in err[0]

@@ -26,7 +26,7 @@ from eclipsebench.challenge.runner import Layout, run_challenge
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.engine.tasks import Task, run_tasks, stamp_path
-from eclipsebench.errors import EXIT_ENVIRONMENT
+from eclipsebench.errors import EXIT_ENVIRONMENT, EnvironmentFailure
 
 # The tiny challenge of tests/challenge/test_runner.py, one method, one profile, no
 # calibration set: the fewest tasks that still simulate, measure, reduce and score.
@@ -167,3 +167,17 @@ def test_a_result_written_while_interrupted_gets_its_stamp(tmp_path):
     task = Task("a", "a", write, (str(out),), (out,))
     assert stamp_path(task).is_file()
     assert run_tasks([task]).skipped == ["a"]  # before: redone once
+
+
+def exhaust_memory(path: str) -> None:
+    raise MemoryError("Unable to allocate 964 GiB")
+
+
+def test_a_task_out_of_memory_stops_the_run_naming_the_task(tmp_path):
+    first, second = tmp_path / "a.txt", tmp_path / "b.txt"
+    tasks = [Task("simulate/r1", "simulate", exhaust_memory, (str(first),), (first,)),
+             Task("simulate/r2", "simulate", write, (str(second),), (second,))]
+    with pytest.raises(EnvironmentFailure, match=r"out of memory in task simulate/r1 "
+                                                 r"\(Unable to allocate 964 GiB\)"):
+        run_tasks(tasks)
+    assert not second.exists()  # stopped at the first
