@@ -127,3 +127,25 @@ def test_check_inside_follows_links(tmp_path):
     assert check_inside(tmp_path / "a" / "up" / "a" / "x", tmp_path / "a") is not None
     with pytest.raises(InputError):
         check_inside(tmp_path / "a" / "up" / "x", tmp_path / "a")
+
+
+@pytest.mark.filterwarnings("default::RuntimeWarning")
+def test_a_plugin_calling_sys_exit_does_not_end_the_command(tmp_path, cli, bad, monkeypatch,
+                                                            caplog):
+    """Before: any command ended with the plugin's exit code (3) and no message."""
+    folder = _plugin_dist(tmp_path / "dist", {"exits": "ebbad_exits2:Exits"},
+                          {"ebbad_exits2": "import sys\nsys.exit(3)\n"})
+    table = bad.xo3_table(tmp_path / "epoch_01.fits")
+    monkeypatch.syspath_prepend(str(folder))
+    monkeypatch.setattr(base, "_PLUGINS_LOADED", False)
+    try:
+        code, _, err = cli("reduce", table, "--method", "no-such-method")
+        warned = [r.getMessage() for r in caplog.records if r.name == "eclipsebench.warnings"]
+    finally:
+        sys.modules.pop("ebbad_exits2", None)
+        base._REGISTRY.pop("exits", None)
+        monkeypatch.undo()
+        base.load_plugins(refresh=True)
+    bad.assert_one_line(code, err, "unknown method")  # not the plugin's exit code 3
+    assert len(warned) == 1 and "\n" not in warned[0], warned  # one log line (stderr in a shell)
+    assert "method plugin 'exits'" in warned[0] and "sys.exit(3)" in warned[0]
