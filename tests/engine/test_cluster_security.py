@@ -204,3 +204,21 @@ def test_a_missing_certificate_file_is_named(tmp_path):
         run_tasks([Task("a", "a", write_text, (str(tmp_path / "o"), "x"), (tmp_path / "o",))],
                   scheduler="tls://127.0.0.1:1",
                   cluster=ClusterOptions(tls_ca_file=__file__, tls_cert=str(tmp_path / "no")))
+
+
+def record_listening(out: str, run_pid: int) -> None:
+    """A task: the run's listening addresses."""
+    Path(out).write_text(json.dumps(sorted(listening_addresses(run_pid))))
+
+
+@pytest.mark.slow  # a 2-worker cluster: ~15 s
+@pytest.mark.timeout(300)
+def test_the_dashboard_is_served_on_loopback_only_when_asked_and_its_address_said(tmp_path,
+                                                                                  caplog):
+    out = tmp_path / "listening.json"
+    with caplog.at_level("WARNING", logger="eclipsebench"):
+        run_tasks([Task("l", "l", record_listening, (str(out), os.getpid()), (out,))],
+                  workers=2, cluster=ClusterOptions(dashboard=True))
+    said = [r.getMessage() for r in caplog.records if "dashboard" in r.getMessage()]
+    assert len(said) == 1 and "http://127.0.0.1:" in said[0], said
+    assert set(json.loads(out.read_text())) <= LOOPBACK
