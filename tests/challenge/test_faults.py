@@ -181,3 +181,39 @@ def test_a_task_out_of_memory_stops_the_run_naming_the_task(tmp_path):
                                                  r"\(Unable to allocate 964 GiB\)"):
         run_tasks(tasks)
     assert not second.exists()  # stopped at the first
+
+
+def disk_full(path: str) -> None:
+    """A task whose write fails for want of space (as io.atomic reports it)."""
+    from eclipsebench.io.atomic import write_bytes
+
+    real = os.replace
+
+    def replace(src, dst, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    os.replace = replace
+    try:
+        write_bytes(path, b"x" * 1000)
+    finally:
+        os.replace = real
+
+
+@pytest.mark.slow  # a 2-worker cluster: ~15 s
+@pytest.mark.timeout(300)
+def test_a_full_disk_on_a_dask_worker_is_said_once_and_stops_the_run(tmp_path, capfd):
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    full = tmp_path / "results" / "a.json"
+    later = [tmp_path / f"later{i}.txt" for i in range(6)]
+    tasks = [Task("full", "reduce", disk_full, (str(full),), (full,))]
+    tasks += [Task(f"later{i}", "reduce", write, (str(p),), (p,), deps=("full",))
+              for i, p in enumerate(later)]
+    with pytest.raises(EnvironmentFailure) as failure:
+        run_tasks(tasks, workers=2)
+    assert failure.value.folder == str(full.parent) and failure.value.bytes_needed == 1000
+    assert "no space left" in str(failure.value) and "1000 bytes needed" in str(failure.value)
+    assert not any(p.exists() for p in later)
+    out, err = capfd.readouterr()
+    assert "Compute Failed" not in err and "Traceback" not in err, err
