@@ -316,6 +316,25 @@ def chain_file(result_path: str | Path) -> Path:
     return chain_path(result_path)
 
 
+def _check_pmap(args: argparse.Namespace, table, table_path: Path, method_options: dict) -> None:
+    """kr-pmap needs a map: ``--pmap``, or a simulated table's SIMDIR (named on the command line).
+
+    The ``--option`` values are checked first, so an unknown option is the
+    error reported, as for any other method.
+    """
+    from ..decorrelate import get_method
+    from ..decorrelate.base import parse_method_options
+
+    cls = get_method(args.method)
+    if cls.name != "kr-pmap" or args.pmap is not None:
+        return
+    parse_method_options(cls, method_options)
+    if not (table.meta.get("SIMDIR") or table.meta.get("simdir")):
+        raise InputError(f"--method kr-pmap: needs --pmap PATH (a calibration-star table, the "
+                         f"SSC pmap, or a folder of its versions); {table_path} names no "
+                         "simulation folder (SIMDIR) to find one in")
+
+
 def run(args: argparse.Namespace) -> dict:
     paths = _table_paths(args.table)
     # The fitter pulls in every method (numba, scikit-learn, about 2 s): imported once the
@@ -347,11 +366,7 @@ def run(args: argparse.Namespace) -> dict:
                               time_column=args.time_column, time_format=args.time_format,
                               labels=_TABLE_LABELS)
     check_columns(table, str(table_path), radius_px=args.radius)
-    if get_method(args.method).name == "kr-pmap" and args.pmap is None \
-            and not (table.meta.get("SIMDIR") or table.meta.get("simdir")):
-        raise InputError(f"--method kr-pmap: needs --pmap PATH (a calibration-star table, the "
-                         f"SSC pmap, or a folder of its versions); {table_path} names no "
-                         "simulation folder (SIMDIR) to find one in")
+    _check_pmap(args, table, table_path, method_options)
     system = _system(args, section, table, table_path)
     result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
