@@ -222,3 +222,17 @@ def test_the_dashboard_is_served_on_loopback_only_when_asked_and_its_address_sai
     said = [r.getMessage() for r in caplog.records if "dashboard" in r.getMessage()]
     assert len(said) == 1 and "http://127.0.0.1:" in said[0], said
     assert set(json.loads(out.read_text())) <= LOOPBACK
+
+
+def test_the_scheduler_can_come_from_the_environment(tmp_path, capsys, monkeypatch):
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    monkeypatch.setenv("ECLIPSEBENCH_SCHEDULER", address)
+    args = ["run", "--out", str(tmp_path / "r"), "--quiet", "--connect-timeout", "1"]
+    for item in TINY:
+        args += ["--set", item]
+    code = main(args)
+    err = capsys.readouterr().err.splitlines()
+    assert code == 2 and len(err) == 1 and address in err[0] and "cannot connect" in err[0], err
+    assert list(tmp_path.iterdir()) == []
