@@ -12,8 +12,8 @@ constant                       limit           what it bounds (default)
 =============================  ==============  ======================================
 ``MAX_EPOCHS``                 1,000           ``challenge.epochs`` (10; 100 for a
                                                Monte Carlo)
-``MAX_TWINS``                  1,000           systematics-free twins of a run
-                                               (one per epoch)
+``MAX_TWINS``                  10,000          digital twins of a trust run
+                                               (``trust --twins``, 50)
 ``MAX_CUBES_PER_AOR``          100,000         ``observation.pre_cubes``,
                                                ``observation.main_cubes`` (11, 233)
 ``MAX_FRAMES_PER_CUBE``        4,096           ``observation.frames_per_cube`` (64)
@@ -41,8 +41,8 @@ __all__ = ["MAX_EPOCHS", "MAX_TWINS", "MAX_CUBES_PER_AOR", "MAX_FRAMES_PER_CUBE"
 
 #: Epochs of one challenge (``challenge.epochs``): each is about 140 MB of cubes.
 MAX_EPOCHS = 1_000
-#: Systematics-free twins (one per epoch of a run; a trust check's twins).
-MAX_TWINS = 1_000
+#: Digital twins of a trust run (``trust --twins``; the value its command states).
+MAX_TWINS = 10_000
 #: Cubes (files) of one AOR, Pre or Main: each cube is about 256 KiB.
 MAX_CUBES_PER_AOR = 100_000
 #: Frames of one cube (a real IRAC subarray cube holds 64).
