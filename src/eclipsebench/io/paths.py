@@ -237,8 +237,11 @@ def check_links_inside(root: str | os.PathLike) -> None:
     base = os.path.realpath(root)
     if not os.path.isdir(base):
         return
-    for folder, dirs, files in os.walk(base):
-        for name in dirs + files:
-            path = os.path.join(folder, name)
-            if os.path.islink(path):
-                check_inside(path, base)
+    folders = [base]
+    while folders:  # scandir's entries know whether they are links: no stat per file
+        with os.scandir(folders.pop()) as entries:
+            for entry in entries:
+                if entry.is_symlink():
+                    check_inside(entry.path, base)
+                elif entry.is_dir(follow_symlinks=False):
+                    folders.append(entry.path)
