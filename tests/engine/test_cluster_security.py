@@ -11,6 +11,7 @@ TypeError.
 from __future__ import annotations
 
 import json
+import logging
 import os
 import socket
 import subprocess
@@ -213,13 +214,19 @@ def record_listening(out: str, run_pid: int) -> None:
 
 @pytest.mark.slow  # a 2-worker cluster: ~15 s
 @pytest.mark.timeout(300)
-def test_the_dashboard_is_served_on_loopback_only_when_asked_and_its_address_said(tmp_path,
-                                                                                  caplog):
+def test_the_dashboard_is_served_on_loopback_only_when_asked_and_its_address_said(tmp_path):
     out = tmp_path / "listening.json"
-    with caplog.at_level("WARNING", logger="eclipsebench"):
+    said: list[str] = []
+    handler = logging.Handler(logging.WARNING)
+    handler.emit = lambda record: said.append(record.getMessage())
+    logger = logging.getLogger("eclipsebench")
+    logger.addHandler(handler)
+    try:
         run_tasks([Task("l", "l", record_listening, (str(out), os.getpid()), (out,))],
                   workers=2, cluster=ClusterOptions(dashboard=True))
-    said = [r.getMessage() for r in caplog.records if "dashboard" in r.getMessage()]
+    finally:
+        logger.removeHandler(handler)
+    said = [m for m in said if "dashboard" in m]
     assert len(said) == 1 and "http://127.0.0.1:" in said[0], said
     assert set(json.loads(out.read_text())) <= LOOPBACK
 

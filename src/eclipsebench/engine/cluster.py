@@ -162,6 +162,8 @@ class _ToOurLogger(logging.Handler):
 
 def route_dask_logging() -> None:
     """Send this process's ``distributed`` log records through :data:`dask_log` (DEBUG)."""
+    import distributed  # noqa: F401 - its import installs its own handler: replace it after
+
     logger = logging.getLogger("distributed")
     if not any(isinstance(h, _ToOurLogger) for h in logger.handlers):
         for handler in list(logger.handlers):
