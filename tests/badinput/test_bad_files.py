@@ -160,7 +160,8 @@ def test_a_full_disk_names_the_file_and_leaves_nothing(command, tmp_path, cli, b
     else:
         from astropy.table import Table
         out = tmp_path / "out" / "r.json"
-        Table({"time_bmjd": [1.0]}).write(tmp_path / "t.ecsv", format="ascii.ecsv")
+        Table({name: [1.0] for name in ("time_bmjd", "flux", "flux_err", "x", "y")}).write(
+            tmp_path / "t.ecsv", format="ascii.ecsv")  # the columns a fit needs (checked first)
         _fake_reduce(monkeypatch)
         monkeypatch.setattr(atomic.Path, "write_bytes", full)
         argv = ["reduce", tmp_path / "t.ecsv", "--method", "pld", "--out", out,
