@@ -36,6 +36,9 @@ class ConfigError(InputError):
         self.problem = problem
         super().__init__(f"config key '{key}': {problem}")
 
+    def __reduce__(self):  # raised in a Dask worker, re-raised in the run's process
+        return type(self), (self.key, self.problem)
+
 
 class DataError(InputError):
     """A data file is unreadable, truncated, or lacks what is needed."""
@@ -44,6 +47,9 @@ class DataError(InputError):
         self.path = str(path)
         self.problem = problem
         super().__init__(f"{self.path}: {problem}")
+
+    def __reduce__(self):  # raised in a Dask worker, re-raised in the run's process
+        return type(self), (self.path, self.problem)
 
 
 class EnvironmentFailure(Exception):

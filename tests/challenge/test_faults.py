@@ -217,3 +217,16 @@ def test_a_full_disk_on_a_dask_worker_is_said_once_and_stops_the_run(tmp_path, c
     assert not any(p.exists() for p in later)
     out, err = capfd.readouterr()
     assert "Compute Failed" not in err and "Traceback" not in err, err
+
+
+def test_the_errors_cross_from_a_worker_whole():
+    """Before: a DataError or ConfigError raised on a Dask worker could not be unpickled."""
+    import pickle
+
+    from eclipsebench.errors import ConfigError, DataError
+
+    for exc in (DataError("/x/t.fits", "truncated"), ConfigError("run.bootstrap", "too many"),
+                EnvironmentFailure("/f/a: no space", folder="/f", bytes_needed=10)):
+        back = pickle.loads(pickle.dumps(exc))
+        assert type(back) is type(exc) and str(back) == str(exc)
+        assert vars(back) == vars(exc)
