@@ -111,7 +111,9 @@ def external_security(address: str, options: ClusterOptions):
              "tls_client_key": _tls_setting(options, "tls_key")}
     security = Security(require_encryption=True,
                         **{k: v for k, v in given.items() if v is not None})
-    if not security.tls_ca_file or not security.tls_client_cert:
+    # read back: Dask's configuration may have given what the options did not
+    if not getattr(security, "tls_ca_file", None) or not getattr(security, "tls_client_cert",
+                                                                  None):
         raise InputError(f"--scheduler {address}: a tls:// scheduler needs --tls-ca-file and "
                          "--tls-cert (and --tls-key unless the key is in the certificate file), "
                          f"or {TLS_ENV['tls_ca_file']} and {TLS_ENV['tls_cert']}")
