@@ -7,8 +7,13 @@ numbers; ``--json`` prints it as one JSON object on stdout, otherwise
 ``format_text`` (or a key: value listing) is printed.
 
 Exit codes: 0 success; 2 bad input or usage (one line on stderr naming the
-file, key or option and what was expected); 130 interrupted (Ctrl-C: one line
-on stderr; whatever a library prints while it unwinds is dropped); 1
+file, key or option and what was expected); 3 an environment failure (a
+full disk or quota, a folder that became unwritable, memory exhausted: one
+line naming the folder, and the bytes needed when known, or the step that
+ran out of memory; a run stops at the first); 130 interrupted by Ctrl-C
+(SIGINT) and 143 by SIGTERM (what a batch scheduler sends at its wall-time
+limit): one line on stderr, whatever a library prints while it unwinds is
+dropped, the run's lock is released and the same command resumes; 1
 unexpected internal error (``--debug`` shows the traceback). A command that
 fails or is interrupted leaves no folder it created empty.
 """
@@ -28,7 +33,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any, NoReturn
 
 from . import __version__
-from .errors import InputError
+from .errors import EXIT_ENVIRONMENT, EnvironmentFailure, InputError
 from .io.paths import missing_folders, remove_empty_folders
 from .progress import configure
 
@@ -128,10 +133,24 @@ class _Silenced:
         return False
 
 
+#: The signals that interrupt a command: Ctrl-C, and what a batch scheduler sends.
+INTERRUPT_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A KeyboardInterrupt that remembers the signal that raised it."""
+
+    def __init__(self, signum: int):
+        self.signum = signum
+        super().__init__(signal.Signals(signum).name)
+
+
 @contextlib.contextmanager
 def _one_line_interrupt() -> Iterator[None]:
-    """On Ctrl-C, silence stdout and stderr until the interrupt reaches :func:`main`.
+    """On Ctrl-C or SIGTERM, silence stdout and stderr until the interrupt reaches :func:`main`.
 
+    Both signals raise a KeyboardInterrupt (:class:`Interrupted`), so the
+    same clean-up runs (the run's lock released, its Dask cluster closed).
     Libraries print while a KeyboardInterrupt unwinds through them (emcee
     prints the traceback of the likelihood call it was in); the user should
     see one line. The streams are silenced at the file-descriptor level too,
@@ -157,19 +176,41 @@ def _one_line_interrupt() -> Iterator[None]:
                 os.close(devnull)
             saved["fds"] = fds
             sys.stdout = sys.stderr = _Silenced()
-        raise KeyboardInterrupt
+        raise Interrupted(signum)
 
-    previous = signal.signal(signal.SIGINT, handler)
+    previous = {signum: signal.signal(signum, handler) for signum in INTERRUPT_SIGNALS}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for signum, old in previous.items():
+            signal.signal(signum, old)
         if saved:
             for fd, copy in saved["fds"].items():
                 with contextlib.suppress(OSError):
                     os.dup2(copy, fd)
                     os.close(copy)
             sys.stdout, sys.stderr = saved["stdout"], saved["stderr"]
+
+
+def _memory_step(exc: BaseException) -> str:
+    """The innermost eclipsebench function a MemoryError came out of (``module.function``)."""
+    step = ""
+    tb = exc.__traceback__
+    while tb is not None:
+        module = tb.tb_frame.f_globals.get("__name__", "")
+        if module.startswith(__package__ + ".") and module != __name__:
+            step = f"{module}.{tb.tb_frame.f_code.co_name}"
+        tb = tb.tb_next
+    return step or "this command"
+
+
+def _environment_line(exc: BaseException) -> str:
+    """One line for an environment failure: its own message, or the step out of memory."""
+    if isinstance(exc, MemoryError):
+        size = " ".join(str(exc).split())
+        return (f"out of memory in {_memory_step(exc)}" + (f" ({size})" if size else "")
+                + "; free memory, or ask for less (eclipsebench.limits), and rerun")
+    return " ".join(str(exc).split())
 
 
 def _usage_line(parser: argparse.ArgumentParser) -> str:
@@ -197,11 +238,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"eclipsebench {module.NAME}: error: {' '.join(str(exc).split())}",
               file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         remove_empty_folders(created)
-        print(f"eclipsebench {module.NAME}: interrupted; rerun the same command to resume",
+        signum = getattr(exc, "signum", signal.SIGINT)
+        by = " by SIGTERM" if signum == signal.SIGTERM else ""
+        print(f"eclipsebench {module.NAME}: interrupted{by}; rerun the same command to resume",
               file=sys.stderr)
-        return 130
+        return 128 + int(signum)
+    except (EnvironmentFailure, MemoryError) as exc:
+        remove_empty_folders(created)
+        print(f"eclipsebench {module.NAME}: error: {_environment_line(exc)}", file=sys.stderr)
+        return EXIT_ENVIRONMENT
     except Exception as exc:  # the one place that turns a bug into exit code 1
         remove_empty_folders(created)
         if args.debug:

@@ -1,12 +1,23 @@
-"""Exceptions that the command line turns into one clear line and exit code 2.
+"""Exceptions that the command line turns into one clear line and an exit code.
 
 Anything a user can get wrong (a file, a key, an option, a parameter value)
 raises :class:`InputError` or one of its subclasses with a message that names
-the file, key or option and says what was expected. Everything else is an
-internal error (exit code 1).
+the file, key or option and says what was expected (exit code 2). A failure
+of the machine rather than of the input (a full disk, a folder that became
+unwritable, memory exhausted) is an :class:`EnvironmentFailure` (exit code
+:data:`EXIT_ENVIRONMENT`). Everything else is an internal error (exit code 1).
 """
 
 from __future__ import annotations
+
+import errno
+
+#: Exit code of an environment failure (disk full, permission, memory): not bad input.
+EXIT_ENVIRONMENT = 3
+
+#: ``errno`` values of a write that fail because of the machine, not of the input.
+ENVIRONMENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EPERM,
+                                errno.EROFS, errno.EIO, errno.ENOMEM})
 
 
 class InputError(Exception):
@@ -25,6 +36,9 @@ class ConfigError(InputError):
         self.problem = problem
         super().__init__(f"config key '{key}': {problem}")
 
+    def __reduce__(self):  # raised in a Dask worker, re-raised in the run's process
+        return type(self), (self.key, self.problem)
+
 
 class DataError(InputError):
     """A data file is unreadable, truncated, or lacks what is needed."""
@@ -33,6 +47,37 @@ class DataError(InputError):
         self.path = str(path)
         self.problem = problem
         super().__init__(f"{self.path}: {problem}")
+
+    def __reduce__(self):  # raised in a Dask worker, re-raised in the run's process
+        return type(self), (self.path, self.problem)
+
+
+class EnvironmentFailure(Exception):
+    """The machine failed the run: no space left, permission lost, memory exhausted.
+
+    The message is one line naming the folder (and the bytes needed when
+    known); the CLI prints it once and exits with :data:`EXIT_ENVIRONMENT`.
+    The engine stops a run at the first one (every other task would fail the
+    same way).
+
+    Parameters
+    ----------
+    message : str
+        The one line, naming the folder or the step.
+    folder : str, optional
+        The folder that could not be written.
+    bytes_needed : int, optional
+        The size of the write that failed, when known.
+    """
+
+    def __init__(self, message: str, folder: str | None = None,
+                 bytes_needed: int | None = None):
+        self.folder = folder
+        self.bytes_needed = bytes_needed
+        super().__init__(message)
+
+    def __reduce__(self):  # pickled across Dask workers with its attributes
+        return type(self), (str(self), self.folder, self.bytes_needed)
 
 
 def require(condition: bool, name: str, expected: str) -> None:

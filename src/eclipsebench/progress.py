@@ -14,6 +14,7 @@ import logging
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterable, Mapping
 
 __all__ = ["configure", "progress", "get_logger", "bars_enabled", "lines_enabled",
@@ -23,11 +24,22 @@ _state = {"quiet": False}
 
 
 def configure(*, quiet: bool = False, verbose: bool = False) -> None:
-    """Set the process-wide quiet flag and the logging level (CLI only)."""
+    """Set the process-wide quiet flag and the logging level (CLI only).
+
+    Python warnings (a method plugin that failed to load, say) are logged as
+    one line each (``WARNING eclipsebench.warnings: RuntimeWarning: ...``)
+    instead of Python's two (the message, then the source line).
+    """
     _state["quiet"] = bool(quiet)
     level = logging.DEBUG if verbose else (logging.WARNING if quiet else logging.INFO)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     logging.getLogger("eclipsebench").setLevel(level)
+    warnings.showwarning = _log_warning
+
+
+def _log_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """:func:`warnings.showwarning` as one log line."""
+    get_logger("warnings").warning("%s: %s", category.__name__, " ".join(str(message).split()))
 
 
 def bars_enabled() -> bool:

@@ -9,7 +9,7 @@ import shutil
 import pytest
 from astropy.io import fits
 
-from eclipsebench.errors import DataError
+from eclipsebench.errors import EXIT_ENVIRONMENT, DataError
 from eclipsebench.io.bcd_read import read_bcd_header
 
 
@@ -141,7 +141,8 @@ def test_config_with_an_unknown_planet_names_the_key_and_file(tmp_path, cli, bad
 @pytest.mark.parametrize("command", ["photometry", "lightcurve", "reduce-json"])
 def test_a_full_disk_names_the_file_and_leaves_nothing(command, tmp_path, cli, bad, monkeypatch,
                                                        star_folder):
-    """ENOSPC from the writer: one line naming the file, no temporary or partial file."""
+    """ENOSPC from the writer: one line naming the file and its folder, no temporary or
+    partial file, and the exit code of an environment failure (issue 28: not bad input)."""
     import eclipsebench.io.atomic as atomic
 
     def full(*args, **kwargs):
@@ -159,14 +160,16 @@ def test_a_full_disk_names_the_file_and_leaves_nothing(command, tmp_path, cli, b
     else:
         from astropy.table import Table
         out = tmp_path / "out" / "r.json"
-        Table({"time_bmjd": [1.0]}).write(tmp_path / "t.ecsv", format="ascii.ecsv")
+        Table({name: [1.0] for name in ("time_bmjd", "flux", "flux_err", "x", "y")}).write(
+            tmp_path / "t.ecsv", format="ascii.ecsv")  # the columns a fit needs (checked first)
         _fake_reduce(monkeypatch)
         monkeypatch.setattr(atomic.Path, "write_bytes", full)
         argv = ["reduce", tmp_path / "t.ecsv", "--method", "pld", "--out", out,
                 "--system", "XO-3b"]
     before = bad.snapshot(tmp_path)
     code, _, err = cli(*argv, "--quiet")
-    bad.assert_one_line(code, err, str(out), "no space left")
+    bad.assert_one_line(code, err, str(out), str(out.parent), "no space left",
+                        exit_code=EXIT_ENVIRONMENT)
     assert bad.snapshot(tmp_path) == before  # no partial file, no temporary, no empty folder
 
 

@@ -36,12 +36,13 @@ from astropy.table import Table
 
 from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
+from ..engine.cluster import ClusterOptions, SchedulerUnreachable, external_security
 from ..engine.layout import Layout
 from ..engine.lock import run_lock
-from ..engine.tasks import RunReport, Task, run_tasks
+from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
-from ..io.paths import check_output_path
+from ..io.paths import check_links_inside, check_output_path
 from ..report.challenge import plan_report_tasks
 from ..simulation.challenge import challenge_plans, plan_simulate_tasks
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
@@ -158,7 +159,8 @@ def _guard(cfg: Config, layout: Layout) -> None:
 
 
 def run_challenge(cfg: Config, root: str | os.PathLike[str], *, workers: int | None = None,
-                  scheduler: str | None = None) -> tuple[dict, RunReport]:
+                  scheduler: str | None = None,
+                  cluster: ClusterOptions | None = None) -> tuple[dict, RunReport]:
     """Run (or resume) a challenge in ``root``; return the summary and what ran.
 
     Parameters
@@ -170,7 +172,10 @@ def run_challenge(cfg: Config, root: str | os.PathLike[str], *, workers: int | N
     workers : int, optional
         Default ``run.workers``; 1 runs in this process.
     scheduler : str, optional
-        Address of an existing Dask scheduler (default ``run.scheduler``).
+        Address of an existing Dask scheduler (``tcp://`` or ``tls://``).
+    cluster : ClusterOptions, optional
+        Dashboard, connection timeout and TLS files of the Dask cluster
+        (:mod:`eclipsebench.engine.cluster`).
 
     Raises
     ------
@@ -181,12 +186,21 @@ def run_challenge(cfg: Config, root: str | os.PathLike[str], *, workers: int | N
     """
     layout = Layout(check_output_path(root, "root", "folder"))
     tasks = build_tasks(cfg, layout.root)  # every configuration error before any work
+    check_links_inside(layout.root)
+    check_outputs_inside(tasks, layout.root)
+    if scheduler:
+        external_security(scheduler, cluster or ClusterOptions())  # TLS files named, readable
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
+        fresh = not layout.run_config.exists()
         _guard(cfg, layout)
-        report = run_tasks(tasks, workers=cfg.run.workers if workers is None else workers,
-                           scheduler=(scheduler if scheduler is not None
-                                      else cfg.run.scheduler) or None)
+        try:
+            report = run_tasks(tasks, workers=cfg.run.workers if workers is None else workers,
+                               scheduler=scheduler or None, cluster=cluster)
+        except SchedulerUnreachable:
+            if fresh:  # nothing ran: leave the folder as it was
+                layout.run_config.unlink(missing_ok=True)
+            raise
         if report.timeline:
             write_timings(report, layout.timings)
         return json.loads(layout.summary.read_text()), report

@@ -18,6 +18,7 @@ from ..astro.catalogue import (
 from ..config import builtin_config_names, load_config
 from ..errors import InputError
 from ..io.paths import check_output_path
+from ..limits import size_problem
 
 __all__ = ["check_output_path", "finite_float", "positive_float", "nonnegative_float",
            "open_unit_float", "positive_int", "method_list", "add_config_options",
@@ -69,8 +70,12 @@ def open_unit_float():
     return parse
 
 
-def positive_int(minimum: int = 1):
-    """An argparse type accepting integers >= ``minimum``."""
+def positive_int(minimum: int = 1, maximum: int | None = None):
+    """An argparse type accepting integers >= ``minimum`` (and <= ``maximum``, a stated limit).
+
+    ``maximum`` is one of :mod:`eclipsebench.limits`' constants: a value above
+    it is refused while the arguments are parsed, before any work.
+    """
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -78,6 +83,8 @@ def positive_int(minimum: int = 1):
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(size_problem(value, maximum))
         return value
     return parse
 

@@ -22,6 +22,7 @@ from ..fit.names import (
 from ..fit.target import system_of_table
 from ..io.atomic import atomic_path, write_json
 from ..io.paths import check_plot_path
+from ..limits import MAX_MCMC_WALKERS
 from .options import (
     add_planet_options,
     check_output_path,
@@ -72,7 +73,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="cyclic residual shifts for the prayer-bead error (0: none; default "
                         "16; computed where the error rule can report it: with --sampler "
                         "leastsq, error_rule largest, or a team that used it)")
-    p.add_argument("--walkers", type=positive_int(minimum=4), default=None, metavar="N",
+    p.add_argument("--walkers", type=positive_int(minimum=4, maximum=MAX_MCMC_WALKERS),
+                   default=None, metavar="N",
                    help="MCMC walkers (even; default 16)")
     p.add_argument("--steps", type=positive_int(minimum=100), default=None, metavar="N",
                    help="MCMC step cap (default 5000)")
@@ -140,6 +142,52 @@ def _column_map(items: list[str]) -> dict[str, str]:
                 raise InputError(f"--columns: {new} is mapped twice ({out[new]}, {old})")
             out[new] = old
     return out
+
+
+#: Lower-case column names of other pipelines, by the package's name they likely hold.
+_LIKELY_NAMES = {
+    "time_bmjd": ("bmjd", "bjd", "bjd_tdb", "bmjd_tdb", "time", "mjd", "jd", "t"),
+    "flux": ("flux", "f", "phot", "aper_flux", "flux_aper"),
+    "flux_err": ("flux_err", "fluxerr", "flux_error", "err", "error", "sigma", "eflux"),
+    "x": ("x", "xc", "xcen", "x_cen", "xpos", "x_centroid", "centroid_x"),
+    "y": ("y", "yc", "ycen", "y_cen", "ypos", "y_centroid", "centroid_y"),
+}
+
+
+def check_columns(table, source: str, *, radius_px: float | None = None) -> None:
+    """Refuse a table without the columns a fit needs, saying how to map them.
+
+    Another pipeline's table names its columns its own way: the message names
+    the missing ones, the table's columns, and the ``--columns`` (and
+    ``--time-column``/``--time-format``) options that map them, with the
+    likely candidates filled in.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the missing columns and the options.
+    """
+    needed = [c for c in ("time_bmjd", "flux", "flux_err", "x", "y")
+              if not (c == "flux" and radius_px is not None)]
+    missing = [c for c in needed if c not in table.colnames]
+    if not missing:
+        return
+    by_lower = {name.lower(): name for name in table.colnames}
+    maps, time_hint = [], ""
+    for name in missing:
+        found = next((by_lower[c] for c in _LIKELY_NAMES[name] if c in by_lower), None)
+        if name == "time_bmjd":
+            fmt = "bjd" if found and "jd" in found.lower() and "mjd" not in found.lower() \
+                else "bmjd"
+            time_hint = (f" and --time-column {found} --time-format {fmt} (one of "
+                         f"{', '.join(TIME_FORMATS)})" if found else
+                         f" and --time-column NAME --time-format {'|'.join(TIME_FORMATS)}")
+        else:
+            maps.append(f"{name}={found or 'NAME'}")
+    how = (f"map them with --columns {','.join(maps)}" if maps else "map it") + time_hint
+    shown = ", ".join(table.colnames[:12]) + (" ..." if len(table.colnames) > 12 else "")
+    raise InputError(f"{source}: missing column(s) {', '.join(missing)} (the table has "
+                     f"{shown}); {how}")
 
 
 #: How errors about the table's names and time format name the options.
@@ -246,6 +294,7 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
         tables.append(standardise_table(table, columns=_column_map(args.columns),
                                         time_column=args.time_column,
                                         time_format=args.time_format, labels=_TABLE_LABELS))
+        check_columns(tables[-1], str(path), radius_px=args.radius)
     systems = [_system(args, section, t, p) for t, p in zip(tables, paths, strict=True)]
     system = systems[0]
     for other, path in zip(systems[1:], paths[1:], strict=True):
@@ -267,12 +316,34 @@ def chain_file(result_path: str | Path) -> Path:
     return chain_path(result_path)
 
 
+def _check_pmap(args: argparse.Namespace, table, table_path: Path, method_options: dict) -> None:
+    """kr-pmap needs a map: ``--pmap``, or a simulated table's SIMDIR (named on the command line).
+
+    The ``--option`` values are checked first, so an unknown option is the
+    error reported, as for any other method.
+    """
+    from ..decorrelate import get_method
+    from ..decorrelate.base import parse_method_options
+
+    cls = get_method(args.method)
+    if cls.name != "kr-pmap" or args.pmap is not None:
+        return
+    parse_method_options(cls, method_options)
+    if not (table.meta.get("SIMDIR") or table.meta.get("simdir")):
+        raise InputError(f"--method kr-pmap: needs --pmap PATH (a calibration-star table, the "
+                         f"SSC pmap, or a folder of its versions); {table_path} names no "
+                         "simulation folder (SIMDIR) to find one in")
+
+
 def run(args: argparse.Namespace) -> dict:
     paths = _table_paths(args.table)
-    if len(paths) > 1:
-        return _run_joint(args, paths)
     # The fitter pulls in every method (numba, scikit-learn, about 2 s): imported once the
     # table is found, not for `eclipsebench --help` or a misspelt path.
+    from ..decorrelate import get_method
+
+    get_method(args.method)  # "unknown method" (listing the known ones) before any path is made
+    if len(paths) > 1:
+        return _run_joint(args, paths)
     from ..fit.data import standardise_table
     from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
     from ..photometry.table import read_table
@@ -294,6 +365,8 @@ def run(args: argparse.Namespace) -> dict:
     table = standardise_table(table, columns=_column_map(args.columns),
                               time_column=args.time_column, time_format=args.time_format,
                               labels=_TABLE_LABELS)
+    check_columns(table, str(table_path), radius_px=args.radius)
+    _check_pmap(args, table, table_path, method_options)
     system = _system(args, section, table, table_path)
     result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,

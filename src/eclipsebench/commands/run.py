@@ -6,12 +6,21 @@ import argparse
 from pathlib import Path
 
 from ..config import load_config
+from ..engine.cluster import (
+    DEFAULT_CONNECT_TIMEOUT_S,
+    TLS_ENV,
+    ClusterOptions,
+    scheduler_from_environment,
+)
+from ..errors import InputError
 from ..io.paths import check_output_path
+from ..limits import MAX_EPOCHS, MAX_WORKERS
 from .options import (
     add_config_options,
     add_planet_options,
     method_list,
     planet_overrides,
+    positive_float,
     positive_int,
 )
 
@@ -28,17 +37,36 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "the same command resumes it")
     p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
                    help="challenge seed (challenge.seed)")
-    p.add_argument("--epochs", type=positive_int(), metavar="K",
+    p.add_argument("--epochs", type=positive_int(maximum=MAX_EPOCHS), metavar="K",
                    help="number of simulated epochs (challenge.epochs); e.g. 200 for Monte Carlo")
     p.add_argument("--methods", type=method_list, metavar="A,B,...",
                    help="methods to run (run.methods; default: every registered method)")
     p.add_argument("--profiles", type=_profile_list, metavar="P[,P]",
                    help="controlled, paper or both (run.profiles; default both)")
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=positive_int(), metavar="N",
+    g.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), metavar="N",
                    help="Dask worker processes of a local cluster; 1 runs in this process")
     g.add_argument("--scheduler", metavar="ADDRESS",
-                   help="address of an existing Dask scheduler, e.g. tcp://host:8786")
+                   help="address of an existing Dask scheduler, e.g. tcp://host:8786 or "
+                        "tls://host:8786 (default: the environment variable "
+                        "ECLIPSEBENCH_SCHEDULER; never a configuration file)")
+    add_cluster_options(p)
+
+
+def add_cluster_options(p: argparse.ArgumentParser) -> None:
+    """The Dask options of ``run``: the dashboard, the connection timeout, TLS files."""
+    p.add_argument("--dashboard", action="store_true",
+                   help="serve the local cluster's Dask dashboard on 127.0.0.1 and print its "
+                        "address (off by default)")
+    p.add_argument("--connect-timeout", type=positive_float(), default=DEFAULT_CONNECT_TIMEOUT_S,
+                   metavar="S", help="seconds to reach --scheduler, its handshake included")
+    for name, what in (("ca-file", "the certificate authority that signed the scheduler's "
+                                   "certificate"),
+                       ("cert", "this client's certificate"),
+                       ("key", "this client's private key, unless in --tls-cert's file")):
+        env = TLS_ENV["tls_" + name.replace("-", "_")]
+        p.add_argument(f"--tls-{name}", metavar="FILE.pem", default=None,
+                       help=f"for a tls:// --scheduler: {what} (default: ${env})")
 
 
 def _profile_list(text: str) -> list[str]:
@@ -62,9 +90,16 @@ def _overrides(args: argparse.Namespace) -> list[str]:
         extra.append("run.profiles=[" + ", ".join(f'"{p}"' for p in args.profiles) + "]")
     if args.workers is not None:
         extra.append(f"run.workers={args.workers}")
-    if args.scheduler is not None:
-        extra.append(f'run.scheduler="{args.scheduler}"')
     return list(args.overrides) + extra + planet_overrides(args)
+
+
+def _scheduler(args: argparse.Namespace) -> str | None:
+    """``--scheduler``, else ``ECLIPSEBENCH_SCHEDULER`` (unless ``--workers`` is given)."""
+    if args.scheduler is not None:
+        if not args.scheduler.strip():
+            raise InputError("--scheduler: expected an address such as tcp://host:8786")
+        return args.scheduler.strip()
+    return None if args.workers is not None else scheduler_from_environment()
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -75,7 +110,9 @@ def run(args: argparse.Namespace) -> dict:
     out = Path(args.out) if args.out else Path(
         "runs") / f"{cfg.challenge.name}-seed{cfg.challenge.seed}-{cfg.challenge.epochs}ep"
     check_output_path(out, "--out", "folder")
-    summary, report = run_challenge(cfg, out)
+    summary, report = run_challenge(cfg, out, scheduler=_scheduler(args), cluster=ClusterOptions(
+        dashboard=args.dashboard, connect_timeout_s=args.connect_timeout,
+        tls_ca_file=args.tls_ca_file, tls_cert=args.tls_cert, tls_key=args.tls_key))
     if args.json:
         return summary
     layout = Layout(out)

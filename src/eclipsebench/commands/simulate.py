@@ -6,6 +6,7 @@ import argparse
 
 from ..config import load_config, replace
 from ..errors import InputError
+from ..limits import MAX_EPOCHS, MAX_WORKERS
 from .options import (
     add_config_options,
     add_planet_options,
@@ -26,9 +27,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="challenge folder to write (complete epochs are kept on a rerun)")
     p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
                    help="random seed (default: challenge.seed of the configuration)")
-    p.add_argument("--epochs", type=positive_int(), metavar="K",
+    p.add_argument("--epochs", type=positive_int(maximum=MAX_EPOCHS), metavar="K",
                    help="number of epochs (default: challenge.epochs)")
-    p.add_argument("--workers", type=positive_int(), metavar="N",
+    p.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), metavar="N",
                    help="worker processes (default: run.workers)")
     p.add_argument("--no-calibration", action="store_true",
                    help="do not write the calibration-star set for KR/Pmap")

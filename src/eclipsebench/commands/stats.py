@@ -7,6 +7,7 @@ import csv
 from pathlib import Path
 
 from ..errors import DataError
+from ..limits import MAX_BOOTSTRAP
 from .options import method_list, nonnegative_float, positive_float, positive_int
 
 NAME = "stats"
@@ -26,7 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="only these methods (also for the t-tests and ANOVA)")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
                    help="seed of the bootstrap resampling")
-    p.add_argument("--bootstrap", type=positive_int(minimum=0), default=2000, metavar="N",
+    p.add_argument("--bootstrap", type=positive_int(minimum=0, maximum=MAX_BOOTSTRAP),
+                   default=2000, metavar="N",
                    help="bootstrap resamples for the intervals on R, r and a (0: none)")
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ..limits import MAX_MCMC_WALKER_STEPS, MAX_MCMC_WALKERS, check_size
 from .base import check
 
 #: The phase-curve models of a single eclipse (``[reduce] phase``).
@@ -172,11 +173,20 @@ class ReduceSection:
             return self.sampler
         return "leastsq" if self.event == "phase-curve" else "mcmc"
 
+    def _check_chain_size(self) -> None:
+        """Walkers, and walkers x steps (the chain kept in memory), within the stated limits."""
+        check_size("mcmc_walkers", self.mcmc_walkers, MAX_MCMC_WALKERS, "walkers", config=True)
+        for key in ("mcmc_steps", "mcmc_block_steps"):
+            steps = getattr(self, key)
+            check_size(key, self.mcmc_walkers * steps, MAX_MCMC_WALKER_STEPS,
+                       f"walker-steps ({self.mcmc_walkers} walkers x {steps})", config=True)
+
     def validate(self) -> None:
         check(self.mcmc_walkers >= 4 and self.mcmc_walkers % 2 == 0, "mcmc_walkers",
               "an even number of walkers >= 4")
         check(self.mcmc_steps >= 100, "mcmc_steps", "at least 100 steps")
         check(self.mcmc_block_steps >= 10, "mcmc_block_steps", "at least 10 steps")
+        self._check_chain_size()
         check(self.mcmc_tau_factor > 0, "mcmc_tau_factor", "a positive number")
         check(0 <= self.prayer_bead_shifts <= 10000, "prayer_bead_shifts",
               "an integer between 0 (no prayer bead) and 10000")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..io.paths import SAFE_NAME, is_safe_name
+from ..limits import MAX_BOOTSTRAP, MAX_EPOCHS, MAX_WORKERS, check_size
 from .base import check
 
 
@@ -17,8 +19,12 @@ class ChallengeSection:
 
     def validate(self) -> None:
         check(bool(self.name.strip()), "name", "a non-empty name")
+        check(is_safe_name(self.name), "name",
+              f"a name that can be a folder name ({SAFE_NAME.pattern}, at most 100 "
+              f"characters), got {self.name!r}")
         check(self.seed >= 0, "seed", "a non-negative integer")
         check(self.epochs >= 1, "epochs", "at least 1 epoch")
+        check_size("epochs", self.epochs, MAX_EPOCHS, "epochs", config=True)
 
 
 @dataclass(frozen=True)
@@ -32,7 +38,10 @@ class RunSection:
     workers : int
         1: in-process; N >= 2: a local Dask cluster of N processes.
     scheduler : str
-        Address of an existing Dask scheduler (empty: none).
+        Must stay empty: an existing Dask scheduler receives the run's tasks
+        (code), so it is named on the command line (``--scheduler``) or in
+        the environment (``ECLIPSEBENCH_SCHEDULER``), never by a configuration
+        file someone may hand you. Kept so that older files still read.
     empirical_photon_limit : bool
         Simulate systematics-free twins of every epoch (no pointing motion,
         the same noise seeds) and reduce them, for the empirical photon limit.
@@ -56,7 +65,7 @@ class RunSection:
 
     methods: tuple[str, ...] = ()  # empty: every registered method
     workers: int = 2
-    scheduler: str = ""  # address of an existing Dask scheduler; empty: a local cluster
+    scheduler: str = ""  # always empty: --scheduler or ECLIPSEBENCH_SCHEDULER name one
     empirical_photon_limit: bool = True
     photon_limit_method: str = ""
     f_in: float = 0.0
@@ -69,7 +78,12 @@ class RunSection:
         check(len(self.profiles) >= 1 and len(set(self.profiles)) == len(self.profiles)
               and all(p in ("controlled", "paper") for p in self.profiles), "profiles",
               'one or both of "controlled" and "paper", each once')
+        check(not self.scheduler.strip(), "scheduler",
+              "no scheduler in a configuration (it would receive the run's tasks); name one "
+              "with --scheduler or the environment variable ECLIPSEBENCH_SCHEDULER")
         check(self.workers >= 1, "workers", "at least 1 worker")
+        check_size("workers", self.workers, MAX_WORKERS, "workers", config=True)
         check(0.0 <= self.f_in < 1.0, "f_in", "0 (from the eclipse geometry) or a fraction in (0, 1)")
         check(self.bootstrap >= 0, "bootstrap", "a non-negative number of resamples")
+        check_size("bootstrap", self.bootstrap, MAX_BOOTSTRAP, "resamples", config=True)
         check(self.lightcurve_epoch >= 1, "lightcurve_epoch", "an epoch number >= 1")

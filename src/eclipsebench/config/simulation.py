@@ -22,6 +22,13 @@ from ..detector.constants import (
     frame_interval_default_s,
 )
 from ..errors import ConfigError
+from ..limits import (
+    MAX_CALIBRATION_FRAMES,
+    MAX_CUBES_PER_AOR,
+    MAX_FRAMES_PER_CUBE,
+    MAX_FRAMES_PER_EPOCH,
+    check_size,
+)
 from .base import check
 
 # Table 2 (sim_xo3meas) of the paper: start of the first exposure of each
@@ -164,6 +171,12 @@ class ObservationSection:
         check(self.pre_cubes >= 0, "pre_cubes", "a non-negative number of cubes")
         check(self.main_cubes >= 1, "main_cubes", "at least 1 cube")
         check(self.frames_per_cube >= 1, "frames_per_cube", "at least 1 frame")
+        for key in ("pre_cubes", "main_cubes"):
+            check_size(key, getattr(self, key), MAX_CUBES_PER_AOR, "cubes", config=True)
+        check_size("frames_per_cube", self.frames_per_cube, MAX_FRAMES_PER_CUBE, "frames",
+                   config=True)
+        check_size("main_cubes", (self.pre_cubes + self.main_cubes) * self.frames_per_cube,
+                   MAX_FRAMES_PER_EPOCH, "frames per epoch", config=True)
         check(self.fowler >= 1, "fowler", "a Fowler number >= 1")
         check(self.wait >= 0, "wait", "a non-negative number of wait ticks")
         check(self.sample_time_s > 0, "sample_time_s", "a positive sample time in s")
@@ -269,5 +282,7 @@ class SimulationSection:
         check(5 <= self.stamp_px <= SUBARRAY_PX and self.stamp_px % 2 == 1, "stamp_px",
               "an odd stamp size between 5 and 31 px")
         check(self.calibration_frames >= 0, "calibration_frames", "a non-negative count")
+        check_size("calibration_frames", self.calibration_frames, MAX_CALIBRATION_FRAMES,
+                   "frames", config=True)
         check(0 < self.calibration_box_px <= 3.0, "calibration_box_px",
               "a positive box width (px) over which calibration pointings are spread")

@@ -48,6 +48,7 @@ import numpy as np
 
 from ..config.base import from_mapping
 from ..errors import ConfigError, InputError
+from ..io.paths import SAFE_NAME, is_safe_name
 from ..seeding import rng, spawn_ints
 from .record import FitterPolicy, MethodRecord, PaperProfile
 
@@ -577,6 +578,9 @@ def register(cls: type[_S]) -> type[_S]:
         raise TypeError(f"{cls!r} is not a subclass of eclipsebench.Systematics")
     if not cls.name:
         raise TypeError(f"{cls.__name__} has no registry name")
+    if not is_safe_name(cls.name):  # it becomes a folder of every run (results/<name>/)
+        raise TypeError(f"{cls.__name__}'s name {cls.name!r} is not a safe file name "
+                        f"({SAFE_NAME.pattern})")
     if not (isinstance(cls.Options, type) and issubclass(cls.Options, MethodOptions)
             and dataclasses.is_dataclass(cls.Options)):
         raise TypeError(f"{cls.__name__}.Options is not a MethodOptions dataclass")
@@ -593,12 +597,14 @@ def register(cls: type[_S]) -> type[_S]:
 def load_plugins(*, refresh: bool = False) -> None:
     """Register the methods of the entry-point group ``eclipsebench.methods``.
 
-    Called the first time the registry is read. A plugin that fails to load,
-    is not a Systematics subclass, or whose class names itself differently
-    from its entry point is left out with a warning naming it, so that one
-    broken package does not take the built-in methods down with it. A class
-    that does not set ``name`` itself (a subclass of a built-in method) takes
-    its entry point's name.
+    Called the first time the registry is read. A plugin that fails to load
+    (raises, or calls ``sys.exit``, while imported), whose entry-point name is
+    not a safe file name (:data:`eclipsebench.io.paths.SAFE_NAME`: it becomes
+    a folder of every run), is not a Systematics subclass, or whose class
+    names itself differently from its entry point is left out with a warning
+    naming it, so that one broken package does not take the built-in methods
+    down with it. A class that does not set ``name`` itself (a subclass of a
+    built-in method) takes its entry point's name.
     """
     global _PLUGINS_LOADED
     if _PLUGINS_LOADED and not refresh:
@@ -608,6 +614,9 @@ def load_plugins(*, refresh: bool = False) -> None:
         if ep.name in _REGISTRY and not refresh:
             continue
         try:
+            if not is_safe_name(ep.name):  # checked before the plugin's code is imported
+                raise TypeError(f"the name is not a safe file name ({SAFE_NAME.pattern}); "
+                                "it would become a folder of every run")
             cls = ep.load()
             if not (isinstance(cls, type) and issubclass(cls, Systematics)):
                 raise TypeError(f"{ep.value} is not a subclass of eclipsebench.Systematics")
@@ -618,8 +627,11 @@ def load_plugins(*, refresh: bool = False) -> None:
             if _REGISTRY.get(ep.name) not in (None, cls):
                 raise TypeError(f"method name '{ep.name}' is already registered")
             register(cls)
-        except Exception as exc:  # any error of a third-party package: skip it, say why
-            warnings.warn(f"method plugin '{ep.name}' ({ep.value}) not loaded: {exc}",
+        except (Exception, SystemExit) as exc:  # any error of a third-party package, a
+            # sys.exit() while it is imported included: skip it, say why in one line
+            reason = (f"it called sys.exit({exc.code!r}) while imported"
+                      if isinstance(exc, SystemExit) else " ".join(str(exc).split()))
+            warnings.warn(f"method plugin {ep.name!r} ({ep.value}) not loaded: {reason}",
                           RuntimeWarning, stacklevel=2)
 
 

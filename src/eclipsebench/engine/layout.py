@@ -26,6 +26,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..io.paths import check_name
+
 __all__ = ["Layout"]
 
 
@@ -43,6 +45,7 @@ class Layout:
 
     def result(self, method: str, epoch: int, flat: bool = False,
                profile: str = "controlled") -> Path:
+        check_name("method", method)  # one path component: never out of the run folder
         folder = "results_flat" if flat else "results"
         if profile != "controlled":
             folder += f"_{profile}"

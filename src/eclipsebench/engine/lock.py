@@ -1,15 +1,23 @@
-"""One run per folder: a lock file created atomically (``O_EXCL``) holding the owner's pid.
+"""One run per folder: a lock file held with a kernel lock (``flock``) while a run works.
 
-A second run into the same folder is refused with one line naming the lock
-file; a lock whose process is gone (killed, machine rebooted) is stale and
-is taken over.
+The file ``run.lock`` holds ``pid host flock`` for the messages, but what
+decides is the kernel's ``flock`` on it: the kernel releases it when its
+holder ends in any way (killed, crashed), so there is no stale lock to
+detect and no window between "the lock is stale" and "take it over" in
+which two runs could both take it (issue 28). A second run into the same
+folder is refused with one line naming the lock file and the holder's pid.
+
+A lock file without the ``flock`` mark was written by a version that did
+not hold a kernel lock: its pid decides, as it did then (a live process on
+this host, or any process on another host, holds it).
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import os
 import socket
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -18,8 +26,10 @@ from ..errors import InputError
 
 __all__ = ["run_lock"]
 
-#: A lock file still empty after this long was left by a process killed while creating it.
-_EMPTY_GRACE_S = 10.0
+#: The last word of a lock file whose holder keeps a kernel lock on it.
+FLOCK_MARK = "flock"
+#: Attempts at locking the file at the path (another run may replace it meanwhile).
+_ATTEMPTS = 5
 
 
 def _pid_alive(pid: int) -> bool:
@@ -32,36 +42,61 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-def _holder(path: Path) -> tuple[int, str] | None:
-    """(pid, host) of a live holder of ``path``, or None when the lock is stale."""
-    try:
-        text = path.read_text()
-        age = time.time() - path.stat().st_mtime
-    except FileNotFoundError:
+def _read(fd: int) -> list[str]:
+    os.lseek(fd, 0, os.SEEK_SET)
+    return os.read(fd, 4096).decode("utf-8", "replace").split()
+
+
+def _legacy_holder(words: list[str]) -> tuple[int, str] | None:
+    """(pid, host) of a live holder named by a lock file without the kernel-lock mark."""
+    if len(words) < 2 or not words[0].isdigit() or words[-1] == FLOCK_MARK:
         return None
-    parts = text.split()
-    if len(parts) < 2 or not parts[0].isdigit():
-        # being written right now by its creator, or left empty by a killed one
-        return (0, "") if age < _EMPTY_GRACE_S else None
-    pid, host = int(parts[0]), parts[1]
+    pid, host = int(words[0]), words[1]
     if host != socket.gethostname():
         return pid, host  # cannot tell from here: assume it is alive
-    return (pid, host) if _pid_alive(pid) else None
+    return (pid, host) if pid != os.getpid() and _pid_alive(pid) else None
 
 
-def _create(path: Path) -> bool:
+def _same_file(fd: int, path: Path) -> bool:
     try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
-    except FileExistsError:
+        a, b = os.fstat(fd), os.stat(path)
+    except FileNotFoundError:
         return False
-    with os.fdopen(fd, "w") as fh:
-        fh.write(f"{os.getpid()} {socket.gethostname()}\n")
-    return True
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
+
+
+def _refusal(path: Path, words: list[str]) -> InputError:
+    pid = words[0] if words and words[0].isdigit() else ""
+    host = words[1] if len(words) > 1 and words[1] != FLOCK_MARK else ""
+    who = f"pid {pid}" if pid else "starting"
+    if pid and host and host != socket.gethostname():
+        who += f" on {host}"
+    return InputError(f"{path}: another run ({who}) is working in this folder; wait for it to "
+                      "finish or use another --out")
+
+
+def _acquire(path: Path) -> int:
+    """A descriptor of ``path`` holding its kernel lock; InputError when another run holds it."""
+    for _ in range(_ATTEMPTS):
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            words = _read(fd)
+            os.close(fd)
+            raise _refusal(path, words) from None
+        except BaseException:
+            os.close(fd)
+            raise
+        if _same_file(fd, path):  # not a file its last holder removed as we opened it
+            return fd
+        os.close(fd)
+    raise InputError(f"{path}: could not take the lock (other runs are starting)")
 
 
 @contextmanager
 def run_lock(path: str | os.PathLike) -> Iterator[Path]:
-    """Hold ``path`` for the duration of the block.
+    """Hold ``path`` (a kernel lock on it) for the duration of the block.
 
     Raises
     ------
@@ -69,27 +104,17 @@ def run_lock(path: str | os.PathLike) -> Iterator[Path]:
         Another live process holds the lock (the message names the file and pid).
     """
     path = Path(path)
-    for _ in range(3):
-        if _create(path):
-            break
-        holder = _holder(path)
-        if holder is not None:
-            who = f"pid {holder[0]}" + (f" on {holder[1]}" if holder[1] and
-                                        holder[1] != socket.gethostname() else "")
-            raise InputError(f"{path}: another run ({who if holder[0] else 'starting'}) is "
-                             "working in this folder; wait for it to finish or use another "
-                             "--out (remove the file if that run is gone)")
-        try:  # stale: take it over
-            path.unlink()
-        except FileNotFoundError:
-            pass
-    else:
-        raise InputError(f"{path}: could not take the lock (other runs are starting)")
+    fd = _acquire(path)
     try:
+        legacy = _legacy_holder(_read(fd))
+        if legacy is not None:
+            raise _refusal(path, [str(legacy[0]), legacy[1]])
+        os.ftruncate(fd, 0)
+        os.lseek(fd, 0, os.SEEK_SET)
+        os.write(fd, f"{os.getpid()} {socket.gethostname()} {FLOCK_MARK}\n".encode())
         yield path
     finally:
-        try:
-            if path.read_text().split()[:1] == [str(os.getpid())]:
-                path.unlink()
-        except FileNotFoundError:
-            pass
+        with contextlib.suppress(OSError):
+            if _same_file(fd, path) and _read(fd)[:1] == [str(os.getpid())]:
+                path.unlink()  # removed while still locked: nobody can have taken it
+        os.close(fd)  # the kernel lock goes with the descriptor

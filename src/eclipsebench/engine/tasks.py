@@ -35,10 +35,10 @@ Executors:
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import json
-import logging
 import os
 import socket
 import time
@@ -51,12 +51,15 @@ import cloudpickle
 import numba
 from threadpoolctl import threadpool_limits
 
-from ..errors import InputError
+from ..errors import EnvironmentFailure, InputError
 from ..io.atomic import write_json
+from ..io.paths import check_inside
 from ..progress import ProgressLines, get_logger, lines_enabled, progress
+from .cluster import ClusterOptions, open_client
+from .cluster import close as close_cluster
 
 __all__ = ["Task", "TaskTiming", "RunReport", "TaskFailed", "run_tasks", "stamp_path",
-           "is_done"]
+           "is_done", "check_outputs_inside"]
 
 #: Suffix of a task's stamp, written beside its last output as ``.<name>.task.json``.
 STAMP_SUFFIX = ".task.json"
@@ -222,6 +225,30 @@ class TaskFailed(RuntimeError):
                          f"{type(first).__name__}: {first}")
 
 
+def check_outputs_inside(tasks: Sequence[Task], root: str | Path) -> None:
+    """Refuse, before any work, an output that resolves outside ``root``.
+
+    Each output is resolved with its symbolic links followed: a run folder
+    holding ``results -> elsewhere`` (from an unpacked archive, say) would
+    otherwise have its results written through the link. The folders already
+    resolved are remembered, so a run of thousands of tasks resolves each
+    folder once.
+
+    Raises
+    ------
+    InputError
+        One line naming the first such output and where it leads.
+    """
+    seen: set[Path] = set()
+    for task in tasks:
+        for path in task.outputs:
+            folder = Path(path).parent
+            if folder not in seen:
+                check_inside(folder, root)
+                seen.add(folder)
+            check_inside(path, root)
+
+
 def _check_graph(tasks: Sequence[Task]) -> dict[str, Task]:
     by_key: dict[str, Task] = {}
     for t in tasks:
@@ -309,14 +336,8 @@ class _Bars:
             self.lines.close()
 
 
-def _worker_env() -> dict[str, str]:
-    # One thread per worker process: the parallelism is across tasks.
-    return {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-            "NUMBA_NUM_THREADS": "1"}
-
-
 def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None = None,
-              keep_going: bool = True) -> RunReport:
+              keep_going: bool = True, cluster: ClusterOptions | None = None) -> RunReport:
     """Run every task that is not done, respecting dependencies.
 
     Parameters
@@ -324,11 +345,15 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
     tasks : sequence of Task
         The whole graph (done tasks included; they are skipped).
     workers : int
-        1: in-process synchronous; N >= 2: a local Dask cluster of N processes.
+        1: in-process synchronous; N >= 2: a local Dask cluster of N processes
+        (on 127.0.0.1, TLS with temporary credentials: :mod:`.cluster`).
     scheduler : str, optional
         Address of an existing Dask scheduler (overrides ``workers``).
     keep_going : bool
-        After a failure, keep running the tasks that do not depend on it.
+        After a failure, keep running the tasks that do not depend on it
+        (never after an environment failure: every other task would meet it).
+    cluster : ClusterOptions, optional
+        Dashboard, connection timeout and TLS files of the Dask cluster.
 
     Returns
     -------
@@ -336,10 +361,21 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
 
     Raises
     ------
+    EnvironmentFailure
+        A task could not write (disk full, permission) or ran out of memory:
+        the run stops at the first, and this names the folder or the task.
     TaskFailed
         If any task raised (after the others finished when ``keep_going``).
         A task that raised an :class:`~eclipsebench.errors.InputError` is
         re-raised as that error (it is the user's to fix).
+    SchedulerUnreachable
+        The scheduler named did not answer in time; nothing was run.
+
+    Notes
+    -----
+    On an interrupt (Ctrl-C, SIGTERM: a KeyboardInterrupt), a task whose
+    outputs were all written while the run was stopping gets its stamp, so
+    that a rerun does not redo it.
     """
     by_key = _check_graph(tasks)
     order = _order(by_key)
@@ -356,22 +392,40 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
         report.executor = "none (all outputs exist)"
         return report
     bars = _Bars(by_key[k] for k in todo)
+    run = _Run(by_key, done, bars, report, hashes, keep_going)
     try:
         if scheduler is None and workers <= 1:
             report.executor = "in-process (synchronous)"
-            failures = _run_sync(by_key, todo, done, bars, report, keep_going, hashes)
+            _run_sync(run, todo)
         else:
-            failures = _run_dask(by_key, todo, done, bars, report, keep_going, hashes,
-                                 workers=workers, scheduler=scheduler)
+            _run_dask(run, todo, workers=workers, scheduler=scheduler, options=cluster)
+    except KeyboardInterrupt:
+        run.stamp_written_in_flight()
+        raise
     finally:
         bars.close()
         report.wall_s = time.perf_counter() - t0
-    if failures:
-        for exc in failures.values():
-            if isinstance(exc, InputError):
-                raise exc
-        raise TaskFailed(failures)
+    _raise_failures(run.failures)
     return report
+
+
+def _raise_failures(failures: dict[str, BaseException]) -> None:
+    """The environment failure first, then the user's (InputError), then the rest."""
+    if not failures:
+        return
+    for key, exc in failures.items():
+        if isinstance(exc, EnvironmentFailure):
+            raise exc
+        if isinstance(exc, MemoryError):
+            size = " ".join(str(exc).split())
+            raise EnvironmentFailure(f"out of memory in task {key}" + (f" ({size})" if size
+                                                                       else "")
+                                     + "; free memory, or ask for less (eclipsebench.limits), "
+                                       "and rerun")
+    for exc in failures.values():
+        if isinstance(exc, InputError):
+            raise exc
+    raise TaskFailed(failures)
 
 
 def _blocked(task: Task, failed: set[str]) -> bool:
@@ -385,73 +439,90 @@ def _finish(task: Task, by_key: dict[str, Task], hashes: _Hashes) -> None:
     _write_stamp(task, by_key, hashes)
 
 
-def _settle(key: str, outcome: Callable[[], Any], by_key, done, bars, report, hashes,
-            failures: dict[str, BaseException]) -> bool:
-    """Record a task's outcome (its timing, its stamp) or its failure; True if it succeeded."""
-    task = by_key[key]
-    try:
-        report.record(key, outcome())
-        _finish(task, by_key, hashes)
-    except Exception as exc:  # collected and re-raised after the others ran
-        failures[key] = exc
-        log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
-        return False
-    done.add(key)
-    report.ran.append(key)
-    bars.update(task.stage)
-    return True
+def _is_fatal(exc: BaseException) -> bool:
+    """An environment failure: every other task would meet it too, so the run stops."""
+    return isinstance(exc, (EnvironmentFailure, MemoryError))
 
 
-def _run_sync(by_key, todo, done, bars, report, keep_going,
-              hashes) -> dict[str, BaseException]:
-    failures: dict[str, BaseException] = {}
-    for key in todo:
-        task = by_key[key]
-        if _blocked(task, set(failures)) or not all(d in done for d in task.deps):
-            continue  # a dependency failed: not run
-        if not _settle(key, functools.partial(_call, task.func, task.args), by_key, done, bars,
-                       report, hashes, failures) and not keep_going:
-            break
-    return failures
+#: File times come from the kernel's coarse clock (a few ms behind ``time.time_ns``).
+_MTIME_SLACK_NS = 50_000_000
 
 
-def _open_client(workers: int, scheduler: str | None):
-    # dask/distributed: imported only when a cluster is used (seconds to import)
-    from dask import config as dask_config
-    from distributed import Client, LocalCluster
+@dataclass
+class _Run:
+    """The state of one invocation of :func:`run_tasks` shared by its executors."""
 
-    # Dask's own INFO lines (nannies, plugins) would drown the progress bars.
-    for name in ("distributed", "distributed.scheduler", "distributed.nanny",
-                 "distributed.worker", "distributed.core", "distributed.http.proxy"):
-        logging.getLogger(name).setLevel(logging.WARNING)
+    by_key: dict[str, Task]
+    done: set[str]
+    bars: _Bars
+    report: RunReport
+    hashes: _Hashes
+    keep_going: bool
+    failures: dict[str, BaseException] = field(default_factory=dict)
+    #: key -> time.time_ns() at submission, for the tasks not settled yet
+    in_flight: dict[str, int] = field(default_factory=dict)
 
-    if scheduler:
+    @property
+    def stopped(self) -> bool:
+        """Whether no more tasks should start (a failure without keep_going, or a fatal one)."""
+        return bool(self.failures) and (not self.keep_going
+                                         or any(map(_is_fatal, self.failures.values())))
+
+    def settle(self, key: str, outcome: Callable[[], Any]) -> bool:
+        """Record a task's outcome (its timing, its stamp) or its failure; True if it succeeded."""
+        task = self.by_key[key]
         try:
-            return Client(scheduler, timeout="20s"), None, f"dask scheduler {scheduler}"
-        except OSError as exc:
-            raise InputError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
-    # The single-thread environment goes to the worker processes only: changing
-    # NUMBA_NUM_THREADS in this process after numba started its threads makes
-    # every later compilation here fail. ":0": the scheduler's HTTP endpoint on a
-    # free port (8787 may be taken by another run).
-    # Dask's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers by default;
-    # fixing any glibc malloc threshold turns off its dynamic mmap threshold, so every
-    # array above 128 KiB becomes a fresh mmap whose pages fault in zeroed: our tasks,
-    # which allocate large temporary arrays, then ran 1.8x slower (BENCHMARKS.md).
-    # The statistical profiler takes the GIL from the task every 10 ms; nobody reads it.
-    with dask_config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-                          "distributed.worker.profile.enabled": False}):
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=40, env=_worker_env())
-    return Client(cluster), cluster, f"dask LocalCluster ({workers} processes)"
+            timing = outcome()  # an interrupt here leaves the task in flight
+            self.in_flight.pop(key, None)
+            self.report.record(key, timing)
+            _finish(task, self.by_key, self.hashes)
+        except Exception as exc:  # collected and re-raised after the others ran
+            self.in_flight.pop(key, None)
+            self.failures[key] = exc
+            if not _is_fatal(exc):  # said once, by whoever catches it
+                log.error("task %s failed: %s: %s", key, type(exc).__name__, exc)
+            return False
+        self.done.add(key)
+        self.report.ran.append(key)
+        self.bars.update(task.stage)
+        return True
+
+    def stamp_written_in_flight(self) -> None:
+        """After an interrupt: stamp the tasks whose outputs were all written since submission.
+
+        Each output is written atomically, the declared last output last, so
+        a last output newer than the task's submission that the task's check
+        accepts was written whole by that task. Without its stamp the task
+        would be redone once by the next run.
+        """
+        for key, submitted_ns in list(self.in_flight.items()):
+            task = self.by_key[key]
+            with contextlib.suppress(OSError):
+                if os.stat(task.outputs[-1]).st_mtime_ns < submitted_ns - _MTIME_SLACK_NS:
+                    continue
+                if not all(Path(p).is_file() for p in task.outputs):
+                    continue
+                if task.check is not None and not task.check(*task.outputs):
+                    continue
+                _write_stamp(task, self.by_key, self.hashes)
 
 
-def _run_dask(by_key, todo, done, bars, report, keep_going, hashes, *, workers,
-              scheduler) -> dict[str, BaseException]:
+def _run_sync(run: _Run, todo: list[str]) -> None:
+    for key in todo:
+        task = run.by_key[key]
+        if _blocked(task, set(run.failures)) or not all(d in run.done for d in task.deps):
+            continue  # a dependency failed: not run
+        run.in_flight[key] = time.time_ns()
+        run.settle(key, functools.partial(_call, task.func, task.args))
+        if run.stopped:
+            break
+
+
+def _run_dask(run: _Run, todo: list[str], *, workers: int, scheduler: str | None,
+              options: ClusterOptions | None) -> None:
     from distributed import as_completed  # heavy, optional: only with a cluster
 
-    client, cluster, report.executor = _open_client(workers, scheduler)
-    failures: dict[str, BaseException] = {}
+    client, cluster, run.report.executor = open_client(workers, scheduler, options)
     waiting = list(todo)
     futures = {}
     try:
@@ -459,14 +530,15 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, hashes, *, workers,
 
         def submit_ready() -> None:
             for key in list(waiting):
-                task = by_key[key]
-                if _blocked(task, set(failures)):
+                task = run.by_key[key]
+                if _blocked(task, set(run.failures)):
                     waiting.remove(key)
                     continue
-                if all(d in done for d in task.deps):
+                if all(d in run.done for d in task.deps):
                     waiting.remove(key)
                     # no retries: a task that raises would raise again; a task whose
                     # worker died is rescheduled by Dask itself (allowed-failures)
+                    run.in_flight[key] = time.time_ns()
                     fut = client.submit(_call_pickled, cloudpickle.dumps(task.func), task.args,
                                         key=f"{key}#{time.time_ns()}",
                                         pure=False)
@@ -476,12 +548,10 @@ def _run_dask(by_key, todo, done, bars, report, keep_going, hashes, *, workers,
         submit_ready()
         for fut in ac:
             key = futures.pop(fut.key)
-            if not _settle(key, fut.result, by_key, done, bars, report, hashes,
-                           failures) and not keep_going:
+            run.settle(key, fut.result)
+            if run.stopped:
+                client.cancel(list(ac.futures))  # the others would meet the same failure
                 break
             submit_ready()
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return failures
+        close_cluster(client, cluster)

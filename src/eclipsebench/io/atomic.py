@@ -3,9 +3,11 @@
 Everything is written to a temporary file in the destination folder and then
 renamed over the destination (``os.replace`` is atomic on POSIX), so an
 interrupted run leaves either the old file, the complete new one, or nothing.
-A write that fails (a full disk, a read-only folder) is a
-:class:`~eclipsebench.errors.DataError` naming the destination; the temporary
-file is removed.
+A write that fails because of the machine (a full disk, a quota, a folder
+that became unwritable) is an :class:`~eclipsebench.errors.EnvironmentFailure`
+naming the destination, its folder and the bytes needed when known; any other
+failed write is a :class:`~eclipsebench.errors.DataError` naming the
+destination. Either way the temporary file is removed.
 """
 
 from __future__ import annotations
@@ -18,18 +20,21 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..errors import DataError
+from ..errors import ENVIRONMENT_ERRNOS, DataError, EnvironmentFailure
 
 __all__ = ["atomic_path", "write_bytes", "write_text", "write_json"]
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike, suffix: str | None = None, *,
+                size_bytes: int | None = None) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` on success.
 
     On an exception the temporary file is removed and ``path`` is untouched.
     The temporary name keeps the destination's suffix (unless ``suffix`` is
     given) so that writers which choose a format by extension still work.
+    ``size_bytes``, when the caller knows it, is named in the message of a
+    write that fails for want of space.
 
     Examples
     --------
@@ -47,7 +52,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
             prefix=f".{dest.name}.",
             suffix=".tmp" + (suffix if suffix is not None else dest.suffix), dir=dest.parent)
     except OSError as exc:
-        raise DataError(dest, f"cannot write ({_reason(exc)})") from None
+        raise _write_error(dest, exc, size_bytes=size_bytes) from None
     os.close(fd)
     tmp = Path(tmp_name)
     tmp.unlink()  # writers such as astropy refuse to overwrite an existing file
@@ -58,9 +63,24 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         with contextlib.suppress(OSError):
             tmp.unlink()
         if isinstance(exc, OSError):
-            raise DataError(dest, f"cannot write ({_reason(exc)}); nothing was written") \
-                from None
+            raise _write_error(dest, exc, nothing_written=True, size_bytes=size_bytes) from None
         raise
+
+
+def _write_error(dest: Path, exc: OSError, *, nothing_written: bool = False,
+                 size_bytes: int | None = None) -> Exception:
+    """The one-line error of a failed write: the machine's (EnvironmentFailure) or the file's."""
+    tail = "; nothing was written" if nothing_written else ""
+    if exc.errno in ENVIRONMENT_ERRNOS:
+        needed = f", {size_bytes} bytes needed" if size_bytes is not None else ""
+        hint = ("free space there and rerun" if exc.errno in (errno.ENOSPC, errno.EDQUOT)
+                else "make it writable and rerun" if exc.errno in (errno.EACCES, errno.EPERM,
+                                                                    errno.EROFS)
+                else "rerun when the device is back")
+        return EnvironmentFailure(f"{dest}: cannot write in {dest.parent} ({_reason(exc)}"
+                                  f"{needed}){tail}; {hint}",
+                                  folder=str(dest.parent), bytes_needed=size_bytes)
+    return DataError(dest, f"cannot write ({_reason(exc)}){tail}")
 
 
 def _reason(exc: OSError) -> str:
@@ -75,7 +95,7 @@ def _reason(exc: OSError) -> str:
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically and return the path."""
-    with atomic_path(path) as tmp:
+    with atomic_path(path, size_bytes=len(data)) as tmp:
         tmp.write_bytes(data)
     return Path(path)
 

@@ -17,13 +17,76 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Literal
 
 from ..errors import InputError
 
-__all__ = ["check_output_path", "check_plot_path", "missing_folders", "remove_empty_folders"]
+__all__ = ["check_output_path", "check_plot_path", "missing_folders", "remove_empty_folders",
+           "SAFE_NAME", "is_safe_name", "check_name", "check_inside", "check_links_inside"]
+
+#: A name that becomes one component of a path (a challenge's name, a method's, a
+#: label): a letter or digit, then letters, digits, ``.``, ``_`` or ``-``. No ``/``,
+#: no ``..``, no leading dot (hidden files, the stamps), no spaces or control characters.
+SAFE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+#: Longest name accepted (a file name is at most 255 bytes; room for suffixes).
+MAX_NAME_CHARS = 100
+
+
+def is_safe_name(name: object) -> bool:
+    """Whether ``name`` can be one path component as it is (:data:`SAFE_NAME`).
+
+    Examples
+    --------
+    >>> [is_safe_name(n) for n in ("kr-pmap", "xo3b-2015", "a/b", "../x", ".hidden", "")]
+    [True, True, False, False, False, False]
+    """
+    return (isinstance(name, str) and len(name) <= MAX_NAME_CHARS
+            and SAFE_NAME.fullmatch(name) is not None)
+
+
+def check_name(key: str, name: object) -> str:
+    """Return ``name`` if it is one safe path component; InputError naming ``key`` otherwise.
+
+    Raises
+    ------
+    InputError
+        One line naming ``key``, the name and the characters allowed.
+    """
+    if not is_safe_name(name):
+        raise InputError(f"{key} {name!r}: expected a name of letters, digits, '.', '_' and '-' "
+                         f"starting with a letter or digit (at most {MAX_NAME_CHARS} characters; "
+                         "it becomes a folder or file name)")
+    return str(name)
+
+
+def check_inside(path: str | os.PathLike, root: str | os.PathLike) -> Path:
+    """Return ``path`` if, resolved (symbolic links followed), it lies inside ``root``.
+
+    A run folder that holds a symbolic link (``results -> elsewhere``, from an
+    unpacked archive, say) would otherwise have its outputs written through it.
+
+    Raises
+    ------
+    InputError
+        One line naming the output, where it leads and the folder it must stay in.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> check_inside(d / "results" / "a.json", d) == d / "results" / "a.json"
+    True
+    """
+    base = Path(os.path.realpath(root))
+    real = Path(os.path.realpath(path))
+    if real != base and base not in real.parents:
+        raise InputError(f"{path}: leads to {real}, outside the run folder {base} (a symbolic "
+                         "link inside it?); outputs stay in the run folder: remove the link or "
+                         "use another --out")
+    return Path(path)
 
 Expect = Literal["file", "folder"]
 
@@ -157,3 +220,28 @@ def remove_empty_folders(folders: list[Path]) -> None:
         with contextlib.suppress(OSError):
             if folder.is_dir() and not folder.is_symlink():
                 folder.rmdir()  # only succeeds when empty
+
+
+def check_links_inside(root: str | os.PathLike) -> None:
+    """Refuse a symbolic link anywhere under ``root`` that leads out of it.
+
+    Outputs that no task declares (a simulated AOR's cubes) are written into
+    folders of the run; one walk of the existing folder (links not followed)
+    finds every link before any work.
+
+    Raises
+    ------
+    InputError
+        One line naming the first link that leads out of ``root`` and where.
+    """
+    base = os.path.realpath(root)
+    if not os.path.isdir(base):
+        return
+    folders = [base]
+    while folders:  # scandir's entries know whether they are links: no stat per file
+        with os.scandir(folders.pop()) as entries:
+            for entry in entries:
+                if entry.is_symlink():
+                    check_inside(entry.path, base)
+                elif entry.is_dir(follow_symlinks=False):
+                    folders.append(entry.path)

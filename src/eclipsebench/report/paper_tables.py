@@ -20,6 +20,7 @@ from collections.abc import Mapping
 
 from ..decorrelate.base import get_method
 from ..errors import InputError
+from .tables import escape_markdown
 
 __all__ = ["TABLE3", "TABLE4", "paper_name", "COMPARED_KEYS", "comparison_rows",
            "comparison_markdown"]
@@ -107,11 +108,15 @@ def comparison_rows(summary: Mapping, table: Mapping[str, Mapping[str, float]],
 
 def comparison_markdown(summary: Mapping, table: Mapping[str, Mapping[str, float]],
                         keys: tuple[str, ...] = COMPARED_KEYS) -> str:
-    """A Markdown table of :func:`comparison_rows` (``ours / paper`` in each cell)."""
+    """A Markdown table of :func:`comparison_rows` (``ours / paper`` in each cell).
+
+    Method names are escaped for Markdown (a plugin's name may hold ``_``).
+    """
     head = "| method | paper's name | " + " | ".join(keys) + " |"
     lines = [head, "|" + " --- |" * (len(keys) + 2)]
     for row in comparison_rows(summary, table, keys):
         cells = [f"{row[2 + 2 * i]} / {row[3 + 2 * i]}" if row[3 + 2 * i] else row[2 + 2 * i]
                  for i in range(len(keys))]
-        lines.append(f"| {row[0]} | {row[1]} | " + " | ".join(cells) + " |")
+        lines.append(f"| {escape_markdown(row[0])} | {escape_markdown(row[1])} | "
+                     + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

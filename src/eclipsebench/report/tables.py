@@ -1,13 +1,18 @@
 """The paper's Tables 3 and 4 from a statistics summary: text, ECSV, AASTeX, Markdown.
 
 Input is the dict of :func:`eclipsebench.stats.summary.summarize` (the
-``summary.json`` / ``eclipsebench stats --json`` content).
+``summary.json`` / ``eclipsebench stats --json`` content). Names that come
+from outside (methods, plugins' included; a run's title) are escaped for the
+format they are written in (:func:`escape_markdown`, :func:`escape_latex`),
+as the HTML page escapes them.
 """
 
 from __future__ import annotations
 
 import io
 import math
+import re
+from collections.abc import Callable
 from pathlib import Path
 
 from astropy.table import Table
@@ -15,7 +20,36 @@ from astropy.table import Table
 from ..io.atomic import atomic_path, write_text
 
 __all__ = ["stats_table", "anova_lines", "display_rows", "format_text_table", "format_markdown",
-           "write_tables", "TABLE_COLUMNS"]
+           "write_tables", "TABLE_COLUMNS", "escape_markdown", "escape_latex"]
+
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]<>()#+!|~&])")
+_LATEX_SPECIAL = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
+                  "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
+                  "^": r"\textasciicircum{}", "|": r"\textbar{}", "<": r"\textless{}",
+                  ">": r"\textgreater{}"}
+
+
+def escape_markdown(text: str) -> str:
+    r"""``text`` with every character Markdown (or a table's ``|``) would read escaped.
+
+    Examples
+    --------
+    >>> print(escape_markdown("a|b *c* <x>"))
+    a\|b \*c\* \<x\>
+    """
+    return _MARKDOWN_SPECIAL.sub(r"\\\1", " ".join(str(text).split()))
+
+
+def escape_latex(text: str) -> str:
+    r"""``text`` as LaTeX prints it literally (``\ & % $ # _ { } ~ ^ | < >`` escaped).
+
+    Examples
+    --------
+    >>> print(escape_latex("kr_pmap & 50%"))
+    kr\_pmap \& 50\%
+    """
+    return "".join(_LATEX_SPECIAL.get(c, c) for c in " ".join(str(text).split()))
+
 
 #: (key, heading, unit) of the displayed columns, in the order of Table 4.
 TABLE_COLUMNS = (
@@ -85,12 +119,14 @@ def _signed(v: float, minus: str) -> str:
 
 
 def display_rows(summary: dict, *, minus: str = "-", pm: str = "+/-",
-                 interval: str = "{f} +{up}/-{down}") -> list[list[str]]:
+                 interval: str = "{f} +{up}/-{down}",
+                 escape: Callable[[str], str] = str) -> list[list[str]]:
     """Rows of formatted cells like the paper's table (method rows, then Average).
 
     ``f_dis`` shows its 68% interval only when the raw value exceeds 1 (the
     paper prints a floored 1.0 without one); the closest match reads
-    ``NAME: (mean +/- SD)``.
+    ``NAME: (mean +/- SD)``. ``escape`` is applied to every method name (the
+    format's escaping: :func:`escape_markdown`, :func:`escape_latex`).
     """
     truth = _has_truth(summary)
     keys = [c for c in TABLE_COLUMNS if truth or c[0] not in ("RMSE", "bias", "a")]
@@ -99,7 +135,7 @@ def display_rows(summary: dict, *, minus: str = "-", pm: str = "+/-",
         cells = []
         for key, _, _ in keys:
             if key == "method":
-                cells.append(name)
+                cells.append(escape(name))
             elif key == "f_dis":
                 f = s.get("f_dis")
                 if name != "Average" and s.get("f_dis_raw", 0) > 1.0:
@@ -110,7 +146,7 @@ def display_rows(summary: dict, *, minus: str = "-", pm: str = "+/-",
             elif key == "closest":
                 m = s.get("closest_match")
                 cells.append("..." if not m else
-                             f"{m}: ({_signed(s['closest_match_mean_ppm'], minus)}{pm}"
+                             f"{escape(m)}: ({_signed(s['closest_match_mean_ppm'], minus)}{pm}"
                              f"{s['closest_match_sd_ppm']:.0f})")
             elif key in ("r", "a"):
                 cells.append(_fmt(s.get(key), 2))
@@ -151,14 +187,16 @@ def anova_lines(summary: dict) -> list[str]:
 
 def format_markdown(summary: dict) -> str:
     """The table as GitHub-flavoured Markdown."""
-    rows = display_rows(summary, pm=" ± ", interval="{f} +{up}/−{down}", minus="−")
+    rows = display_rows(summary, pm=" ± ", interval="{f} +{up}/−{down}", minus="−",
+                        escape=escape_markdown)
     out = ["| " + " | ".join(rows[0]) + " |", "|" + "|".join("---" for _ in rows[0]) + "|"]
     out += ["| " + " | ".join(r) + " |" for r in rows[1:]]
     return "\n".join(out) + "\n"
 
 
 def _aastex(summary: dict, caption: str) -> str:
-    rows = display_rows(summary, minus="--", pm=r"$\pm$", interval=r"{f}\ppm{{{up}}}{{{down}}}")
+    rows = display_rows(summary, minus="--", pm=r"$\pm$", interval=r"{f}\ppm{{{up}}}{{{down}}}",
+                        escape=escape_latex)
     heads = [h.replace("_mean", r"$_{\rm mean}$").replace("sigma", r"$\sigma$")
              .replace("_orig", r"$_{\rm orig}$").replace("_tot", r"$_{\rm TOT}$")
              .replace("f_dis", r"$f_{\rm dis}$") for h in rows[0]]
@@ -176,6 +214,8 @@ def write_tables(summary: dict, dest: str | Path, *, stem: str = "eclipse_depth_
                  caption: str = "Eclipse Depth Statistics") -> list[Path]:
     """Write ``stem.ecsv``, ``stem.tex`` (AASTeX deluxetable) and ``stem.md`` to ``dest``.
 
+    ``caption`` is plain text (escaped for LaTeX here).
+
     Returns
     -------
     list of Path
@@ -183,6 +223,7 @@ def write_tables(summary: dict, dest: str | Path, *, stem: str = "eclipse_depth_
     """
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
+    caption = escape_latex(caption)  # a run's name, a title: printed as given
     if summary.get("sigma_phot_ppm") is not None:
         caption = f"{caption} ($\\sigma_{{\\rm phot}}\\approx {summary['sigma_phot_ppm']:.0f}$ ppm)"
     ecsv = dest / f"{stem}.ecsv"

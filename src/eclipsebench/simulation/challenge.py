@@ -49,7 +49,7 @@ from ..config.base import load_toml
 from ..config.detector import fluxconv_of, gain_of, noise_factor_of, read_noise_of
 from ..detector.constants import ReadoutMode, channel_constants
 from ..detector.fowler import bunc_mjysr, electrons_to_mjysr
-from ..engine.tasks import Task, run_tasks
+from ..engine.tasks import Task, check_outputs_inside, run_tasks
 from ..errors import ConfigError, InputError
 from ..instrument.pointing import (
     ParamRange,
@@ -61,6 +61,7 @@ from ..instrument.pointing import (
 from ..io.atomic import atomic_path, write_json, write_text
 from ..io.bcd_write import AorWriter, bcd_path, bmjd_to_utc, bunc_path
 from ..io.header_template import XO3_DEC_DEG, XO3_RA_DEG, BcdHeaderInfo
+from ..io.paths import check_links_inside
 from ..progress import get_logger, progress
 from ..seeding import rng
 from .calibration import write_calibration_set
@@ -653,6 +654,9 @@ def simulate_challenge(cfg: Config, out_dir: str | os.PathLike[str], *, workers:
     make_star_imager(cfg)  # ... on a bad PRF choice
     for epoch in range(1, cfg.challenge.epochs + 1):
         draw_epoch_pointing(cfg, epoch, seed)  # ... and on bad pointing ranges
+    tasks = plan_simulate_tasks(cfg, out, calibration=calibration)
+    check_links_inside(out)  # no output through a symbolic link out of --out
+    check_outputs_inside(tasks, out)
     out.mkdir(parents=True, exist_ok=True)
     config_text = dump_toml(to_mapping(cfg))
     existing = out / "config.toml"
@@ -667,7 +671,6 @@ def simulate_challenge(cfg: Config, out_dir: str | os.PathLike[str], *, workers:
             raise InputError(f"--out {out}: holds a challenge simulated with a different "
                              "configuration (see its config.toml); choose another folder")
     write_text(existing, config_text)
-    tasks = plan_simulate_tasks(cfg, out, calibration=calibration)
     report = run_tasks(tasks, workers=workers)
     plans = challenge_plans(cfg)
     aor_keys = {f"simulate/r{a.aorkey}" for p in plans for a in p.aors}

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..limits import MAX_BOOTSTRAP, check_size
 from .compare import compare_methods, group_by_method
 from .ensemble import method_statistics, validate_depths
 
@@ -35,7 +36,8 @@ def summarize(table, *, sigma_phot_ppm: float | None = None, truth_ppm: float | 
     methods : sequence of str, optional
         Restrict to these methods (also for the t-tests and ANOVA).
     seed, n_bootstrap : int
-        Bootstrap resampling.
+        Bootstrap resampling (``n_bootstrap`` at most
+        :data:`eclipsebench.limits.MAX_BOOTSTRAP`).
 
     Returns
     -------
@@ -44,6 +46,7 @@ def summarize(table, *, sigma_phot_ppm: float | None = None, truth_ppm: float | 
         ``closest_match_sd_ppm``), ``average``, ``ttest``, ``anova``,
         ``sigma_phot_ppm`` and ``truth_ppm``.
     """
+    check_size("n_bootstrap", n_bootstrap, MAX_BOOTSTRAP, "resamples")
     groups = group_by_method(table, methods)
     per_method = {}
     for name, g in groups.items():
