@@ -33,6 +33,7 @@ from ..engine.tasks import RunReport, Task, run_tasks
 from ..errors import InputError
 from ..fit import reduce as fit_reduce
 from ..io.atomic import atomic_path, write_json, write_text
+from ..limits import MAX_TWINS
 from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
@@ -44,9 +45,8 @@ from .twin import twin_table
 
 __all__ = ["TrustSettings", "make_settings", "run_trust", "MIN_TWINS", "MAX_TWINS"]
 
-#: Fewer twins give no coverage worth quoting; more is a size to bound before work.
+#: Fewer twins give no coverage worth quoting (the upper bound is the stated limit).
 MIN_TWINS = 10
-MAX_TWINS = 10_000
 
 log = get_logger("trust")
 
