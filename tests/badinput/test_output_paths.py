@@ -15,7 +15,8 @@ def _no_work(monkeypatch):
     def boom(*args, **kwargs):
         raise AssertionError("work started before the output path was checked")
 
-    for module, name in (("eclipsebench.commands.photometry", "photometry_tables"),
+    # where the commands find them when they run (each imports its work inside ``run``)
+    for module, name in (("eclipsebench.photometry.pipeline", "photometry_tables"),
                          ("eclipsebench.simulation.challenge", "simulate_challenge"),
                          ("eclipsebench.fit.reduce", "reduce_epoch"),
                          ("eclipsebench.astro.lightcurve", "light_curve_function")):

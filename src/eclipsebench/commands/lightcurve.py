@@ -150,7 +150,8 @@ def _run_phase_bias(args: argparse.Namespace) -> dict:
     epoch = PHASE_BIAS_EPOCH if args.epoch is None else args.epoch
     time = challenge_epoch_times_bmjd(epoch)
     system = planet_from_args(args, args.system)
-    lc = light_curve_function(system, fix_depth_ppm=_fixed_depth_ppm(args, system), **_light_curve_options(args))
+    lc = light_curve_function(system, fix_depth_ppm=_fixed_depth_ppm(args, system),
+                              **_light_curve_options(args))
     t0, t1 = float(time[0]), float(time[-1])
     inside = lc.eclipse_times_bmjd(t0, t1)
     if not inside:
