@@ -150,3 +150,20 @@ def _code(argv: list[str]) -> int:
 
 def _statistics(table, fit) -> dict[str, float]:
     return {**observation_statistics(table), "bliss_residual_rms_ppm": float(fit.rms_ppm)}
+
+
+def test_a_link_out_of_the_trust_folder_is_refused_before_any_work(small_table, tmp_path, capsys):
+    out, elsewhere = tmp_path / "trust", tmp_path / "elsewhere"
+    out.mkdir()
+    elsewhere.mkdir()
+    (out / "twins").symlink_to(elsewhere)
+    assert _code(["trust", str(small_table), "--out", str(out)] + FAST) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "outside the run folder" in err, err
+    assert list(elsewhere.iterdir()) == [] and sorted(p.name for p in out.iterdir()) == ["twins"]
+
+
+def test_workers_beyond_the_stated_limit_are_refused(small_table, tmp_path, capsys):
+    assert _code(["trust", str(small_table), "--out", str(tmp_path / "t"), "--workers",
+                  "100000"] + FAST) == 2
+    assert "limit" in capsys.readouterr().err and not (tmp_path / "t").exists()

@@ -9,6 +9,7 @@ from pathlib import Path
 from ..config import load_config
 from ..config.base import parse_override
 from ..errors import InputError
+from ..limits import MAX_WORKERS
 from .options import (
     add_planet_options,
     check_output_path,
@@ -53,7 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="calibration set for kr-pmap (as reduce --pmap)")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
                    help="one seed for every twin's noise and every reduction")
-    p.add_argument("--workers", type=positive_int(), default=None, metavar="N",
+    p.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), default=None, metavar="N",
                    help="Dask worker processes (default: run.workers); 1 runs in this process")
     p.add_argument("--config", metavar="CONFIG", default=None,
                    help="configuration file whose [reduce], [system] and [run] sections are used")

@@ -29,10 +29,11 @@ from ..config.base import to_mapping
 from ..config.reduce import ReduceSection
 from ..decorrelate import get_method
 from ..engine.lock import run_lock
-from ..engine.tasks import RunReport, Task, run_tasks
+from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import InputError
 from ..fit import reduce as fit_reduce
 from ..io.atomic import atomic_path, write_json, write_text
+from ..io.paths import check_links_inside
 from ..limits import MAX_TWINS
 from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
@@ -228,6 +229,9 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
               scheduler: str | None = None) -> tuple[TrustResult, RunReport]:
     """Run (or resume) a trust run in ``root``; return its answer and what ran."""
     layout = TrustLayout(Path(root))
+    if layout.root.is_dir():   # no output through a symbolic link out of the folder
+        check_links_inside(layout.root)
+        check_outputs_inside(plan_real(settings, layout), layout.root)
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
         _guard(settings, layout)
@@ -237,6 +241,7 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
             raise InputError(f"{settings.table}: no method could reduce the real table ("
                              + "; ".join(f"{m}: {r}" for m, r in skipped.items()) + ")")
         tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable)
+        check_outputs_inside(tasks, layout.root)
         report = run_tasks(tasks, workers=workers, scheduler=scheduler)
         report.ran = first.ran + report.ran
         return read_trust(layout.result), report
