@@ -32,7 +32,9 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "_templates"]
+# benchmarks-history.md: the old benchmark notebook kept verbatim (git has it too); not a
+# chapter of the site, and its headings are the notebook's, not the site's.
+exclude_patterns = ["_build", "_templates", "benchmarks-history.md"]
 
 # The Markdown pages were written for GitHub: ```` ``` ```` blocks without a
 # language are plain text, "Heading" anchors are made for levels 1-3.
