@@ -14,9 +14,8 @@ import shutil
 import numpy as np
 import pytest
 
-from eclipsebench.astro.catalogue import system_for
+from eclipsebench.astro.catalogue import get_system
 from eclipsebench.cli import main
-from eclipsebench.config import load_config
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table, write_photometry
 from eclipsebench.simulation.render import FrameModel, tick_moments
@@ -126,9 +125,8 @@ def test_the_twins_resemble_real_epoch1(real_epoch1_table):
     from eclipsebench.trust.recipe import build_recipe
 
     real_fit = reduce(real_epoch1_table, "bliss", sampler="leastsq", prayer_bead_shifts=0)
-    recipe, info = build_recipe(str(real_epoch1_table), system_for(
-        load_config(None, ["system.name=\"XO-3b\""]).system), real_fit.to_dict(),
-        real_fit.depth_ppm)
+    recipe, info = build_recipe(str(real_epoch1_table), get_system("XO-3b"), real_fit.to_dict(),
+                                real_fit.depth_ppm)
     real = _statistics(read_table(real_epoch1_table), real_fit)
     twins = []
     for i in (1, 2):

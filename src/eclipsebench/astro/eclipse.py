@@ -20,6 +20,7 @@ returned shape lands on the time asked for.
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 
 import batman
 import numpy as np
@@ -46,12 +47,12 @@ def event_window(clock: OrbitClock, which: str, t_conj_geom: float) -> tuple[flo
     return float(t[idx[0]] - 2 * step), float(t[idx[-1]] + 2 * step)
 
 
-class _EventShape:
+class _EventShape(ABC):
     _which = "eclipse"
 
+    @abstractmethod
     def _batman(self, t_geom: np.ndarray, t_conj: float) -> np.ndarray:
         """The event's shape at geometric times ``t_geom`` (each event class computes its own)."""
-        raise NotImplementedError
 
     def __init__(self, time_bmjd, system, *, grid_step_s: float = _GRID_STEP_S):
         self.time_bmjd = np.ascontiguousarray(time_bmjd, dtype=float)

@@ -90,6 +90,12 @@ def _median_frame(data: np.ndarray, valid: np.ndarray, most: int = 256) -> np.nd
     return nanmedian0(data[idx])
 
 
+def brightest_of_median(frames: np.ndarray, valid: np.ndarray) -> tuple[int, int] | None:
+    """The brightest pixel ``(x, y)`` of the median of up to 256 valid frames: where the star
+    is (None when no pixel is finite)."""
+    return _brightest(_median_frame(frames, valid))
+
+
 def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
     """Stack one AOR's cubes (time order), convert to electrons, cut a window.
 
@@ -107,7 +113,7 @@ def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
     valid = ~first if options.drop_first_frame and (~first).any() else np.ones(first.size, bool)
     x_off = y_off = 0
     if not infos[0].subarray:
-        guess = _brightest(_median_frame(data, valid))
+        guess = brightest_of_median(data, valid)
         if guess is not None:
             half = options.window_px // 2
             x_off = int(np.clip(guess[0] - half, 0, data.shape[2] - options.window_px))
@@ -117,7 +123,7 @@ def load_aor(cubes: list[BcdCube], options: PhotometrySection) -> AorStack:
             masks = masks[:, y_off:y_off + options.window_px, x_off:x_off + options.window_px]
     if masks is not None:
         data[masks] = np.nan
-    star = _brightest(_median_frame(data, valid))
+    star = brightest_of_median(data, valid)
     if star is None:
         star = (data.shape[2] // 2, data.shape[1] // 2)
     return AorStack(

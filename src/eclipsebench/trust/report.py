@@ -18,6 +18,7 @@ from astropy.table import Table
 
 from .. import __version__
 from ..io.atomic import atomic_path, write_json, write_text
+from ..photometry.binning import bin_indices, bin_values
 from ..photometry.table import read_table
 from .layout import TrustLayout
 from .score import observation_statistics, recommend, score_methods
@@ -150,11 +151,14 @@ def _figure_z(summary, twins, path: Path) -> None:
 
 
 def _binned(time, values, width_d: float):
-    edges = np.arange(time.min(), time.max() + width_d, width_d)
-    idx = np.digitize(time, edges)
-    keep = [k for k in np.unique(idx) if np.sum(idx == k) >= 3]
-    return (np.array([time[idx == k].mean() for k in keep]),
-            np.array([np.median(values[idx == k]) for k in keep]))
+    """Mean time and median value of each ``width_d`` bin of at least 3 frames."""
+    bins = bin_indices(time, width_days=width_d)
+    centres, counts = bin_values(time, bins)
+    order = np.argsort(bins, kind="stable")
+    medians = np.array([np.median(v) for v in np.split(values[order], np.cumsum(
+        counts.astype(int))[:-1])])
+    keep = counts >= 3
+    return centres[keep], medians[keep]
 
 
 def _figure_twin(real_table, twin_table, path: Path) -> None:

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..photometry.binning import bin_indices, bin_values
 from ..stats.ensemble import GAUSS_1SIGMA, coverage
 
 __all__ = ["method_score", "recommend", "score_methods", "observation_statistics"]
@@ -105,11 +106,9 @@ def observation_statistics(table) -> dict[str, float]:
     "Validation".
     """
     good = np.asarray(table["flag"]) == 0
-    time_d = np.asarray(table["time_bmjd"])[good]
     flux = np.asarray(table["flux"], float)[good]
-    bins = np.floor((time_d - time_d[0]) / (5.0 / 1440.0)).astype(int)
-    counts = np.bincount(bins)
-    binned = np.bincount(bins, flux)[counts > 0] / counts[counts > 0]
+    bins = bin_indices(np.asarray(table["time_bmjd"])[good], width_days=5.0 / 1440.0)
+    binned, _ = bin_values(flux, bins)
     return {"noise_pixels_median": float(np.median(np.asarray(table["noise_pixels"])[good])),
             "x_rms_px": float(np.std(np.asarray(table["x"], float)[good])),
             "y_rms_px": float(np.std(np.asarray(table["y"], float)[good])),

@@ -34,7 +34,7 @@ from ..instrument.pointing import fbm_segments
 from ..instrument.prf import BuiltinPRF, load_gainmap_coefficients
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack
-from ..photometry.pipeline import AorStack, measure_aor
+from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
 from ..simulation.render import FrameModel, render_frames, stamp_origin, tick_moments
@@ -168,8 +168,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
 def _measure_aor(recipe: TwinRecipe, rows: np.ndarray, frames: np.ndarray,
                  options: PhotometrySection) -> dict[str, np.ndarray]:
     obs = recipe.obs
-    median = np.median(frames, axis=0)
-    star_y, star_x = np.unravel_index(int(np.argmax(median)), median.shape)
+    star = brightest_of_median(frames, obs.frame[rows] != 0)
+    star_x, star_y = star if star is not None else (frames.shape[2] // 2, frames.shape[1] // 2)
     stack = AorStack(aorkey=int(obs.aorkey[rows[0]]), frames_e=frames.astype(np.float32),
                      bad_mask=None, time_bmjd=obs.time_bmjd[rows], expid=obs.expid[rows],
                      dce=np.zeros(rows.size, np.int64), frame=obs.frame[rows],
@@ -198,7 +198,7 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-    columns["flag"] = columns["flag"] | np.where(obs.flag != 0, obs.flag, 0)
+    columns["flag"] = columns["flag"] | obs.flag
     meta = {k: v for k, v in obs.meta.items() if k not in ("FLAGCNT", "FILENAME")}
     meta.update({"TWIN": int(twin), "EPOCH": int(twin), "SIMULATE": True,
                  "TWINMOT": float(recipe.motion_rms_px)})
@@ -243,8 +243,7 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *, n_frames
 
 
 def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
-    median = np.median(frames, axis=0)
-    sy, sx = np.unravel_index(int(np.argmax(median)), median.shape)
+    sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
     m = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
                       fowler=obs.mode.fowler, wait=obs.mode.wait, read_noise_e=obs.read_noise_e)
     return m["noise_pixels"]
