@@ -86,6 +86,21 @@ def test_sync_runs_in_dependency_order_and_resumes(tmp_path):
     assert rep3.ran == [] and len(rep3.skipped) == 5
 
 
+def two_files(second: str, first: str) -> None:
+    """Writes ``first`` then ``second`` (its outputs are listed out of name order)."""
+    write_json(first, {"a": 1})
+    write_json(second, {"b": 2})
+
+
+def test_a_task_whose_outputs_are_not_in_name_order_is_done_on_resume(tmp_path):
+    """The stamp's JSON sorts its keys; a task listing ``z.json`` before ``a.json`` was
+    never found done and was redone on every resume."""
+    task = Task("two", "two", two_files, (str(tmp_path / "a.json"), str(tmp_path / "z.json")),
+                (tmp_path / "z.json", tmp_path / "a.json"))
+    assert run_tasks([task], workers=1).ran == ["two"]
+    assert run_tasks([task], workers=1).ran == []
+
+
 def test_failure_keeps_other_outputs_and_blocks_dependants(tmp_path):
     tasks = graph(tmp_path, n=2)
     tasks[1] = Task("n/1", "numbers", fail, (str(tmp_path / "n1.json"),), (tmp_path / "n1.json",))

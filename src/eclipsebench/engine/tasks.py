@@ -154,7 +154,9 @@ def is_done(task: Task, by_key: dict[str, Task], hashes: _Hashes | None = None) 
     try:
         stamp = json.loads(stamp_path(task).read_text())
         recorded = stamp["outputs_sha256"]
-        if stamp["task"] != task.key or list(recorded) != [Path(p).name for p in task.outputs]:
+        # the stamp's JSON keeps its keys sorted: outputs are compared as a set of names
+        if stamp["task"] != task.key or sorted(recorded) != sorted(Path(p).name
+                                                                   for p in task.outputs):
             return False
         if any(recorded[Path(p).name] != hashes.of(p) for p in task.outputs):
             return False
