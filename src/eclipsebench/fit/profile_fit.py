@@ -41,8 +41,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     options : ReduceSection
         Phase and ramp model, sampler, error settings (``[reduce]``).
     system : str, PlanetSystem or None
-        The planet (default: the configured system, the 2015 challenge's XO-3b; give
-        "XO-3b" for real data).
+        The planet (default: the one the table names, a simulation's ``SYSTEM`` or the
+        archive's ``OBJECT`` through the catalogue; InputError when it names none).
     seed : int
         Run seed; every stream of the fit and of the method is
         ``rng(seed, "reduce", epoch, method, ...)`` (the MCMC's ends in ``"mcmc"``).
