@@ -49,20 +49,14 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy import interpolate, optimize
+from scipy import optimize
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
+from eclipsebench.instrument import gain_fit as G  # noqa: E402
 from eclipsebench.instrument import prf as P  # noqa: E402
-from eclipsebench.photometry.estimators import (  # noqa: E402
-    aperture_flux,
-    centroid_col,
-    noise_pixels,
-)
-
-OCC_MIN = 20.0
-
+from eclipsebench.photometry.estimators import noise_pixels  # noqa: E402
 
 CHANNEL_DEFAULTS = {
     2: {"source": "pmap_ch2_0p1s_x4_500x500_0043_120124 (Spitzer Science Center)",
@@ -90,50 +84,6 @@ def load_pmap(folder: Path, channel: int = 2):
     return out
 
 
-def pmap_interpolator(pm):
-    x = pm["xgrid"][0, :]
-    y = pm["ygrid"][:, 0]
-    val = interpolate.RegularGridInterpolator((y, x), pm["pmap"], bounds_error=False,
-                                              fill_value=np.nan)
-    occ = interpolate.RegularGridInterpolator((y, x), pm["occu"], method="nearest",
-                                              bounds_error=False, fill_value=0.0)
-    return val, occ
-
-
-def poly_design(u, v, degree):
-    powers = [(m, t - m) for t in range(degree + 1) for m in range(t, -1, -1)]
-    return powers, np.stack([u**m * v**n for m, n in powers], axis=-1)
-
-
-def fit_pmap_poly(pm, degree):
-    mask = pm["occu"] > OCC_MIN
-    u = pm["xgrid"][mask] - 15.0
-    v = pm["ygrid"][mask] - 15.0
-    powers, a = poly_design(u, v, degree)
-    c, *_ = np.linalg.lstsq(a, pm["pmap"][mask], rcond=None)
-    rms = float(np.sqrt(np.mean((a @ c - pm["pmap"][mask]) ** 2)))
-    return {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
-            "phase_origin": "nearest pixel centre", "occupancy_min": OCC_MIN,
-            "fit_rms": rms, "n_cells": int(mask.sum())}
-
-
-def trusted_box(pm):
-    """((u_lo, u_hi), (v_lo, v_hi)): the phases of the cells with occupancy > 20, or None
-    when the map has no NaN cell (nothing needs clamping)."""
-    if np.all(np.isfinite(pm["pmap"])):
-        return None
-    high = pm["occu"] > OCC_MIN
-    u, v = pm["xgrid"][high] - 15.0, pm["ygrid"][high] - 15.0
-    return ((float(u.min()), float(u.max())), (float(v.min()), float(v.max())))
-
-
-def in_box(u, v, box):
-    if box is None:
-        return np.ones(np.shape(u), bool)
-    (u0, u1), (v0, v1) = box
-    return (u >= u0) & (u <= u1) & (v >= v0) & (v <= v1)
-
-
 def psf_kwargs(channel, pixel_scale):
     from eclipsebench.detector.constants import channel_constants
 
@@ -154,13 +104,6 @@ def beta_at(blur_px, obscuration, os_, half_px, x, y, jitter_px, **psf_kw):
     w = np.outer(weights, weights).ravel() / weights.sum() ** 2
     image = np.tensordot(w, prf.render(x + u.ravel(), y + v.ravel()), axes=1)
     return float(noise_pixels(image[None])[0])
-
-
-def weighted_poly(u, v, target, weights, degree):
-    powers, a = poly_design(u, v, degree)
-    sw = np.sqrt(weights)
-    c, *_ = np.linalg.lstsq(a * sw[:, None], target * sw, rcond=None)
-    return powers, c, a @ c
 
 
 def main(argv=None) -> int:
@@ -195,22 +138,19 @@ def main(argv=None) -> int:
     pm = load_pmap(pmap_dir, ch)
     result = {"source": dflt["source"],
               "made_by": "tools/fit_gainmap.py " + " ".join(sys.argv[1:] if argv is None else argv)}
-    box = trusted_box(pm)
+    maps = (pm["xgrid"][0, :], pm["ygrid"][:, 0], pm["pmap"], pm["occu"])
 
     # (1) the gain map itself as a function of the centroid phase
-    high = pm["occu"] > OCC_MIN
-    u, v = pm["xgrid"].ravel() - 15.0, pm["ygrid"].ravel() - 15.0
-    use = np.isfinite(pm["pmap"].ravel()) & in_box(u, v, box)
-    w = np.where(high, 1.0, args.low_weight).ravel()[use]
-    powers, c, fit = weighted_poly(u[use], v[use], pm["pmap"].ravel()[use], w, args.degree)
-    rms = float(np.sqrt(np.mean((fit - pm["pmap"].ravel()[use])[high.ravel()[use]] ** 2)))
-    result["pmap_poly"] = {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
+    poly, info = G.fit_centroid_gain(*maps, degree=args.degree, low_weight=args.low_weight)
+    rms, box = info["fit_rms"], info["box"]
+    result["pmap_poly"] = {"powers": [list(p) for p in poly.powers],
+                           "coeffs": list(poly.coeffs),
                            "variable": "centroid phase about the nearest pixel centre",
-                           "occupancy_min": OCC_MIN, "fit_rms": rms}
+                           "occupancy_min": G.OCCUPANCY_MIN, "fit_rms": rms}
     if box is not None:
         result["pmap_poly"]["box"] = [list(box[0]), list(box[1])]
-    print(f"pmap polynomial (degree {args.degree}): rms {rms:.5f} where occupancy > {OCC_MIN}"
-          + (f", phase clamped to {box}" if box is not None else ""))
+    print(f"pmap polynomial (degree {args.degree}): rms {rms:.5f} where occupancy > "
+          f"{G.OCCUPANCY_MIN}" + (f", phase clamped to {box}" if box is not None else ""))
 
     # (2) the builtin PSF width
     os_, half = 20, 12.8
@@ -222,33 +162,15 @@ def main(argv=None) -> int:
     prf = P.PRF(table, os_, (0.5 * (table.shape[1] - 1), 0.5 * (table.shape[0] - 1)))
 
     # (3) the gain polynomial in the true phase
-    g = np.arange(-0.5, 0.5 + 1e-9, args.step)
-    gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
-    xs, ys = gx.ravel(), gy.ravel()
-    img = prf.render(xs, ys)
-    xc, yc = centroid_col(img, around=(15, 15))
-    ap_flux = aperture_flux(img, xc, yc, args.radius)
-    val, occ = pmap_interpolator(pm)
-    pts = np.column_stack([yc, xc])
-    target = val(pts)
-    inside = np.isfinite(target) & in_box(xc - 15.0, yc - 15.0, box)
-    ok = inside & (occ(pts) > OCC_MIN)
-    wt = np.where(ok, 1.0, args.low_weight)[inside]
-    powers, c, fit = weighted_poly(xs[inside] - 15.0, ys[inside] - 15.0,
-                                   target[inside] / ap_flux[inside], wt, args.degree)
-    model = fit * ap_flux[inside]
-    sel = ok[inside]
-    scale = np.sum(model[sel] * target[inside][sel]) / np.sum(model[sel] ** 2)
-    rel = model[sel] * scale / target[inside][sel] - 1.0
-    rms = float(np.sqrt(np.mean(rel**2)))
-    gain = {"powers": [list(p) for p in powers], "coeffs": [float(x) for x in c],
+    poly, info = G.fit_true_phase_gain(prf, *maps, radius_px=args.radius, degree=args.degree,
+                                       step_px=args.step, low_weight=args.low_weight)
+    rms = info["fit_rms"]
+    gain = {"powers": [list(p) for p in poly.powers], "coeffs": list(poly.coeffs),
             "variable": "true sub-pixel phase about the nearest pixel centre"}
-    if box is not None:  # the true phases whose centroids fall in the map's box
-        tu, tv = xs[inside] - 15.0, ys[inside] - 15.0
-        gain["box"] = [[float(tu.min()), float(tu.max())], [float(tv.min()), float(tv.max())]]
-    full = P.GainPolynomial.from_dict(gain).evaluate(xs, ys)
-    print(f"builtin gain (degree {args.degree}): {sel.sum()} positions, rms {rms:.5f}; "
-          f"G over the whole pixel {full.min() / full.mean():.4f}..{full.max() / full.mean():.4f}")
+    if poly.box is not None:
+        gain["box"] = [list(poly.box[0]), list(poly.box[1])]
+    print(f"builtin gain (degree {args.degree}): {info['n_positions']} positions, rms {rms:.5f}; "
+          f"G over the whole pixel {info['gain_min']:.4f}..{info['gain_max']:.4f}")
     result["builtin"] = {
         "obscuration": args.obscuration, "blur_px": float(blur),
         "target_noise_pixels": beta, "noise_pixels_position": [x_beta, y_beta],
@@ -256,7 +178,7 @@ def main(argv=None) -> int:
         "gain": gain,
         "aperture_radius_px": args.radius,
         "centroid": "centre of light, 7x7 box on pixel (15, 15)",
-        "fit_rms": rms, "n_positions": int(sel.sum()),
+        "fit_rms": rms, "n_positions": info["n_positions"],
     }
     from eclipsebench.io.atomic import atomic_path
 

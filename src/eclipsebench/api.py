@@ -312,7 +312,8 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
     options : mapping, optional
         ``{method: {key: value}}``: method options, as ``reduce(options=...)``.
     pmap : path, optional
-        Calibration set for ``kr-pmap``.
+        Pixel map: ``kr-pmap``'s calibration and, when it is a gridded SSC
+        map (or a folder of dated versions), the twins' intra-pixel gain.
     workers : int, optional
         Dask worker processes (default ``run.workers``).
     **reduce_options

@@ -165,3 +165,42 @@ def test_workers_beyond_the_stated_limit_are_refused(small_table, tmp_path, caps
     assert _code(["trust", str(small_table), "--out", str(tmp_path / "t"), "--workers",
                   "100000"] + FAST) == 2
     assert "limit" in capsys.readouterr().err and not (tmp_path / "t").exists()
+
+
+def test_a_twin_carries_the_gain_of_a_given_map_through_its_recipe(small_table, tmp_path):
+    from eclipsebench.instrument.prf import GainPolynomial
+    from eclipsebench.trust.recipe import read_recipe, write_recipe
+    from eclipsebench.trust.twin import map_gain
+
+    obs = observation_from_table(read_table(small_table))
+    grid = np.linspace(14.501, 15.499, 60)
+    xx, yy = np.meshgrid(grid, grid)
+    tilted = 1.0 + 0.02 * (xx - 15.0)          # a map unlike the simulator's gain
+    gain, text, info = map_gain(obs.channel, grid, grid, tilted, np.full(xx.shape, 50.0),
+                                source="pmap_ch2_test_121212.fits")
+    assert "pmap_ch2_test_121212.fits" in text and info["fit_rms"] < 1e-3
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25, gain=gain)
+    plain = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    with_map = twin_table(recipe, PhotometrySection(), seed=3, twin=1)
+    builtin = twin_table(plain, PhotometrySection(), seed=3, twin=1)
+    assert not np.array_equal(np.asarray(with_map["flux"]), np.asarray(builtin["flux"]))
+    write_recipe(recipe, {"flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
+                          "y_ref_px": recipe.y_ref_px, "motion_rms_px": 0.0,
+                          "gain": {"powers": [list(p) for p in gain.powers],
+                                   "coeffs": list(gain.coeffs), "box": None}},
+                 tmp_path / "r.npz", tmp_path / "r.json")
+    again, _ = read_recipe(str(small_table), tmp_path / "r.npz", tmp_path / "r.json")
+    assert isinstance(again.gain, GainPolynomial) and again.gain.coeffs == gain.coeffs
+    assert np.array_equal(np.asarray(twin_table(again, PhotometrySection(), seed=3, twin=1)["flux"]),
+                          np.asarray(with_map["flux"]))
+
+
+@pytest.mark.shared_data
+def test_twins_of_real_epoch1_take_the_map_of_its_date(real_epoch1_table, shared_irac):
+    from eclipsebench.trust.recipe import twin_gain
+
+    obs = observation_from_table(read_table(real_epoch1_table))
+    gain, text, info = twin_gain(obs, str(shared_irac))    # pmap_ch2 (120124), pmap_ch2_120827
+    assert "120827" in text and "120827" in info["path"] and gain is not None
+    none, default_text, _ = twin_gain(obs, None)
+    assert none is None and "simulator's gain model" in default_text

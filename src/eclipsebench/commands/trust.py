@@ -51,7 +51,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    metavar="METHOD.KEY=VALUE",
                    help="a method's option (repeatable), e.g. --option kr-data.k=40")
     p.add_argument("--pmap", metavar="PATH", default=None,
-                   help="calibration set for kr-pmap (as reduce --pmap)")
+                   help="pixel map: kr-pmap's calibration (as reduce --pmap) and, when it is a "
+                        "gridded SSC map (or a folder of dated versions), the twins' gain")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
                    help="one seed for every twin's noise and every reduction")
     p.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), default=None, metavar="N",

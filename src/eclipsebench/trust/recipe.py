@@ -21,12 +21,14 @@ from ..config.base import from_mapping
 from ..config.photometry import PhotometrySection
 from ..errors import InputError
 from ..fit.astro_model import AstroModel
+from ..instrument.prf import GainPolynomial
 from ..io.atomic import atomic_path, write_json
+from ..io.pmap_files import GriddedPmap, find_pmap_path, load_pmap
 from ..photometry.table import read_table
 from .observation import Observation, observation_from_table
-from .twin import TwinRecipe, calibrate_motion, gain_model, make_recipe
+from .twin import TwinRecipe, calibrate_motion, gain_model, make_recipe, map_gain
 
-__all__ = ["twin_light_curve", "build_recipe", "write_recipe", "read_recipe", "EVENTS"]
+__all__ = ["twin_light_curve", "build_recipe", "twin_gain", "write_recipe", "read_recipe", "EVENTS"]
 
 #: The events a twin can carry (a whole phase curve is several AORs of its own kind).
 EVENTS = ("eclipse", "transit")
@@ -60,23 +62,56 @@ def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
     return np.asarray(model(theta), dtype=float)
 
 
+def twin_gain(obs: Observation, pmap: str | None) -> tuple[GainPolynomial | None, str, dict]:
+    """The twins' intra-pixel gain: fitted to the gridded SSC map ``pmap`` (a folder of
+    versions: the one in force at the observation's date), else the simulator's model.
+
+    Returns the gain (None: the simulator's), its description and the map fit's
+    diagnostics. A calibration-star table is not a gridded map: the twins keep the
+    simulator's model and the description says so.
+    """
+    if pmap is None or str(pmap) == "":
+        return None, gain_model(obs.channel), {}
+    path = find_pmap_path(pmap, {"CHANNEL": obs.channel}, float(obs.time_bmjd[0]))
+    found = load_pmap(path)
+    if not isinstance(found, GriddedPmap):
+        return None, (gain_model(obs.channel) + f"; {path.name} is a calibration-star table, "
+                      "not a gridded map of the gain, so the twins keep the simulator's model"), {}
+    poly, text, info = map_gain(obs.channel, found.x_grid, found.y_grid, found.gain,
+                                found.occupancy, source=path.name)
+    return poly, text, {"path": str(path), **info}
+
+
+def _gain_dict(gain: GainPolynomial | None) -> dict[str, Any] | None:
+    if gain is None:
+        return None
+    return {"powers": [list(p) for p in gain.powers], "coeffs": list(gain.coeffs),
+            "box": None if gain.box is None else [list(gain.box[0]), list(gain.box[1])]}
+
+
 def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm: float,
-                 event: str = "eclipse") -> tuple[TwinRecipe, dict[str, Any]]:
-    """The recipe of the twins of the table at ``table_path`` and what it is made of."""
+                 event: str = "eclipse", pmap: str | None = None
+                 ) -> tuple[TwinRecipe, dict[str, Any]]:
+    """The recipe of the twins of the table at ``table_path`` and what it is made of.
+
+    ``pmap``: an SSC warm map (file or folder of versions) whose gain the
+    twins carry (:func:`twin_gain`); None: the simulator's gain model.
+    """
     table = read_table(table_path)
     obs = observation_from_table(table, table_path)
     options = photometry_options(obs)
+    gain, gain_text, gain_fit = twin_gain(obs, pmap)
     lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, gain=gain)
     rms, calibration = calibrate_motion(recipe, options)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_rms_px=rms)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_rms_px=rms, gain=gain)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
             "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
             "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
             "y_ref_px": recipe.y_ref_px, "motion_rms_px": rms, "calibration": calibration,
-            "gain_model": gain_model(obs.channel), "n_frames": obs.n_frames,
-            "n_good": int(obs.good.sum())}
+            "gain_model": gain_text, "gain": _gain_dict(gain), "gain_fit": gain_fit,
+            "n_frames": obs.n_frames, "n_good": int(obs.good.sum())}
     return recipe, info
 
 
@@ -108,5 +143,7 @@ def read_recipe(table_path: str, npz_path: Path, json_path: Path
                             flux_aperture_e=float(info["flux_aperture_e"]),
                             x_ref_px=float(info["x_ref_px"]), y_ref_px=float(info["y_ref_px"]),
                             sky_e_per_px=arrays["sky_e_per_px"],
-                            motion_rms_px=float(info["motion_rms_px"]))
+                            motion_rms_px=float(info["motion_rms_px"]),
+                            gain=(None if info.get("gain") is None
+                                  else GainPolynomial.from_dict(info["gain"])))
     return recipe, info

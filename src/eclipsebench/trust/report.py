@@ -78,9 +78,9 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
             "recommended_because": why, "n_twins": int(settings["n_twins"]),
             "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],
             "seed": settings["seed"], "profile": settings["reduce"]["profile"],
-            "sampler": settings["reduce"]["sampler"], "twins": {k: recipe[k] for k in (
+            "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
                 "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
-                "motion_rms_px", "calibration", "gain_model")},
+                "motion_rms_px", "calibration", "gain_model", "gain_fit")},
             "eclipsebench_version": __version__}
 
 

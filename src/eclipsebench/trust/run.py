@@ -110,7 +110,8 @@ def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: s
         raise InputError(f"{first}: the real depth is {depth:.1f} ppm; twins need a positive "
                          "depth to inject (give --depth PPM)")
     event = settings.reduce.event
-    recipe, info = build_recipe(settings.table, settings.system, fit, depth, event)
+    recipe, info = build_recipe(settings.table, settings.system, fit, depth, event,
+                                settings.pmap)
     write_recipe(recipe, info, Path(npz_path), Path(json_path))
 
 

@@ -12,8 +12,9 @@ A twin shares with the real observation everything but the noise draw
 - the star's aperture flux and the background level in electrons, so the
   photon and read noise are the real ones;
 - the detector: the simulator's intra-pixel gain model of the channel
-  (``BuiltinPRF``), rendered through the Fowler sampling of paper
-  Appendix A.2-A.3 (:func:`eclipsebench.simulation.render.render_frames`);
+  (``BuiltinPRF``), or, where the user gives an SSC warm pixel map, a gain
+  fitted to that map (:func:`map_gain`), rendered through the Fowler
+  sampling of paper Appendix A.2-A.3 (:func:`eclipsebench.simulation.render.render_frames`);
 - the astrophysics: L(t) given per frame (the real fit's phase model with a
   known depth at the real mid-time).
 
@@ -30,8 +31,9 @@ import numpy as np
 from astropy.table import Table
 
 from ..config.photometry import PhotometrySection
+from ..instrument.gain_fit import fit_true_phase_gain
 from ..instrument.pointing import fbm_segments
-from ..instrument.prf import BuiltinPRF, load_gainmap_coefficients
+from ..instrument.prf import BuiltinPRF, GainPolynomial, load_gainmap_coefficients
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack
 from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
@@ -42,15 +44,16 @@ from ..simulation.star import StarImager
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "make_recipe", "render_frames_of", "twin_table", "calibrate_motion",
-           "MOTION_GRID_PX", "gain_model"]
+           "MOTION_GRID_PX", "gain_model", "map_gain"]
 
 #: Within-exposure motion rms (px) on which the noise pixels are calibrated.
 MOTION_GRID_PX = (0.0, 0.02, 0.04, 0.07, 0.1, 0.14, 0.2, 0.28)
 
 
 def gain_model(channel: int) -> str:
-    """What the twins' intra-pixel gain is, for the report: the simulator's model of the
-    channel, fitted to the SSC pixel map named in ``data/gainmap_ch<N>.json``.
+    """What the twins' intra-pixel gain is when no map is given, for the report: the
+    simulator's model of the channel, fitted to the SSC pixel map named in
+    ``data/gainmap_ch<N>.json``.
 
     Examples
     --------
@@ -60,6 +63,25 @@ def gain_model(channel: int) -> str:
     source = load_gainmap_coefficients(channel).get("source", "an SSC pixel map")
     return (f"the simulator's gain model of channel {channel} (BuiltinPRF's intra-pixel gain, "
             f"a polynomial fitted to {source}; data/gainmap_ch{channel}.json)")
+
+
+def map_gain(channel: int, x_grid: np.ndarray, y_grid: np.ndarray, gain: np.ndarray,
+             occupancy: np.ndarray, *, source: str, radius_px: float = 3.0
+             ) -> tuple[GainPolynomial, str, dict]:
+    """The twins' gain from a gridded SSC warm map: what ``BuiltinPRF`` of ``channel``
+    needs so that aperture photometry (radius ``radius_px``, the map's 3 px) at the
+    measured centroid follows the map (:func:`~eclipsebench.instrument.gain_fit.fit_true_phase_gain`).
+
+    Returns the gain, its description for the report and the fit's diagnostics.
+    """
+    poly, info = fit_true_phase_gain(BuiltinPRF(gain=False, channel=channel), x_grid, y_grid,
+                                     gain, occupancy, radius_px=radius_px)
+    text = (f"the SSC pixel map {source} (a degree-6 gain in the true sub-pixel phase fitted "
+            f"so that {radius_px:g} px aperture photometry of BuiltinPRF follows the map: "
+            f"rms {100 * info['fit_rms']:.3f} % over {info['n_positions']} positions)")
+    return poly, text, info
+
+
 _BACKGROUND_WINDOW = 65   # frames of the running median of the real background (one cube)
 _FBM_BETA = 1.0           # the jitter's spectral index (paper Table 5)
 
@@ -82,6 +104,9 @@ class TwinRecipe:
         background, smoothed over a cube, minus the PRF's own wings).
     motion_rms_px : float
         Rms of the within-exposure motion about each frame's mean position.
+    gain : GainPolynomial or None
+        The intra-pixel gain in the true phase (:func:`map_gain`); None: the
+        simulator's model of the channel.
     """
 
     obs: Observation
@@ -91,11 +116,15 @@ class TwinRecipe:
     y_ref_px: float
     sky_e_per_px: np.ndarray
     motion_rms_px: float = 0.0
+    gain: GainPolynomial | None = None
 
 
-def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float) -> StarImager:
-    return StarImager(BuiltinPRF(gain=True, channel=obs.channel), x_ref_px=x_ref_px,
-                      y_ref_px=y_ref_px, radius_px=radius_px)
+def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
+          gain: GainPolynomial | None = None) -> StarImager:
+    prf = BuiltinPRF(gain=gain is None, channel=obs.channel)
+    if gain is not None:
+        prf.gain = gain
+    return StarImager(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
 
 
 def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
@@ -103,7 +132,7 @@ def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
 
 
 def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
-                motion_rms_px: float = 0.0) -> TwinRecipe:
+                motion_rms_px: float = 0.0, gain: GainPolynomial | None = None) -> TwinRecipe:
     """The shared part of the twins of ``obs`` with astrophysics ``light_curve``.
 
     The star's flux is the real median aperture flux divided by the median of
@@ -113,12 +142,12 @@ def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
     good = obs.good
     x_ref, y_ref = float(np.median(obs.x_px[good])), float(np.median(obs.y_px[good]))
     flux = float(np.median(obs.flux_e[good]) / np.median(light_curve[good]))
-    star = _star(obs, x_ref, y_ref, radius_px)
+    star = _star(obs, x_ref, y_ref, radius_px, gain)
     level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, good)
     wing = star.annulus_per_unit * star.electrons_per_unit(flux)
     return TwinRecipe(obs=obs, light_curve=np.asarray(light_curve, float), flux_aperture_e=flux,
                       x_ref_px=x_ref, y_ref_px=y_ref, sky_e_per_px=np.clip(level - wing, 0, None),
-                      motion_rms_px=float(motion_rms_px))
+                      motion_rms_px=float(motion_rms_px), gain=gain)
 
 
 def _motion(model: FrameModel, n_frames: int, rms_px: float, stream: np.random.Generator
@@ -146,7 +175,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     """
     obs = recipe.obs
     model = _frame_model(obs, noise_model)
-    star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px)
+    star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
+                                               recipe.gain)
     x_track, y_track = obs.track_px()
     dx, dy = _motion(model, rows.size, recipe.motion_rms_px, rng(seed, *key, "motion"))
     x_off, y_off, moments = tick_moments(dx, dy, model)
@@ -189,7 +219,7 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     ``SIMULATE`` true and ``EPOCH`` the twin's number.
     """
     obs = recipe.obs
-    star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px)
+    star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain)
     parts = []
     for rows in obs.aors():
         frames = np.concatenate([
