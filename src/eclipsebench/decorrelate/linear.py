@@ -10,16 +10,23 @@ pieces (scaled columns, bins, weights, per-frame outer products);
 and :func:`fit_log_likelihood_batch` are the calls in the fit's loop.
 :func:`weighted_lstsq` and :func:`gram_lstsq` are the plain solves of ICA's
 component weights and SP(K2)'s detrending polynomials.
+:class:`LinearSystematics` is the method machinery the linear methods share
+(PLD's and SPCA's models): prediction, residuals and likelihoods from a
+:class:`LinearDesign`.
 """
 
 from __future__ import annotations
 
 import copy
+from abc import abstractmethod
 
 import numpy as np
 
+from .base import Systematics
+
 __all__ = ["LinearDesign", "solve_coefficients", "fit_residuals", "fit_log_likelihood",
-           "fit_log_likelihood_batch", "binned_design_batch", "weighted_lstsq", "gram_lstsq"]
+           "fit_log_likelihood_batch", "binned_design_batch", "weighted_lstsq", "gram_lstsq",
+           "LinearSystematics"]
 
 
 _OUTER_BYTES_MAX = 64 * 2**20
@@ -256,3 +263,56 @@ def gram_lstsq(design: np.ndarray, target: np.ndarray) -> np.ndarray:
     rhs = np.einsum("ni,n->i", design, target)
     coef, *_ = np.linalg.lstsq(gram, rhs, rcond=1e-12)
     return coef
+
+
+class LinearSystematics(Systematics):
+    """A method whose model is ``a * (D c)``, ``c`` solved on :attr:`design` for each ``a``.
+
+    ``D`` are the design's scaled regressors and ``a`` the curve they multiply
+    (:meth:`regressed_curve`): the astrophysical curve, or that curve times a
+    term of the method's own parameters. The coefficients ``c`` are solved by
+    weighted least squares inside every evaluation; the residuals and the
+    likelihood are those of the design's points (bins, or frames when
+    unbinned), on which the whole fit is made. A subclass provides
+    :attr:`design` and, if ``a`` is not the astrophysical curve,
+    :meth:`regressed_curve` and :meth:`regressed_curves`.
+    """
+
+    @property
+    @abstractmethod
+    def design(self) -> LinearDesign:
+        """The regression the coefficients are solved on."""
+
+    def regressed_curve(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """The curve ``a`` the regressors multiply (default: ``astro``)."""
+        return np.asarray(astro, float)
+
+    def regressed_curves(self, astro: np.ndarray, theta: np.ndarray | None) -> np.ndarray:
+        """:meth:`regressed_curve` of every row of ``astro`` (m, n), ``theta`` (m, k) or None."""
+        return astro
+
+    def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """``a * (D c)`` at every frame, ``c`` fitted on the design's points."""
+        a = self.regressed_curve(astro, theta)
+        return a * np.einsum("nk,k->n", self.design.design, solve_coefficients(self.design, a))
+
+    def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """Normalised residuals of the fitted points (one per bin; per frame when unbinned)."""
+        a = self.regressed_curve(astro, theta)
+        return fit_residuals(self.design, a, solve_coefficients(self.design, a))
+
+    def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                       noise_scale: float = 1.0) -> float:
+        """Gaussian log-likelihood of the binned points the fit is made on."""
+        return fit_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
+
+    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
+                             noise_scale: float = 1.0) -> np.ndarray:
+        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)) and of ``theta``
+        (shape (m, k) or None): the normal equations of all rows are built and solved
+        together."""
+        astro = np.atleast_2d(np.asarray(astro, float))
+        out = (fit_log_likelihood_batch(self.design, self.regressed_curves(astro, theta),
+                                        noise_scale)
+               if self._batch_is_exact(LinearSystematics) else None)
+        return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out

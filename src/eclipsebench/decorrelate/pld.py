@@ -45,14 +45,8 @@ import numpy as np
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .linear import (
-    LinearDesign,
-    fit_log_likelihood,
-    fit_log_likelihood_batch,
-    fit_residuals,
-    solve_coefficients,
-)
+from .base import EpochData, MethodContext, MethodOptions, register
+from .linear import LinearDesign, LinearSystematics, solve_coefficients
 from .record import FitterPolicy, MethodRecord, PaperProfile
 
 __all__ = ["normalised_pixels", "central_stamp", "time_basis", "residual_scatter_curve", "scatter_slope",
@@ -262,7 +256,7 @@ _PLD_PAPER = PaperProfile(
 
 
 @register
-class PixelLevelDecorrelation(Systematics):
+class PixelLevelDecorrelation(LinearSystematics):
     """PLD (Deming et al. 2015; paper Appendix B.5), fitted on binned data.
 
     Options (:class:`PldOptions`)
@@ -353,29 +347,6 @@ class PixelLevelDecorrelation(Systematics):
     def coefficients(self, astro: np.ndarray) -> np.ndarray:
         """The PLD coefficients ``c_i`` (of the unscaled regressors) for ``astro``."""
         return solve_coefficients(self.design, astro) / self.design.col_scale
-
-    def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """``astro * (P_hat c [+ poly])`` at every frame, ``c`` fitted on the bins."""
-        astro = np.asarray(astro, float)
-        return astro * np.einsum("nk,k->n", self.design.design, solve_coefficients(self.design, astro))
-
-    def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """Normalised residuals of the binned fit (one per bin; per frame when unbinned)."""
-        astro = np.asarray(astro, float)
-        return fit_residuals(self.design, astro, solve_coefficients(self.design, astro))
-
-    def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
-                       noise_scale: float = 1.0) -> float:
-        """Gaussian log-likelihood of the binned points the fit is made on."""
-        return fit_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
-
-    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
-                             noise_scale: float = 1.0) -> np.ndarray:
-        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)): the binned
-        normal equations of all rows are built and solved together."""
-        out = (fit_log_likelihood_batch(self.design, astro, noise_scale)
-               if self._batch_is_exact(PixelLevelDecorrelation) else None)
-        return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out
 
     def relative_residuals(self, astro: np.ndarray) -> np.ndarray:
         """``flux / model - 1`` of the unbinned frames, in time order."""

@@ -48,14 +48,8 @@ from numpy.polynomial import legendre
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .linear import (
-    LinearDesign,
-    fit_log_likelihood,
-    fit_log_likelihood_batch,
-    fit_residuals,
-    solve_coefficients,
-)
+from .base import EpochData, MethodContext, MethodOptions, register
+from .linear import LinearDesign, LinearSystematics
 from .record import MethodRecord, PaperProfile
 
 __all__ = ["polynomial_terms", "legendre_design", "scaled_coordinate", "psf_width_columns",
@@ -176,7 +170,7 @@ class LinearModelOptions(Protocol):
     psf_width: bool
 
 
-class LinearDetectorModel(Systematics):
+class LinearDetectorModel(LinearSystematics):
     """A detector model linear in its coefficients, times SPCA's optional PSF-width term.
 
     ``flux = astro * W(theta) * (R c)``: ``R`` are the regressors of the
@@ -208,59 +202,37 @@ class LinearDetectorModel(Systematics):
         if n_points <= basis.shape[1]:
             raise InputError(f"method '{self.name}': {n_points} (binned) points for "
                              f"{basis.shape[1]} regressors; use fewer bin_frames")
-        self.design = LinearDesign(basis, data.flux, data.flux_err, bin_frames,
-                                time=data.time_bmjd)
+        self._design = LinearDesign(basis, data.flux, data.flux_err, bin_frames,
+                                    time=data.time_bmjd)
 
     @abstractmethod
     def regressors(self, data: EpochData) -> np.ndarray:
         """The regressors ``R`` of the model, shape (n, k)."""
 
-    def _gain_astro(self, astro: np.ndarray, theta: np.ndarray | None) -> np.ndarray:
+    @property
+    def design(self) -> LinearDesign:
+        """The regression on the whitened regressors (``with_flux`` swaps its target)."""
+        return self._design
+
+    def regressed_curve(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """``astro * W``: the PSF-width term ``W`` of ``theta`` (1 without it)."""
         astro = np.asarray(astro, float)
         if self.widths is None:
             return astro
         theta = np.zeros(2) if theta is None else np.asarray(theta, float)
         return astro * (1.0 + self.widths[:, 0] * theta[0] + self.widths[:, 1] * theta[1])
 
-    def predict(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """``astro * W * (R c)`` with ``c`` solved by weighted least squares."""
-        scaled = self._gain_astro(astro, theta)
-        return scaled * np.einsum("nk,k->n", self.design.design, solve_coefficients(self.design, scaled))
-
-    def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
-        """Normalised residuals of the fitted points (one per bin; per frame when unbinned).
-
-        The whole fit is made on the bins, as SPCA fits its binned photometry:
-        the coefficients minimise these residuals, and so does the outer fit.
-        """
-        scaled = self._gain_astro(astro, theta)
-        return fit_residuals(self.design, scaled, solve_coefficients(self.design, scaled))
-
-    def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
-                       noise_scale: float = 1.0) -> float:
-        """Gaussian log-likelihood of the binned points the fit is made on."""
-        return fit_log_likelihood(self.design, self.residuals(astro, theta), noise_scale)
-
-    def log_likelihood_batch(self, astro: np.ndarray, theta: np.ndarray | None = None,
-                             noise_scale: float = 1.0) -> np.ndarray:
-        """:meth:`log_likelihood` of every row of ``astro`` (shape (m, n)) and of ``theta``
-        (shape (m, 2) with the PSF-width term): the binned normal equations of all rows
-        are built and solved together."""
-        astro = np.atleast_2d(np.asarray(astro, float))
-        if self.widths is not None:
-            theta = np.zeros((len(astro), 2)) if theta is None else np.atleast_2d(theta)
-            scaled = astro * (1.0 + self.widths[:, 0] * theta[:, :1]
-                              + self.widths[:, 1] * theta[:, 1:2])
-        else:
-            scaled = astro
-        out = (fit_log_likelihood_batch(self.design, scaled, noise_scale)
-               if self._batch_is_exact(LinearDetectorModel) else None)
-        return super().log_likelihood_batch(astro, theta, noise_scale) if out is None else out
+    def regressed_curves(self, astro: np.ndarray, theta: np.ndarray | None) -> np.ndarray:
+        """``astro * W`` of every row of ``astro`` (m, n) and ``theta`` (m, 2) or None."""
+        if self.widths is None:
+            return astro
+        theta = np.zeros((len(astro), 2)) if theta is None else np.atleast_2d(theta)
+        return astro * (1.0 + self.widths[:, 0] * theta[:, :1] + self.widths[:, 1] * theta[:, 1:2])
 
     def with_flux(self, flux: np.ndarray) -> LinearDetectorModel:
         """The same design on new fluxes (equal to a fresh build)."""
         new = self._copy_with_flux(flux)
-        new.design = self.design.with_flux(new.data.flux)
+        new._design = self.design.with_flux(new.data.flux)
         return new
 
     def n_effective_params(self) -> int:

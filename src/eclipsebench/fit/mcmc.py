@@ -30,6 +30,7 @@ rest, and sampling stops once the chain after burn-in is longer than
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -208,25 +209,60 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     move = move or systematics.policy.preferred_move
     n_walkers = max(int(n_walkers), 2 * ndim + 2)
     n_walkers += n_walkers % 2
-    scale = np.where(np.isfinite(scale_start) & (np.asarray(scale_start) > 0),
-                     scale_start, 1e-6 * np.maximum(1.0, np.abs(theta_start)))
-    z = rng.standard_normal((n_walkers, ndim))
-    chol = _cholesky(cov_start, ndim)
-    p0 = theta_start + 0.1 * (z @ chol.T if chol is not None else scale * z)
-    p0 = _fold(p0, lower, upper)
+    p0 = _initial_ball(theta_start, scale_start, cov_start, n_walkers, lower, upper, rng)
 
     log_prob = _LogProb(systematics, astro_model, lower, upper, noise_scale)
     sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, moves=make_moves(move),
                                     vectorize=True)
     sampler.random_state = np.random.RandomState(int(rng.integers(2**32))).get_state()
+    run = _run_blocks(sampler, p0, f"MCMC ({systematics.name})", max_steps=max_steps,
+                      block_steps=block_steps, tau_factor=tau_factor)
+    return _summarise(sampler, run, names=names, move=move)
+
+
+class _ChainRun(NamedTuple):
+    """How far :func:`_run_blocks` ran the chain and what it found."""
+
+    n_steps: int
+    tau: np.ndarray
+    burn_in: int
+    n_over_tau: float
+    converged: bool
+
+
+def _initial_ball(theta_start: np.ndarray, scale_start, cov_start: np.ndarray | None,
+                  n_walkers: int, lower: np.ndarray, upper: np.ndarray,
+                  rng: np.random.Generator) -> np.ndarray:
+    """The walkers' starting points, shape (n_walkers, ndim), folded into the bounds.
+
+    ``theta_start`` plus 10 % of a standard normal deviate times ``scale_start``
+    (a non-positive or non-finite scale: ``1e-6 max(1, |theta|)``), or times
+    the Cholesky factor of ``cov_start`` when that is positive definite.
+    """
+    ndim = len(theta_start)
+    scale = np.where(np.isfinite(scale_start) & (np.asarray(scale_start) > 0),
+                     scale_start, 1e-6 * np.maximum(1.0, np.abs(theta_start)))
+    z = rng.standard_normal((n_walkers, ndim))
+    chol = _cholesky(cov_start, ndim)
+    p0 = theta_start + 0.1 * (z @ chol.T if chol is not None else scale * z)
+    return _fold(p0, lower, upper)
+
+
+def _run_blocks(sampler, p0: np.ndarray, desc: str, *, max_steps: int, block_steps: int,
+                tau_factor: float) -> _ChainRun:
+    """Run ``sampler`` from ``p0`` in blocks until ``N / tau > tau_factor`` or ``max_steps``.
+
+    After each block of ``block_steps`` steps the autocorrelation time is
+    estimated (:func:`_autocorrelation`); ``desc`` labels the progress bar.
+    """
     state = p0
     n_steps = 0
-    tau, burn_in, n_over_tau = np.full(ndim, np.inf), 0, 0.0
+    tau, burn_in, n_over_tau = np.full(p0.shape[1], np.inf), 0, 0.0
     converged = False
     # One BLAS thread: the batched likelihoods are small matrix products, which
     # threads slow down on a shared machine and would sum in a thread-dependent order.
     # A bar on a terminal (quiet and off a terminal: none); it may stop early, at convergence.
-    bar = progress(total=int(max_steps), desc=f"MCMC ({systematics.name})", unit="step")
+    bar = progress(total=int(max_steps), desc=desc, unit="step")
     with threadpool_limits(limits=1, user_api="blas"), bar:
         while n_steps < max_steps:
             steps = min(block_steps, max_steps - n_steps)
@@ -238,15 +274,21 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
             if n_over_tau > tau_factor:
                 converged = True
                 break
+    return _ChainRun(n_steps, tau, burn_in, n_over_tau, converged)
+
+
+def _summarise(sampler, run: _ChainRun, *, names: tuple[str, ...], move: str) -> McmcResult:
+    """The :class:`McmcResult` of a finished chain: burn-in dropped, thinned by ``tau / 2``."""
+    tau = run.tau
     finite = bool(np.all(np.isfinite(tau)))
     thin = max(1, int(0.5 * np.min(tau))) if finite else 1
-    samples = sampler.get_chain(discard=burn_in, thin=thin, flat=True)
+    samples = sampler.get_chain(discard=run.burn_in, thin=thin, flat=True)
     p16, p50, p84 = np.percentile(samples, [15.865525393145708, 50.0, 84.13447460685429], axis=0)
     return McmcResult(names=tuple(names), median=p50, std=np.std(samples, axis=0, ddof=1),
-                      p16=p16, p84=p84, tau=np.asarray(tau, dtype=float), n_steps=n_steps,
-                      n_walkers=n_walkers, burn_in=burn_in, converged=converged,
+                      p16=p16, p84=p84, tau=np.asarray(tau, dtype=float), n_steps=run.n_steps,
+                      n_walkers=sampler.nwalkers, burn_in=run.burn_in, converged=run.converged,
                       acceptance=float(np.mean(sampler.acceptance_fraction)), move=move,
-                      samples=samples, n_over_tau=float(n_over_tau))
+                      samples=samples, n_over_tau=float(run.n_over_tau))
 
 
 def _autocorrelation(chain: np.ndarray) -> tuple[np.ndarray, int, float]:

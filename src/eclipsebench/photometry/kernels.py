@@ -253,14 +253,40 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
     x_lo = px - h
     y_lo = py - h
     d = np.empty((n, n))
+    finite, total = _gauss_box(img, x_lo, y_lo, bg, d)
+    if not finite:
+        return nan, nan, nan, nan, nan, nan, 0.0
+    p = _gauss_start(total, x0, y0, width, fixed)
+    converged = _gauss_levenberg_marquardt(d, x_lo, y_lo, h, p, fixed, width, x0, y0, max_iter)
+    if fixed:
+        return p[1], p[2], width, width, p[0], p[3], 1.0 if converged else 0.0
+    return p[1], p[2], p[3], p[4], p[0], p[5], 1.0 if converged else 0.0
+
+
+@njit(cache=True)
+def _gauss_box(img, x_lo, y_lo, bg, d):
+    """Fill ``d`` (n, n) with the image minus ``bg`` from corner (x_lo, y_lo).
+
+    Returns (True, the sum of ``d``), or (False, 0) at the first non-finite value.
+    """
+    n = d.shape[0]
     total = 0.0
     for j in range(n):
         for i in range(n):
             v = img[y_lo + j, x_lo + i] - bg
             if not math.isfinite(v):
-                return nan, nan, nan, nan, nan, nan, 0.0
+                return False, 0.0
             d[j, i] = v
             total += v
+    return True, total
+
+
+@njit(cache=True)
+def _gauss_start(total, x0, y0, width, fixed):
+    """Starting parameters: (A, x0, y0, C) with a fixed width, else (A, x0, y0, sx, sy, C).
+
+    The amplitude starts at the box's sum, the widths at ``width``, C at 0.
+    """
     npar = 4 if fixed else 6
     p = np.empty(npar)
     p[0] = total
@@ -272,6 +298,19 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
         p[3] = width
         p[4] = width
         p[5] = 0.0
+    return p
+
+
+@njit(cache=True)
+def _gauss_levenberg_marquardt(d, x_lo, y_lo, h, p, fixed, width, x0, y0, max_iter):
+    """Levenberg-Marquardt iterations of the Gaussian fit to the box ``d``, updating ``p``.
+
+    Stops after ``max_iter`` iterations, when the centre moves by less than
+    1e-5 px or chi^2 by less than 1e-14 of itself, or when no damping gives
+    a downhill step. Returns whether it converged.
+    """
+    n = d.shape[0]
+    npar = p.shape[0]
     ex = np.empty(n)
     ey = np.empty(n)
     dex = np.empty(n)
@@ -305,84 +344,111 @@ def _frame_gauss(img, px, py, h, bg, x0, y0, width, fixed, max_iter):
         if not fresh:  # a rejected trial overwrote them
             chi2 = _gauss_chi2(d, x_lo, y_lo, n, p, fixed, width, ex, ey, dex, dey, dexs, deys)
         c = p[3] if fixed else p[5]
-        for i in range(n):
-            xb[0, i] = ex[i]
-            xb[1, i] = dex[i]
-            xb[2, i] = dexs[i]
-            xb[3, i] = 1.0
-            yb[0, i] = ey[i]
-            yb[1, i] = dey[i]
-            yb[2, i] = deys[i]
-            yb[3, i] = 1.0
-        for u in range(4):
-            for v in range(u, 4):
-                su = 0.0
-                sv = 0.0
-                for i in range(n):
-                    su += xb[u, i] * xb[v, i]
-                    sv += yb[u, i] * yb[v, i]
-                sxx[u, v] = su
-                sxx[v, u] = su
-                syy[u, v] = sv
-                syy[v, u] = sv
-        for j in range(n):
-            for i in range(n):
-                res[j, i] = d[j, i] - (p[0] * ex[i] * ey[j] + c)
-        for b in range(4):
-            for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += res[j, i] * yb[b, j]
-                ry[b, i] = acc
-        for q in range(npar):
-            coef[q] = 1.0 if (q == 0 or cx_idx[q] == 3) else p[0]
-        for q in range(npar):
-            acc = 0.0
-            for i in range(n):
-                acc += xb[cx_idx[q], i] * ry[cy_idx[q], i]
-            jtr[q] = coef[q] * acc
-            for k in range(q, npar):
-                v = coef[q] * coef[k] * sxx[cx_idx[q], cx_idx[k]] * syy[cy_idx[q], cy_idx[k]]
-                jtj[q, k] = v
-                jtj[k, q] = v
-        improved = False
-        fresh = False
-        while lam < 1e12:
-            for q in range(npar):
-                for k in range(npar):
-                    a[q, k] = jtj[q, k]
-                a[q, q] += lam * max(jtj[q, q], 1e-300)
-                step[q] = jtr[q]
-            if _solve_small(a, step, npar):
-                for q in range(npar):
-                    trial[q] = p[q] + step[q]
-                ok_w = fixed or (trial[3] > 0.05 and trial[4] > 0.05
-                                 and trial[3] < 10.0 and trial[4] < 10.0)
-                if ok_w and abs(trial[1] - x0) < h and abs(trial[2] - y0) < h:
-                    c2 = _gauss_chi2(d, x_lo, y_lo, n, trial, fixed, width, ex, ey, dex, dey,
-                                     dexs, deys)
-                    if c2 <= chi2:
-                        for q in range(npar):
-                            p[q] = trial[q]
-                        chi2_old = chi2
-                        chi2 = c2
-                        lam = max(lam * 0.1, 1e-9)
-                        improved = True
-                        fresh = True
-                        if (abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5) or (
-                                chi2_old - chi2 <= 1e-14 * chi2_old):
-                            converged = True
-                        break
-            lam *= 10.0
+        _axis_basis(ex, dex, dexs, xb, sxx)
+        _axis_basis(ey, dey, deys, yb, syy)
+        _gauss_residual_rows(d, p[0], c, ex, ey, yb, res, ry)
+        _gauss_normal_equations(p, cx_idx, cy_idx, xb, ry, sxx, syy, coef, jtj, jtr)
+        improved, converged, chi2, lam = _gauss_damped_step(
+            d, x_lo, y_lo, h, p, fixed, width, x0, y0, chi2, lam, jtj, jtr, a, step, trial,
+            ex, ey, dex, dey, dexs, deys)
+        fresh = improved
         if not improved:
             # no downhill step: p is a (numerical) minimum unless the first try failed
             converged = lam >= 1e12 and math.isfinite(chi2)
             break
         if converged:
             break
-    if fixed:
-        return p[1], p[2], width, width, p[0], p[3], 1.0 if converged else 0.0
-    return p[1], p[2], p[3], p[4], p[0], p[5], 1.0 if converged else 0.0
+    return converged
+
+
+@njit(cache=True)
+def _axis_basis(e, de_dc, de_ds, basis, gram):
+    """One axis's vectors (value, d/dcentre, d/dwidth, ones) as the rows of ``basis``
+    (4, n), and their inner products in ``gram`` (4, 4)."""
+    n = e.shape[0]
+    for i in range(n):
+        basis[0, i] = e[i]
+        basis[1, i] = de_dc[i]
+        basis[2, i] = de_ds[i]
+        basis[3, i] = 1.0
+    for u in range(4):
+        for v in range(u, 4):
+            s = 0.0
+            for i in range(n):
+                s += basis[u, i] * basis[v, i]
+            gram[u, v] = s
+            gram[v, u] = s
+
+
+@njit(cache=True)
+def _gauss_residual_rows(d, amp, c, ex, ey, yb, res, ry):
+    """Residuals ``res = d - (amp Ex Ey + c)`` and their projections ``ry[b, i] =
+    sum_j res[j, i] yb[b, j]`` on the y-axis vectors."""
+    n = d.shape[0]
+    for j in range(n):
+        for i in range(n):
+            res[j, i] = d[j, i] - (amp * ex[i] * ey[j] + c)
+    for b in range(4):
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += res[j, i] * yb[b, j]
+            ry[b, i] = acc
+
+
+@njit(cache=True)
+def _gauss_normal_equations(p, cx_idx, cy_idx, xb, ry, sxx, syy, coef, jtj, jtr):
+    """``J^T J`` and ``J^T r`` from the per-axis sums (see :func:`_gauss_levenberg_marquardt`)."""
+    n = xb.shape[1]
+    npar = p.shape[0]
+    for q in range(npar):
+        coef[q] = 1.0 if (q == 0 or cx_idx[q] == 3) else p[0]
+    for q in range(npar):
+        acc = 0.0
+        for i in range(n):
+            acc += xb[cx_idx[q], i] * ry[cy_idx[q], i]
+        jtr[q] = coef[q] * acc
+        for k in range(q, npar):
+            v = coef[q] * coef[k] * sxx[cx_idx[q], cx_idx[k]] * syy[cy_idx[q], cy_idx[k]]
+            jtj[q, k] = v
+            jtj[k, q] = v
+
+
+@njit(cache=True)
+def _gauss_damped_step(d, x_lo, y_lo, h, p, fixed, width, x0, y0, chi2, lam, jtj, jtr, a, step,
+                       trial, ex, ey, dex, dey, dexs, deys):
+    """Raise the damping ``lam`` (x10) until a step lowers chi^2, then take it.
+
+    A step is tried only if its widths stay within 0.05-10 px and its centre
+    within ``h`` px of (x0, y0). Returns (improved, converged, chi2, lam);
+    when improved, ``p`` holds the new parameters and ``ex``... the model's
+    vectors at them.
+    """
+    n = d.shape[0]
+    npar = p.shape[0]
+    while lam < 1e12:
+        for q in range(npar):
+            for k in range(npar):
+                a[q, k] = jtj[q, k]
+            a[q, q] += lam * max(jtj[q, q], 1e-300)
+            step[q] = jtr[q]
+        if _solve_small(a, step, npar):
+            for q in range(npar):
+                trial[q] = p[q] + step[q]
+            ok_w = fixed or (trial[3] > 0.05 and trial[4] > 0.05
+                             and trial[3] < 10.0 and trial[4] < 10.0)
+            if ok_w and abs(trial[1] - x0) < h and abs(trial[2] - y0) < h:
+                c2 = _gauss_chi2(d, x_lo, y_lo, n, trial, fixed, width, ex, ey, dex, dey,
+                                 dexs, deys)
+                if c2 <= chi2:
+                    for q in range(npar):
+                        p[q] = trial[q]
+                    lam = max(lam * 0.1, 1e-9)
+                    converged = (abs(step[1]) < 1e-5 and abs(step[2]) < 1e-5) or (
+                        chi2 - c2 <= 1e-14 * chi2)
+                    return True, converged, c2, lam
+        lam *= 10.0
+    return False, False, chi2, lam
 
 
 @njit(cache=True)
@@ -546,101 +612,132 @@ def measure_frames(frames, guess_x, guess_y, stamp_x, stamp_y, search_half, box_
     stamps ``stamp3`` (n, 3, 3) and ``stamp5`` (n, 5, 5).
     """
     n = frames.shape[0]
-    ny = frames.shape[1]
-    nx = frames.shape[2]
     nbuf = int((2 * r_out + 3) * (2 * r_out + 3)) + 1
     nvar = var_a.shape[0]
     for f in prange(n):
         img = frames[f]
         buf = np.empty(nbuf)
+        row = out[f]
         for c in range(N_COLUMNS):
-            out[f, c] = np.nan
+            row[c] = np.nan
         px, py = _frame_peak(img, guess_x[f], guess_y[f], search_half)
         if px < 0:
-            for k in range(radii.shape[0]):
-                ap_sums[f, k] = np.nan
-                ap_areas[f, k] = np.nan
-            for k in range(nvar):
-                var_sums[f, k] = np.nan
-                var_areas[f, k] = np.nan
-                var_radii[f, k] = np.nan
-            for a in range(3):
-                for b in range(3):
-                    stamp3[f, a, b] = np.nan
-            for a in range(5):
-                for b in range(5):
-                    stamp5[f, a, b] = np.nan
+            _no_star(ap_sums[f], ap_areas[f], var_sums[f], var_areas[f], var_radii[f],
+                     stamp3[f], stamp5[f])
             continue
-        out[f, 0] = px
-        out[f, 1] = py
+        row[0] = px
+        row[1] = py
         bg0, _m, _s, _n = _frame_annulus(img, float(px), float(py), r_in, r_out, 0.0, 0, buf)
-        out[f, 2] = bg0
-        xcol, ycol, beta = _frame_col(img, px, py, box_half, bg0)
-        out[f, 3] = xcol
-        out[f, 4] = ycol
-        out[f, 5] = beta
-        xg, yg, sxg, syg, ag, cg, okg = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol,
-                                                     GAUSS_START_WIDTH_PX, False, max_iter)
-        out[f, 6] = xg
-        out[f, 7] = yg
-        out[f, 8] = sxg
-        out[f, 9] = syg
-        out[f, 10] = ag
-        out[f, 11] = cg
-        out[f, 12] = okg
-        if fixed_width > 0.0:
-            xf, yf, _a, _b, _c, _d, okf = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol,
-                                                       fixed_width, True, max_iter)
-            out[f, 13] = xf
-            out[f, 14] = yf
-            out[f, 15] = okf
-        if want_lsq:
-            xl, yl, okl = _frame_lsq_asym(img, px, py, bg0, LSQ_GRID_HALF_PX, LSQ_WINDOW_PX)
-            out[f, 16] = xl
-            out[f, 17] = yl
-            out[f, 18] = okl
+        row[2] = bg0
+        _centroid_set(img, px, py, box_half, bg0, fixed_width, max_iter, want_lsq, row)
+        beta = row[5]
         if centroid_code == 0:
-            xc, yc = xcol, ycol
+            xc, yc = row[3], row[4]
         elif centroid_code == 1:
-            xc, yc = xg, yg
+            xc, yc = row[6], row[7]
         elif centroid_code == 2:
-            xc, yc = out[f, 13], out[f, 14]
+            xc, yc = row[13], row[14]
         else:
-            xc, yc = out[f, 16], out[f, 17]
-        out[f, 19] = xc
-        out[f, 20] = yc
+            xc, yc = row[16], row[17]
+        row[19] = xc
+        row[20] = yc
         if math.isfinite(xc) and math.isfinite(yc):
             mean, med, std, nb = _frame_annulus(img, xc, yc, r_in, r_out, clip_sigma, clip_iters,
                                                 buf)
         else:
             mean, med, std, nb = np.nan, np.nan, np.nan, 0
-        out[f, 21] = mean
-        out[f, 22] = med
-        out[f, 23] = std
-        out[f, 24] = nb
+        row[21] = mean
+        row[22] = med
+        row[23] = std
+        row[24] = nb
         bg = med if use_median else mean
         _frame_apertures(img, xc, yc, radii, ap_sums[f], ap_areas[f])
         if nvar > 0:
-            vr = np.empty(nvar)
-            for k in range(nvar):
-                vr[k] = var_a[k] * math.sqrt(beta) + var_b[k]
-                var_radii[f, k] = vr[k]
-            if math.isfinite(beta):
-                _frame_apertures(img, xc, yc, vr, var_sums[f], var_areas[f])
+            _variable_apertures(img, xc, yc, beta, var_a, var_b, var_radii[f],
+                                      var_sums[f], var_areas[f])
+        _stamps(img, stamp_x[f], stamp_y[f], bg, stamp3[f], stamp5[f])
+
+
+@njit(cache=True)
+def _no_star(ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5):
+    """NaN in every aperture, variable-aperture and stamp output of a frame with no star."""
+    for k in range(ap_sums.shape[0]):
+        ap_sums[k] = np.nan
+        ap_areas[k] = np.nan
+    for k in range(var_sums.shape[0]):
+        var_sums[k] = np.nan
+        var_areas[k] = np.nan
+        var_radii[k] = np.nan
+    for a in range(3):
+        for b in range(3):
+            stamp3[a, b] = np.nan
+    for a in range(5):
+        for b in range(5):
+            stamp5[a, b] = np.nan
+
+
+@njit(cache=True)
+def _centroid_set(img, px, py, box_half, bg0, fixed_width, max_iter, want_lsq, row):
+    """Every centroid of one frame about its peak (px, py), into ``row`` (:data:`COLUMNS`).
+
+    Center of light and noise pixels, the free-width Gaussian started there,
+    the fixed-width one when ``fixed_width > 0`` and the least-asymmetry
+    centroid when ``want_lsq``; the columns of the fits not run stay as they are.
+    """
+    xcol, ycol, beta = _frame_col(img, px, py, box_half, bg0)
+    row[3] = xcol
+    row[4] = ycol
+    row[5] = beta
+    xg, yg, sxg, syg, ag, cg, okg = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol,
+                                                 GAUSS_START_WIDTH_PX, False, max_iter)
+    row[6] = xg
+    row[7] = yg
+    row[8] = sxg
+    row[9] = syg
+    row[10] = ag
+    row[11] = cg
+    row[12] = okg
+    if fixed_width > 0.0:
+        xf, yf, _a, _b, _c, _d, okf = _frame_gauss(img, px, py, box_half, bg0, xcol, ycol,
+                                                   fixed_width, True, max_iter)
+        row[13] = xf
+        row[14] = yf
+        row[15] = okf
+    if want_lsq:
+        xl, yl, okl = _frame_lsq_asym(img, px, py, bg0, LSQ_GRID_HALF_PX, LSQ_WINDOW_PX)
+        row[16] = xl
+        row[17] = yl
+        row[18] = okl
+
+
+@njit(cache=True)
+def _variable_apertures(img, xc, yc, beta, var_a, var_b, var_radii, var_sums, var_areas):
+    """Aperture sums and areas at the radii ``a sqrt(beta) + b`` (NaN when beta is not finite)."""
+    nvar = var_a.shape[0]
+    vr = np.empty(nvar)
+    for k in range(nvar):
+        vr[k] = var_a[k] * math.sqrt(beta) + var_b[k]
+        var_radii[k] = vr[k]
+    if math.isfinite(beta):
+        _frame_apertures(img, xc, yc, vr, var_sums, var_areas)
+    else:
+        for k in range(nvar):
+            var_sums[k] = np.nan
+            var_areas[k] = np.nan
+
+
+@njit(cache=True)
+def _stamps(img, sx0, sy0, bg, stamp3, stamp5):
+    """The 5x5 and 3x3 stamps about pixel (sx0, sy0) minus ``bg``; NaN off the image."""
+    ny, nx = img.shape
+    for a in range(5):
+        for b in range(5):
+            j = sy0 - 2 + a
+            i = sx0 - 2 + b
+            if 0 <= j < ny and 0 <= i < nx:
+                v = img[j, i] - bg
             else:
-                for k in range(nvar):
-                    var_sums[f, k] = np.nan
-                    var_areas[f, k] = np.nan
-        sx0 = stamp_x[f]
-        sy0 = stamp_y[f]
-        for a in range(5):
-            for b in range(5):
-                j = sy0 - 2 + a
-                i = sx0 - 2 + b
-                if 0 <= j < ny and 0 <= i < nx:
-                    v = img[j, i] - bg
-                else:
-                    v = np.nan
-                stamp5[f, a, b] = v
-                if 1 <= a <= 3 and 1 <= b <= 3:
-                    stamp3[f, a - 1, b - 1] = v
+                v = np.nan
+            stamp5[a, b] = v
+            if 1 <= a <= 3 and 1 <= b <= 3:
+                stamp3[a - 1, b - 1] = v

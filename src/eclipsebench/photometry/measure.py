@@ -25,7 +25,7 @@ frames passed in.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -130,40 +130,81 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
     var_b = np.asarray([ab[1] for ab in opt.variable_apertures], dtype=np.float64)
     width = gauss_width_px if gauss_width_px is not None else opt.gauss_width_px
     code = kernels.CENTROID_CODES[opt.centroid]
-
-    def run(fixed_width: float, centroid_code: int):
-        out = np.empty((n, kernels.N_COLUMNS))
-        ap_sums = np.empty((n, radii_arr.size))
-        ap_areas = np.empty((n, radii_arr.size))
-        nv = var_a.size
-        var_sums = np.empty((n, nv))
-        var_areas = np.empty((n, nv))
-        var_radii = np.empty((n, nv))
-        stamp3 = np.empty((n, 3, 3))
-        stamp5 = np.empty((n, 5, 5))
-        # float64 chunks: one compiled specialisation, bounded extra memory
-        for a in range(0, n, _CHUNK):
-            b = min(a + _CHUNK, n)
-            chunk = np.ascontiguousarray(frames[a:b], dtype=np.float64)
-            kernels.measure_frames(
-                chunk, gx[a:b], gy[a:b], sx[a:b], sy[a:b], int(opt.search_px),
-                int(opt.box_px // 2), float(opt.annulus_px[0]), float(opt.annulus_px[1]),
-                float(opt.clip_sigma), int(opt.clip_iters), radii_arr, var_a, var_b,
-                float(fixed_width), int(centroid_code), opt.background == "median",
-                int(opt.gauss_max_iter), opt.centroid == "lsq-asym", out[a:b], ap_sums[a:b],
-                ap_areas[a:b], var_sums[a:b], var_areas[a:b], var_radii[a:b], stamp3[a:b],
-                stamp5[a:b])
-        return out, ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5
+    stack = (frames, (gx, gy, sx, sy), opt, radii_arr, var_a, var_b)
 
     if opt.centroid == "gauss-fixed" and width is None:
-        first = run(0.0, kernels.CENTROID_CODES["gauss"])[0]
-        ok = (first[:, kernels.IDX["ok_gauss"]] > 0)
-        widths = 0.5 * (first[ok, kernels.IDX["width_x"]] + first[ok, kernels.IDX["width_y"]])
-        widths = widths[np.isfinite(widths)]
-        width = float(np.median(widths)) if widths.size else 0.7
+        width = _median_free_width(_run_kernels(*stack, 0.0, kernels.CENTROID_CODES["gauss"]).out)
     fixed = float(width) if width is not None else 0.0  # 0: no fixed-width fit
-    out, ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5 = run(fixed, code)
+    raw = _run_kernels(*stack, fixed, code)
+    result = _position_columns(raw.out, opt, fixed)
+    result.update(_flux_columns(raw, result["background"], radii, opt, fowler=fowler, wait=wait,
+                                read_noise_e=read_noise_e))
+    return result
 
+
+class _KernelOutput(NamedTuple):
+    """The arrays :func:`kernels.measure_frames` fills, for every frame of a stack."""
+
+    out: np.ndarray
+    ap_sums: np.ndarray
+    ap_areas: np.ndarray
+    var_sums: np.ndarray
+    var_areas: np.ndarray
+    var_radii: np.ndarray
+    stamp3: np.ndarray
+    stamp5: np.ndarray
+
+
+def _run_kernels(frames: np.ndarray, positions: tuple[np.ndarray, ...], opt: PhotometrySection,
+                 radii_arr: np.ndarray, var_a: np.ndarray, var_b: np.ndarray,
+                 fixed_width: float, centroid_code: int) -> _KernelOutput:
+    """:func:`kernels.measure_frames` over ``frames`` in float64 chunks of ``_CHUNK`` frames.
+
+    ``positions`` are the per-frame ``(guess_x, guess_y, stamp_x, stamp_y)``;
+    ``fixed_width`` 0 skips the fixed-width Gaussian fit.
+    """
+    gx, gy, sx, sy = positions
+    n = frames.shape[0]
+    out = np.empty((n, kernels.N_COLUMNS))
+    ap_sums = np.empty((n, radii_arr.size))
+    ap_areas = np.empty((n, radii_arr.size))
+    nv = var_a.size
+    var_sums = np.empty((n, nv))
+    var_areas = np.empty((n, nv))
+    var_radii = np.empty((n, nv))
+    stamp3 = np.empty((n, 3, 3))
+    stamp5 = np.empty((n, 5, 5))
+    # float64 chunks: one compiled specialisation, bounded extra memory
+    for a in range(0, n, _CHUNK):
+        b = min(a + _CHUNK, n)
+        chunk = np.ascontiguousarray(frames[a:b], dtype=np.float64)
+        kernels.measure_frames(
+            chunk, gx[a:b], gy[a:b], sx[a:b], sy[a:b], int(opt.search_px),
+            int(opt.box_px // 2), float(opt.annulus_px[0]), float(opt.annulus_px[1]),
+            float(opt.clip_sigma), int(opt.clip_iters), radii_arr, var_a, var_b,
+            float(fixed_width), int(centroid_code), opt.background == "median",
+            int(opt.gauss_max_iter), opt.centroid == "lsq-asym", out[a:b], ap_sums[a:b],
+            ap_areas[a:b], var_sums[a:b], var_areas[a:b], var_radii[a:b], stamp3[a:b],
+            stamp5[a:b])
+    return _KernelOutput(out, ap_sums, ap_areas, var_sums, var_areas, var_radii, stamp3, stamp5)
+
+
+def _median_free_width(out: np.ndarray) -> float:
+    """The median free-fit Gaussian width ``(width_x + width_y) / 2`` of the frames whose
+    fit converged (0.7 px when none did): the width of a ``gauss-fixed`` run left unset."""
+    ok = (out[:, kernels.IDX["ok_gauss"]] > 0)
+    widths = 0.5 * (out[ok, kernels.IDX["width_x"]] + out[ok, kernels.IDX["width_y"]])
+    widths = widths[np.isfinite(widths)]
+    return float(np.median(widths)) if widths.size else 0.7
+
+
+def _position_columns(out: np.ndarray, opt: PhotometrySection,
+                      fixed: float) -> dict[str, np.ndarray]:
+    """The centroid, width, noise-pixel and background columns of the kernels' ``out``.
+
+    The fixed-width Gaussian's columns are there when ``fixed > 0``, the
+    least-asymmetry ones when it is the chosen centroid.
+    """
     col = {name: out[:, k] for name, k in kernels.IDX.items()}
     bg = col["bg_median"] if opt.background == "median" else col["bg_mean"]
     result: dict[str, np.ndarray] = {
@@ -180,25 +221,34 @@ def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp
     if fixed > 0.0:
         result.update({"x_gfix": col["x_gfix"], "y_gfix": col["y_gfix"],
                        "gfix_ok": col["ok_gfix"] > 0})
-        result["gauss_fixed_width"] = np.full(n, fixed)
+        result["gauss_fixed_width"] = np.full(len(out), fixed)
     if opt.centroid == "lsq-asym":
         result.update({"x_lsq": col["x_lsq"], "y_lsq": col["y_lsq"],
                        "lsq_ok": col["ok_lsq"] > 0})
-    net = ap_sums - bg[:, None] * ap_areas
+    return result
+
+
+def _flux_columns(raw: _KernelOutput, bg: np.ndarray, radii: list[float], opt: PhotometrySection,
+                  *, fowler: int, wait: int, read_noise_e: float) -> dict[str, np.ndarray]:
+    """The aperture fluxes (net of ``bg`` times the area), the main flux's uncertainty,
+    the variable apertures' fluxes and radii, and the stamps."""
+    result: dict[str, np.ndarray] = {}
+    net = raw.ap_sums - bg[:, None] * raw.ap_areas
     k_main = radii.index(float(opt.radius_px))
     result["flux"] = net[:, k_main]
-    result["flux_err"] = flux_uncertainty(ap_sums[:, k_main], bg, ap_areas[:, k_main],
-                                          col["bg_npix"], fowler=fowler, wait=wait,
-                                          read_noise_e=read_noise_e, read=opt.noise_read)
-    result["flux_raw"] = ap_sums[:, k_main]
-    result["aperture_area"] = ap_areas[:, k_main]
+    result["flux_err"] = flux_uncertainty(raw.ap_sums[:, k_main], bg, raw.ap_areas[:, k_main],
+                                          raw.out[:, kernels.IDX["bg_npix"]], fowler=fowler,
+                                          wait=wait, read_noise_e=read_noise_e,
+                                          read=opt.noise_read)
+    result["flux_raw"] = raw.ap_sums[:, k_main]
+    result["aperture_area"] = raw.ap_areas[:, k_main]
     for k, r in enumerate(radii):
         if any(abs(r - float(q)) < 1e-12 for q in opt.radii_px):
             result[f"flux_{radius_name(r)}"] = net[:, k]
     for k, (a, b) in enumerate(opt.variable_apertures):
         name = variable_name(a, b)
-        result[f"flux_{name}"] = var_sums[:, k] - bg * var_areas[:, k]
-        result[f"radius_{name}"] = var_radii[:, k]
-    result["stamp3"] = stamp3
-    result["stamp5"] = stamp5
+        result[f"flux_{name}"] = raw.var_sums[:, k] - bg * raw.var_areas[:, k]
+        result[f"radius_{name}"] = raw.var_radii[:, k]
+    result["stamp3"] = raw.stamp3
+    result["stamp5"] = raw.stamp5
     return result
