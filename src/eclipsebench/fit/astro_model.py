@@ -78,24 +78,37 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
-from numba import njit
 
 from ..astro.batman_core import quadratic_transit, sky_separation
 from ..astro.eclipse import EclipseShape
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..astro.phase_curves import harmonic_curve, harmonic_summary
 from ..errors import InputError
+from .astro_kernels import _NO_TABLE, _astro_rows, _interp_table, _search_table
+from .astro_parts import (
+    NONNEGATIVE_SCALE,
+    SCALES,
+    TRANSIT_BOUNDS,
+    TRANSIT_FREE,
+    VisibleFraction,
+    aor_order,
+    box_visible_fraction,
+    half_depth_duration,
+    inclination_deg,
+    integration_offsets_d,
+    q_from_u,
+    system_period_days,
+    u_from_q,
+)
 from .names import ECLIPSE_SHAPES, EVENTS, PHASE_CURVE_MODELS, PHASE_MODELS, RAMP_MODELS
 
 __all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES",
            "EVENTS", "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u",
            "u_from_q", "integration_offsets_d", "aor_order"]
 
-#: The transit's optional free parameters, in the order they take in the vector.
-TRANSIT_FREE = ("a_rs", "b", "q1", "q2")
 
 _PHASE_NAMES = {
     "flat": (),
@@ -110,142 +123,9 @@ _RAMP_NAMES = {
     "linear": ("ramp_slope_per_day",),
     "exponential": ("ramp_amplitude", "ramp_tau_days"),
 }
-# Typical magnitude of each parameter: sets finite-difference steps (1 % of it)
-# and the size of the initial MCMC ball.
-_SCALES = {"depth": 1e-4, "t_ecl_bmjd": 1e-3, "c1_per_day": 1e-3, "c2_per_day2": 1e-3,
-           "c_cos": 1e-4, "c_sin": 1e-4, "ramp_slope_per_day": 1e-3, "ramp_amplitude": 1e-3,
-           "ramp_tau_days": 1e-2, "rp_rs": 1e-3, "t_transit_bmjd": 1e-3, "a_rs": 1e-2,
-           "b": 1e-2, "q1": 1e-2, "q2": 1e-2, "phase_a1": 1e-4, "phase_b1": 1e-4,
-           "phase_a2": 1e-4, "phase_b2": 1e-4, "aor_offset": 1e-4}
-#: Bounds of the transit's parameters (also the MCMC's uniform prior): q1, q2 in
-#: [0, 1] is Kipping's (2013) physically allowed triangle.
-_TRANSIT_BOUNDS = {"rp_rs": (0.0, 0.5), "a_rs": (1.5, 200.0), "b": (0.0, 1.5),
-                   "q1": (0.0, 1.0), "q2": (0.0, 1.0)}
-#: Longest sub-exposure (s) over which a row's model is averaged (:func:`integration_offsets_d`).
-MAX_SUBEXPOSURE_S = 10.0
-#: Scale (planet-to-star flux ratio) of the least-squares penalty residual that keeps a
-#: phase curve's minimum non-negative (``nonnegative_planet``): -1 ppm adds 1 to chi2.
-NONNEGATIVE_SCALE = 1e-6
 #: Sky separation (stellar radii) that batman's rsky gives when the planet is behind the
 #: star; also the value outside the tabulated transit window (no overlap for rp_rs <= 0.5).
 _FAR = 100.0
-
-
-def integration_offsets_d(exposure_s: float,
-                          max_step_s: float = MAX_SUBEXPOSURE_S) -> np.ndarray:
-    """Offsets (days) from a row's mid-time at which its model is averaged over the exposure.
-
-    The midpoint rule with ``n = ceil(exposure_s / max_step_s)`` equal
-    sub-exposures: the numerical resampling ("supersampling") of Kipping (2010,
-    MNRAS 408, 1758) for long integrations (one row per 64-frame cube). A 2 s
-    frame is one sample at its mid-time (offset 0).
-
-    Examples
-    --------
-    >>> integration_offsets_d(2.0).tolist()
-    [0.0]
-    >>> (integration_offsets_d(30.0) * 86400.0).round(6).tolist()
-    [-10.0, 0.0, 10.0]
-    """
-    if not (math.isfinite(exposure_s) and exposure_s >= 0):
-        raise InputError(f"exposure_s {exposure_s!r}: expected a non-negative exposure in s")
-    n = max(1, int(math.ceil(exposure_s / max_step_s - 1e-9)))
-    return ((np.arange(n) + 0.5) / n - 0.5) * (exposure_s / 86400.0)
-
-
-def aor_order(time_bmjd: np.ndarray, aorkey: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The AORs in the order of their first frame, and each frame's rank in that order.
-
-    Examples
-    --------
-    >>> keys, rank = aor_order(np.array([3.0, 1.0, 2.0, 4.0]), np.array([7, 9, 9, 7]))
-    >>> keys.tolist(), rank.tolist()
-    ([9, 7], [1, 0, 0, 1])
-    """
-    keys, inverse = np.unique(np.asarray(aorkey), return_inverse=True)
-    first = np.full(len(keys), np.inf)
-    np.minimum.at(first, inverse.ravel(), np.asarray(time_bmjd, dtype=float))
-    order = np.argsort(first, kind="stable")
-    rank = np.empty(len(order), dtype=np.int64)
-    rank[order] = np.arange(len(order))
-    return keys[order], rank[inverse.ravel()]
-
-
-class VisibleFraction(Protocol):
-    """Anything with ``visible_fraction(t_ecl_bmjd) -> ndarray`` (the astro API)."""
-
-    def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray: ...
-
-
-def system_period_days(system: Any) -> float | None:
-    """The orbital period of ``system`` in days, or None if it does not say."""
-    for name in ("period_days", "period_d", "period"):
-        value = getattr(system, name, None)
-        if value is not None:
-            return float(value)
-    return None
-
-
-def box_visible_fraction(time_bmjd: np.ndarray, t_ecl_bmjd: float | np.ndarray, duration_d: float,
-                         exposure_d: float) -> np.ndarray:
-    """A box eclipse averaged over each exposure.
-
-    The planet is invisible for ``|t - t_ecl| < duration_d / 2``; a frame of
-    length ``exposure_d`` that straddles a contact sees the fraction of its
-    exposure outside the box, which keeps the model continuous in ``t_ecl``
-    (a fitter can move the box by less than a frame).
-    """
-    edge = (np.abs(np.asarray(time_bmjd) - t_ecl_bmjd) - 0.5 * duration_d) / exposure_d + 0.5
-    return np.clip(edge, 0.0, 1.0)
-
-
-def _half_depth_duration(time_bmjd: np.ndarray, visible: np.ndarray) -> float | None:
-    """Time between the v = 0.5 crossings of ingress and egress, or None."""
-    below = np.flatnonzero(visible < 0.5)
-    if len(below) == 0 or below[0] == 0 or below[-1] == len(visible) - 1:
-        return None
-    i, j = below[0], below[-1]
-    t_in = np.interp(0.5, [visible[i], visible[i - 1]], [time_bmjd[i], time_bmjd[i - 1]])
-    t_out = np.interp(0.5, [visible[j], visible[j + 1]], [time_bmjd[j], time_bmjd[j + 1]])
-    return float(t_out - t_in)
-
-
-def u_from_q(q1: float, q2: float) -> tuple[float, float]:
-    """Quadratic limb-darkening coefficients from Kipping's (2013) q1, q2 (his Eqs. 15-16).
-
-    Examples
-    --------
-    >>> u_from_q(0.25, 0.25)
-    (0.25, 0.25)
-    """
-    root = math.sqrt(q1)
-    return 2.0 * root * q2, root * (1.0 - 2.0 * q2)
-
-
-def q_from_u(u1: float, u2: float) -> tuple[float, float]:
-    """Kipping's (2013) q1, q2 of quadratic coefficients u1, u2 (his Eqs. 17-18).
-
-    ``q2`` is 0 when ``u1 + u2 = 0`` (a uniform disc, where it is undefined).
-
-    Examples
-    --------
-    >>> q_from_u(0.25, 0.25)
-    (0.25, 0.25)
-    """
-    total = u1 + u2
-    return total * total, (u1 / (2.0 * total) if total != 0 else 0.0)
-
-
-def _inclination_deg(a_rs: float, b: float, ecc: float, omega_deg: float) -> float:
-    """Inclination (deg) of impact parameter ``b`` (Winn 2010, Eq. 7, inverted).
-
-    ``b = a cos i (1 - e^2) / (1 + e sin omega)``, the form of
-    :attr:`eclipsebench.astro.catalogue.PlanetSystem.impact_parameter`; cos i
-    is kept in [0, 1] (a ``b`` that ``a_rs`` cannot reach gives i = 0).
-    """
-    w = math.radians(omega_deg)
-    cos_i = b * (1.0 + ecc * math.sin(w)) / (a_rs * (1.0 - ecc * ecc))
-    return math.degrees(math.acos(min(max(cos_i, 0.0), 1.0)))
 
 
 class _TransitCurve:
@@ -589,9 +469,9 @@ class AstroModel:
         if system is not None and self.period_d:
             mid = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
             grid = mid + np.linspace(-0.25, 0.25, 20001) * self.period_d
-            return _half_depth_duration(grid, EclipseShape(grid, system).visible_fraction(mid))
+            return half_depth_duration(grid, EclipseShape(grid, system).visible_fraction(mid))
         mid = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
-        return _half_depth_duration(self.time_bmjd, np.asarray(shape.visible_fraction(mid)))
+        return half_depth_duration(self.time_bmjd, np.asarray(shape.visible_fraction(mid)))
 
     def __len__(self) -> int:
         return len(self.names)
@@ -617,7 +497,7 @@ class AstroModel:
     @property
     def scales(self) -> np.ndarray:
         """Typical magnitude of each parameter (finite-difference steps, MCMC ball)."""
-        return np.array([_SCALES["aor_offset" if n.startswith("aor_offset_") else n]
+        return np.array([SCALES["aor_offset" if n.startswith("aor_offset_") else n]
                          for n in self.names])
 
     @property
@@ -639,13 +519,13 @@ class AstroModel:
         if self.event == "phase-curve":
             lo[1] -= 0.5 * self._period()
             hi[1] += 0.5 * self._period()
-            lo[2], hi[2] = _TRANSIT_BOUNDS["rp_rs"]
+            lo[2], hi[2] = TRANSIT_BOUNDS["rp_rs"]
             if self.n_aor:
                 lo[-self.n_aor:], hi[-self.n_aor:] = -0.5, 0.5
         if self.event == "transit":
             for i, name in enumerate(self.names[:2 + self.n_shape]):
-                if name in _TRANSIT_BOUNDS:
-                    lo[i], hi[i] = _TRANSIT_BOUNDS[name]
+                if name in TRANSIT_BOUNDS:
+                    lo[i], hi[i] = TRANSIT_BOUNDS[name]
         if self.ramp == "exponential":
             k = 2 + self.n_shape + self.n_phase
             lo[k], hi[k] = -0.2, 0.2
@@ -748,7 +628,7 @@ class AstroModel:
         for i, name in enumerate(self.transit_free):
             values[name] = float(theta[2 + i])
         if {"a_rs", "b"} & set(self.transit_free):
-            values["inc_deg"] = _inclination_deg(values["a_rs"], values["b"], self.ecc,
+            values["inc_deg"] = inclination_deg(values["a_rs"], values["b"], self.ecc,
                                                  self.omega_deg)
         else:
             values["inc_deg"] = self._inc_fixed_deg
@@ -1074,101 +954,3 @@ class AstroModel:
         return out
 
 
-def _search_table(xp: np.ndarray, fp: np.ndarray) -> tuple:
-    """``(xp, fp, slopes, start, step, index)`` for :func:`_interp_table`.
-
-    ``index[k]`` is the last ``j`` with ``xp[j] <= start + k * step`` on a
-    uniform grid whose step is the smallest spacing of ``xp`` (so a cell
-    holds at most one table point); ``slopes`` are :func:`numpy.interp`'s.
-    """
-    step = float(np.min(np.diff(xp)))
-    cells = np.arange(int(np.ceil((xp[-1] - xp[0]) / step)) + 2)
-    index = np.searchsorted(xp, xp[0] + cells * step, side="right") - 1
-    slopes = (fp[1:] - fp[:-1]) / (xp[1:] - xp[:-1])
-    return (np.ascontiguousarray(xp), np.ascontiguousarray(fp), slopes, float(xp[0]), step,
-            np.clip(index, 0, len(xp) - 2).astype(np.int64))
-
-
-#: Placeholder table arguments of :func:`_astro_rows` for the box eclipse.
-_NO_TABLE = (np.zeros(2), np.ones(2), np.zeros(1), 0.0, 1.0, np.zeros(1, dtype=np.int64))
-
-
-@njit(cache=True)
-def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, exposure,
-                xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
-    """``AstroModel.__call__`` of every row of ``thetas``, one compiled pass per row.
-
-    The expressions are those of :meth:`AstroModel.planet`,
-    :func:`box_visible_fraction` (``box``) or :func:`_interp_table` (the
-    physical shape's table), and :meth:`AstroModel.ramp_factor` (linear ramp
-    when ``ramp_at >= 0``), in the same order, so each value is the same.
-    """
-    m, n = thetas.shape[0], len(time)
-    out = np.empty((m, n))
-    last = len(xp) - 1
-    cells = len(index) - 1
-    for i in range(m):
-        depth, t_ecl = thetas[i, 0], thetas[i, 1]
-        c0 = thetas[i, 2] if phase_code >= 1 else 0.0
-        c1 = thetas[i, 3] if phase_code == 2 else 0.0
-        slope = thetas[i, ramp_at] if ramp_at >= 0 else 0.0
-        for k in range(n):
-            dt = time[k] - t_ecl
-            if phase_code == 0:
-                p = depth
-            elif phase_code == 1:
-                p = depth + c0 * dt
-            else:
-                p = depth + dt * (c0 + c1 * dt)
-            if box:
-                v = min(max((abs(dt) - box_half) / exposure + 0.5, 0.0), 1.0)
-            elif dt < xp[0] or dt > xp[last]:
-                v = 1.0
-            elif dt == xp[last]:
-                v = fp[last]
-            else:   # j: the last table point at or below dt (uniform index, then corrected)
-                j = index[min(max(int((dt - start) / step), 0), cells)]
-                while j > 0 and xp[j] > dt:
-                    j -= 1
-                while j < last - 1 and xp[j + 1] <= dt:
-                    j += 1
-                v = fp[j] if xp[j] == dt else slopes[j] * (dt - xp[j]) + fp[j]
-            f = 1.0 + v * p
-            if ramp_at >= 0:
-                f = f * (1.0 + slope * (time[k] - t_start))
-            out[i, k] = f
-    return out
-
-
-def _interp_table(x: np.ndarray, table: tuple) -> np.ndarray:
-    """``numpy.interp(x, xp, fp, left=1, right=1)`` of a 2-D ``x``, with an O(1) search.
-
-    Same formula as numpy's (``slope[j] * (x - xp[j]) + fp[j]``, ``fp[j]``
-    where ``x == xp[j]``, ``fp[-1]`` at the last point), so the values are
-    identical; ``j`` comes from the uniform index of :func:`_search_table`.
-    """
-    xp, fp, slopes, start, step, index = table
-    return _interp_rows(np.ascontiguousarray(x, dtype=float), xp, fp, slopes, start, step, index)
-
-
-@njit(cache=True)
-def _interp_rows(x, xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
-    m, n = x.shape
-    out = np.empty((m, n))
-    last = len(xp) - 1
-    cells = len(index) - 1
-    for i in range(m):
-        for k in range(n):
-            xv = x[i, k]
-            if xv < xp[0] or xv > xp[last]:
-                out[i, k] = 1.0
-            elif xv == xp[last]:
-                out[i, k] = fp[last]
-            else:
-                j = index[min(max(int((xv - start) / step), 0), cells)]
-                while j > 0 and xp[j] > xv:
-                    j -= 1
-                while j < last - 1 and xp[j + 1] <= xv:
-                    j += 1
-                out[i, k] = fp[j] if xp[j] == xv else slopes[j] * (xv - xp[j]) + fp[j]
-    return out
