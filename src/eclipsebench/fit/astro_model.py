@@ -85,11 +85,13 @@ import numpy as np
 from ..astro.batman_core import quadratic_transit, sky_separation
 from ..astro.eclipse import EclipseShape
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
-from ..astro.phase_curves import harmonic_curve, harmonic_summary
+from ..astro.phase_curves import harmonic_summary
 from ..errors import InputError
 from .astro_kernels import _NO_TABLE, _astro_rows, _interp_table, _search_table
 from .astro_parts import (
     NONNEGATIVE_SCALE,
+    PHASE_TERMS,
+    RAMPS,
     SCALES,
     TRANSIT_BOUNDS,
     TRANSIT_FREE,
@@ -110,19 +112,6 @@ __all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "E
            "u_from_q", "integration_offsets_d", "aor_order"]
 
 
-_PHASE_NAMES = {
-    "flat": (),
-    "linear": ("c1_per_day",),
-    "quadratic": ("c1_per_day", "c2_per_day2"),
-    "sinusoid": ("c_cos", "c_sin"),
-    "harmonic1": ("phase_a1", "phase_b1"),
-    "harmonic2": ("phase_a1", "phase_b1", "phase_a2", "phase_b2"),
-}
-_RAMP_NAMES = {
-    "none": (),
-    "linear": ("ramp_slope_per_day",),
-    "exponential": ("ramp_amplitude", "ramp_tau_days"),
-}
 #: Sky separation (stellar radii) that batman's rsky gives when the planet is behind the
 #: star; also the value outside the tabulated transit window (no overlap for rp_rs <= 0.5).
 _FAR = 100.0
@@ -312,9 +301,14 @@ class AstroModel:
         self.system = system
         self.phase = phase
         self.ramp = ramp
+        #: The phase model's p(t) and the ramp's R(t) (:mod:`.astro_parts`).
+        self.phase_term = PHASE_TERMS[phase]
+        self.ramp_term = RAMPS[ramp]
         self.eclipse_shape = eclipse_shape
         self.t_start_bmjd = float(self.time_bmjd.min())
         self.t_stop_bmjd = float(self.time_bmjd.max())
+        #: Time since the first frame, the ramp's argument.
+        self._since_start = self.time_bmjd - self.t_start_bmjd
         self.event = event
         self.n_shape = 0          # the transit's free a_rs, b, q1, q2
         self.priors: dict[str, tuple[float, float]] = {}
@@ -340,9 +334,9 @@ class AstroModel:
             self.period_d = period_d if period_d is not None else system_period_days(system)
             self._setup_transit(system, transit_free, transit_priors, limb_darkening_q)
             self.names = ("rp_rs", "t_transit_bmjd") + self.transit_free \
-                + _PHASE_NAMES[phase] + _RAMP_NAMES[ramp]
-            self.n_phase = len(_PHASE_NAMES[phase])
-            self.n_ramp = len(_RAMP_NAMES[ramp])
+                + self.phase_term.names + self.ramp_term.names
+            self.n_phase = len(self.phase_term.names)
+            self.n_ramp = len(self.ramp_term.names)
             return
         if transit_free or transit_priors:
             raise InputError("transit_free, transit_priors: apply to event 'transit' only")
@@ -352,7 +346,7 @@ class AstroModel:
             shape = EclipseShape(self.time_bmjd, system)
         self.shape = shape
         self.period_d = period_d if period_d is not None else system_period_days(system)
-        if phase == "sinusoid" and not self.period_d:
+        if self.phase_term.needs_period and not self.period_d:
             raise InputError("--phase sinusoid: the orbital period is unknown (give period_d)")
         if eclipse_shape == "box":
             if box_duration_d is None:
@@ -364,10 +358,9 @@ class AstroModel:
             if not box_duration_d > 0:
                 raise InputError("box_duration_d: expected a positive duration in days")
             self.box_duration_d = float(box_duration_d)
-        self.names = ("depth", "t_ecl_bmjd") + _PHASE_NAMES[phase] \
-            + _RAMP_NAMES[ramp]
-        self.n_phase = len(_PHASE_NAMES[phase])
-        self.n_ramp = len(_RAMP_NAMES[ramp])
+        self.names = ("depth", "t_ecl_bmjd") + self.phase_term.names + self.ramp_term.names
+        self.n_phase = len(self.phase_term.names)
+        self.n_ramp = len(self.ramp_term.names)
 
     def _setup_transit(self, system: Any, free: Sequence[str],
                        priors: Mapping[str, Sequence[float]] | None,
@@ -375,7 +368,7 @@ class AstroModel:
         """The transit's fixed values, free parameters, priors and precomputed curve."""
         if system is None:
             raise InputError("event 'transit': give the planetary system (its orbit)")
-        if self.phase == "sinusoid" and not self.period_d:
+        if self.phase_term.needs_period and not self.period_d:
             raise InputError("--phase sinusoid: the orbital period is unknown (give period_d)")
         unknown = [n for n in free if n not in TRANSIT_FREE]
         if unknown or len(set(free)) != len(tuple(free)):
@@ -454,10 +447,10 @@ class AstroModel:
         self.nonnegative_planet = bool(nonnegative)
         self.n_priors = 1 if self.nonnegative_planet else 0
         self.n_shape = 1   # rp_rs
-        self.n_phase = len(_PHASE_NAMES[self.phase])
-        self.n_ramp = len(_RAMP_NAMES[self.ramp])
-        self.names = ("depth", "t_ecl_bmjd", "rp_rs") + _PHASE_NAMES[self.phase] \
-            + _RAMP_NAMES[self.ramp] + tuple(f"aor_offset_{k}" for k in range(1, self.n_aor + 1))
+        self.n_phase = len(self.phase_term.names)
+        self.n_ramp = len(self.ramp_term.names)
+        self.names = ("depth", "t_ecl_bmjd", "rp_rs") + self.phase_term.names \
+            + self.ramp_term.names + tuple(f"aor_offset_{k}" for k in range(1, self.n_aor + 1))
 
     def _measure_box_duration(self, system: Any, shape: VisibleFraction) -> float | None:
         """Half-depth duration of the physical eclipse.
@@ -526,11 +519,8 @@ class AstroModel:
             for i, name in enumerate(self.names[:2 + self.n_shape]):
                 if name in TRANSIT_BOUNDS:
                     lo[i], hi[i] = TRANSIT_BOUNDS[name]
-        if self.ramp == "exponential":
-            k = 2 + self.n_shape + self.n_phase
-            lo[k], hi[k] = -0.2, 0.2
-            lo[k + 1] = self.exposure_d
-            hi[k + 1] = self.t_stop_bmjd - self.t_start_bmjd
+        self.ramp_term.bound(lo, hi, 2 + self.n_shape + self.n_phase, self.exposure_d,
+                             self.t_stop_bmjd - self.t_start_bmjd)
         return lo, hi
 
     def initial(self, *, depth: float | None = None, t_ecl_bmjd: float | None = None,
@@ -566,9 +556,8 @@ class AstroModel:
         if self.event == "phase-curve":
             theta[2] = self.rp_rs_catalogue if rp_rs is None else rp_rs
         theta[1] = t_ecl_bmjd
-        if self.ramp == "exponential":
-            theta[2 + self.n_shape + self.n_phase + 1] = min(
-                0.02, 0.25 * (self.t_stop_bmjd - self.t_start_bmjd))
+        self.ramp_term.start(theta, 2 + self.n_shape + self.n_phase,
+                             self.t_stop_bmjd - self.t_start_bmjd)
         return theta
 
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
@@ -602,24 +591,12 @@ class AstroModel:
         k = 2 + self.n_shape
         c = theta[k:k + self.n_phase]
         dt = self.time_bmjd - t_ecl
-        if self.phase == "flat":
-            return np.full_like(dt, depth)
-        if self.phase == "linear":
-            return depth + c[0] * dt
-        if self.phase == "quadratic":
-            return depth + dt * (c[0] + c[1] * dt)
-        arg = (2.0 * np.pi / self._period()) * dt
-        return depth + c[0] * (np.cos(arg) - 1.0) + c[1] * np.sin(arg)
+        return self.phase_term.value(depth, c, dt, self.period_d)
 
     def ramp_factor(self, theta) -> np.ndarray:
         """R(t), the multiplicative ramp (1 when ``ramp="none"``)."""
-        if self.ramp == "none":
-            return np.ones_like(self.time_bmjd)
         r = np.asarray(theta, dtype=float)[2 + self.n_shape + self.n_phase:]
-        dt = self.time_bmjd - self.t_start_bmjd
-        if self.ramp == "linear":
-            return 1.0 + r[0] * dt
-        return 1.0 - r[0] * np.exp(-dt / r[1])
+        return self.ramp_term.factor(r, self._since_start)
 
     def transit_values(self, theta) -> dict[str, float]:
         """The transit's a_rs, b, q1, q2 (free from ``theta``, fixed otherwise), inclination
@@ -659,8 +636,8 @@ class AstroModel:
     def _harmonic(self, theta: np.ndarray, time: np.ndarray) -> np.ndarray:
         """p(t) of a phase curve at ``time``: the lead's harmonic curve, phi = 2 pi (t - t_ecl) / P."""
         k = 2 + self.n_shape
-        phase_rad = (2.0 * np.pi / self._period()) * (time - theta[1])
-        return harmonic_curve(phase_rad, theta[0], theta[k:k + self.n_phase])
+        return self.phase_term.value(theta[0], theta[k:k + self.n_phase], time - theta[1],
+                                     self._period())
 
     def _stellar_sub(self, theta: np.ndarray) -> np.ndarray:
         """T(t) of a phase curve at the sub-exposure times (Rp/R* is ``theta[2]``)."""
@@ -696,8 +673,8 @@ class AstroModel:
         v = np.asarray(self._shape().visible_fraction(theta[1]), dtype=float)
         flux = self._integrated(self._stellar_sub(theta) + v * self._harmonic(theta,
                                                                               self._sub_time))
-        if self.ramp != "none":
-            flux *= self.ramp_factor(theta)
+        flux = self.ramp_term.apply(flux, theta[2 + self.n_shape + self.n_phase:],
+                                    self._since_start)
         if self.n_aor:
             flux *= self.aor_factor(theta)
         return flux
@@ -716,13 +693,12 @@ class AstroModel:
             return self._phase_curve(theta)
         if self.event == "transit":
             flux = self.stellar_flux(theta)
-            if self.phase != "flat":
+            if self.phase_term.varies:
                 flux = flux + self.planet(theta)
         else:
             flux = 1.0 + self.visible_fraction(theta[1]) * self.planet(theta)
-        if self.ramp != "none":
-            flux *= self.ramp_factor(theta)
-        return flux
+        return self.ramp_term.apply(flux, theta[2 + self.n_shape + self.n_phase:],
+                                    self._since_start)
 
     # ------------------------------------------------------------------ the event's depth
     def depth_ppm(self, size: float) -> float:
@@ -830,9 +806,8 @@ class AstroModel:
         else:   # v = 1 outside cols: 1 + 1 * p is 1 + p exactly
             flux = 1.0 + planet
             flux[:, cols] = 1.0 + visible * planet[:, cols]
-        if self.ramp != "none":
-            flux *= self._ramp_factor_batch(thetas)
-        return flux
+        return self.ramp_term.apply_rows(flux, thetas[:, 2 + self.n_shape + self.n_phase:],
+                                         self._since_start)
 
     def _fused_arguments(self, thetas: np.ndarray) -> tuple | None:
         """The arguments of :func:`_astro_rows` after the times and thetas, or None.
@@ -842,10 +817,10 @@ class AstroModel:
         or eclipse times so far from the data that the shape would fold the
         offsets by a period.
         """
-        if self.phase == "sinusoid" or self.ramp == "exponential":
+        phase_code = self.phase_term.kernel_code
+        ramp_at = self.ramp_term.kernel_index(2 + self.n_phase)
+        if phase_code is None or ramp_at is None:
             return None
-        phase_code = ("flat", "linear", "quadratic").index(self.phase)
-        ramp_at = 2 + self.n_phase if self.ramp == "linear" else -1
         if self.eclipse_shape == "box":
             return (phase_code, ramp_at, self.t_start_bmjd, True, 0.5 * self._box_duration(),
                     self.exposure_d, *_NO_TABLE)
@@ -863,24 +838,8 @@ class AstroModel:
 
     def _planet_batch(self, thetas: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """:meth:`planet` of every row (``dt = time - t_ecl`` of each row)."""
-        depth = thetas[:, :1]
         c = thetas[:, 2 + self.n_shape:2 + self.n_shape + self.n_phase]
-        if self.phase == "flat":
-            return np.broadcast_to(depth, dt.shape)
-        if self.phase == "linear":
-            return depth + c[:, :1] * dt
-        if self.phase == "quadratic":
-            return depth + dt * (c[:, :1] + c[:, 1:2] * dt)
-        arg = (2.0 * np.pi / self._period()) * dt
-        return depth + c[:, :1] * (np.cos(arg) - 1.0) + c[:, 1:2] * np.sin(arg)
-
-    def _ramp_factor_batch(self, thetas: np.ndarray) -> np.ndarray:
-        """:meth:`ramp_factor` of every row."""
-        r = thetas[:, 2 + self.n_shape + self.n_phase:]
-        dt = self.time_bmjd - self.t_start_bmjd
-        if self.ramp == "linear":
-            return 1.0 + r[:, :1] * dt
-        return 1.0 - r[:, :1] * np.exp(-dt / r[:, 1:2])
+        return self.phase_term.rows(thetas[:, :1], c, dt, self.period_d)
 
     def _visible_fraction_batch(self, t_ecl: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
         """:meth:`visible_fraction` of every eclipse time in ``t_ecl``.

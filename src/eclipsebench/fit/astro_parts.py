@@ -1,28 +1,51 @@
 """The parts every event's astrophysical model is built from, and their pure helpers.
 
-The parameter names' typical magnitudes and the transit's bounds; the
+The planet's phase variation ``p(t)``, one :class:`PhaseTerm` per phase
+model, written so that ``p(t_ecl) = D`` (``dt = t - t_ecl``, ``P`` the
+period)::
+
+    flat       p = D
+    linear     p = D + c1 dt
+    quadratic  p = D + c1 dt + c2 dt^2
+    sinusoid   p = D + c1 [cos(2 pi dt / P) - 1] + c2 sin(2 pi dt / P)
+    harmonic1  p = D + a1 (cos phi - 1) + b1 sin phi,  phi = 2 pi dt / P
+    harmonic2  harmonic1 + a2 (cos 2 phi - 1) + b2 sin 2 phi
+
+(the harmonics are :func:`eclipsebench.astro.phase_curves.harmonic_curve`,
+a whole phase curve's). The multiplicative detector ramp ``R(t)``, one
+:class:`Ramp` per ramp model (``t0`` the first frame)::
+
+    none         R = 1
+    linear       R = 1 + r1 (t - t0)
+    exponential  R = 1 - a exp(-(t - t0) / tau)
+
+Its constant level is left to the systematics model (every method fits the
+flux normalisation). :data:`PHASE_TERMS` and :data:`RAMPS` give each model's
+object by its name; the object carries its parameter names, its values for
+one parameter vector and for rows of them (the MCMC's batch), and what the
+compiled batch kernel needs.
+
+Besides: the parameters' typical magnitudes and the transit's bounds; the
 exposure integration (:func:`integration_offsets_d`), the AORs' order
 (:func:`aor_order`), the box eclipse (:func:`box_visible_fraction`),
 Kipping's (2013) limb-darkening parametrisation (:func:`u_from_q`,
-:func:`q_from_u`) and the inclination of an impact parameter. The models
-themselves are in :mod:`.astro_eclipse`, :mod:`.astro_transit` and
-:mod:`.astro_phase_curve` (:class:`~eclipsebench.fit.astro_model.AstroModel`
-picks one).
+:func:`q_from_u`) and the inclination of an impact parameter.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
+from ..astro.phase_curves import harmonic_curve
 from ..errors import InputError
 
 __all__ = ["TRANSIT_FREE", "SCALES", "TRANSIT_BOUNDS", "MAX_SUBEXPOSURE_S", "NONNEGATIVE_SCALE",
            "VisibleFraction", "integration_offsets_d", "aor_order", "system_period_days",
            "box_visible_fraction", "half_depth_duration", "u_from_q", "q_from_u",
-           "inclination_deg"]
+           "inclination_deg", "PhaseTerm", "Ramp", "PHASE_TERMS", "RAMPS", "known_period"]
 
 #: The transit's optional free parameters, in the order they take in the vector.
 TRANSIT_FREE = ("a_rs", "b", "q1", "q2")
@@ -160,3 +183,245 @@ def inclination_deg(a_rs: float, b: float, ecc: float, omega_deg: float) -> floa
     cos_i = b * (1.0 + ecc * math.sin(w)) / (a_rs * (1.0 - ecc * ecc))
     return math.degrees(math.acos(min(max(cos_i, 0.0), 1.0)))
 
+
+
+def known_period(period_d: float | None) -> float:
+    """``period_d``, or an error if the orbital period is unknown (None)."""
+    if period_d is None:
+        raise InputError("the orbital period is unknown (give period_d)")
+    return period_d
+
+
+class PhaseTerm:
+    """p(t), the planet-to-star flux ratio of one phase model, ``p(t_ecl) = level``.
+
+    ``level`` is the depth (an eclipse or phase curve) or 0 (a transit's
+    variation about mid-transit); ``c`` the model's coefficients (its
+    :attr:`names`, in order); ``dt = time - t_ecl``.
+
+    Examples
+    --------
+    >>> quadratic = PHASE_TERMS["quadratic"]
+    >>> quadratic.names
+    ('c1_per_day', 'c2_per_day2')
+    >>> quadratic.value(2e-3, np.array([0.01, -0.1]), np.array([0.0, 0.1]), None).tolist()
+    [0.002, 0.002]
+    """
+
+    #: The model's name (``phase``).
+    kind: ClassVar[str] = ""
+    #: Its coefficients' names, in the parameter vector's order.
+    names: ClassVar[tuple[str, ...]] = ()
+    #: True when p varies in time (every model but "flat").
+    varies: ClassVar[bool] = True
+    #: True when p needs the orbital period.
+    needs_period: ClassVar[bool] = False
+    #: The model's code in the compiled eclipse batch (``_astro_rows``); None: numpy's.
+    kernel_code: ClassVar[int | None] = None
+
+    def value(self, level: float, c: np.ndarray, dt: np.ndarray,
+              period_d: float | None) -> np.ndarray:
+        """p at the times ``dt`` from mid-eclipse of one parameter vector."""
+        raise NotImplementedError
+
+    def rows(self, level: np.ndarray, c: np.ndarray, dt: np.ndarray,
+             period_d: float | None) -> np.ndarray:
+        """p of every row: ``level`` (m, 1), ``c`` (m, len(names)), ``dt`` (m, n).
+
+        The same arithmetic as :meth:`value`, element by element; by default
+        :meth:`value` row by row.
+        """
+        return np.stack([self.value(level[i, 0], c[i], dt[i], period_d)
+                         for i in range(len(dt))])
+
+
+class FlatPhase(PhaseTerm):
+    """p = D: no phase variation."""
+
+    kind = "flat"
+    varies = False
+    kernel_code = 0
+
+    def value(self, level, c, dt, period_d):
+        return np.full_like(dt, level)
+
+    def rows(self, level, c, dt, period_d):
+        return np.broadcast_to(level, dt.shape)
+
+
+class LinearPhase(PhaseTerm):
+    """p = D + c1 dt."""
+
+    kind = "linear"
+    names = ("c1_per_day",)
+    kernel_code = 1
+
+    def value(self, level, c, dt, period_d):
+        return level + c[0] * dt
+
+    def rows(self, level, c, dt, period_d):
+        return level + c[:, :1] * dt
+
+
+class QuadraticPhase(PhaseTerm):
+    """p = D + c1 dt + c2 dt^2, evaluated as ``D + dt (c1 + c2 dt)``."""
+
+    kind = "quadratic"
+    names = ("c1_per_day", "c2_per_day2")
+    kernel_code = 2
+
+    def value(self, level, c, dt, period_d):
+        return level + dt * (c[0] + c[1] * dt)
+
+    def rows(self, level, c, dt, period_d):
+        return level + dt * (c[:, :1] + c[:, 1:2] * dt)
+
+
+class SinusoidPhase(PhaseTerm):
+    """p = D + c1 [cos(2 pi dt / P) - 1] + c2 sin(2 pi dt / P)."""
+
+    kind = "sinusoid"
+    names = ("c_cos", "c_sin")
+    needs_period = True
+
+    def value(self, level, c, dt, period_d):
+        arg = (2.0 * np.pi / known_period(period_d)) * dt
+        return level + c[0] * (np.cos(arg) - 1.0) + c[1] * np.sin(arg)
+
+    def rows(self, level, c, dt, period_d):
+        arg = (2.0 * np.pi / known_period(period_d)) * dt
+        return level + c[:, :1] * (np.cos(arg) - 1.0) + c[:, 1:2] * np.sin(arg)
+
+
+class FirstHarmonic(PhaseTerm):
+    """A whole phase curve's first harmonic (:func:`harmonic_curve` of phi = 2 pi dt / P)."""
+
+    kind = "harmonic1"
+    names: ClassVar[tuple[str, ...]] = ("phase_a1", "phase_b1")
+    needs_period = True
+
+    def value(self, level, c, dt, period_d):
+        return harmonic_curve((2.0 * np.pi / known_period(period_d)) * dt, level, c)
+
+
+class SecondHarmonic(FirstHarmonic):
+    """The first and second harmonics."""
+
+    kind = "harmonic2"
+    names = ("phase_a1", "phase_b1", "phase_a2", "phase_b2")
+
+
+class Ramp:
+    """R(t), a multiplicative detector ramp; ``r`` its coefficients (:attr:`names` first),
+    ``dt = time - t0`` (the first frame).
+
+    Examples
+    --------
+    >>> linear = RAMPS["linear"]
+    >>> linear.names
+    ('ramp_slope_per_day',)
+    >>> linear.factor(np.array([0.5]), np.array([0.0, 0.2])).tolist()
+    [1.0, 1.1]
+    """
+
+    #: The model's name (``ramp``).
+    kind: ClassVar[str] = ""
+    #: Its coefficients' names, in the parameter vector's order.
+    names: ClassVar[tuple[str, ...]] = ()
+
+    def factor(self, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """R at ``dt`` for one parameter vector."""
+        raise NotImplementedError
+
+    def rows(self, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """R of every row of ``r`` (m, >= len(names)): shape (m, len(dt))."""
+        raise NotImplementedError
+
+    def apply(self, flux: np.ndarray, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """``flux`` times R (:meth:`factor`), in place."""
+        flux *= self.factor(r, dt)
+        return flux
+
+    def apply_rows(self, flux: np.ndarray, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
+        """Each row of ``flux`` times its R (:meth:`rows`), in place."""
+        flux *= self.rows(r, dt)
+        return flux
+
+    def kernel_index(self, k: int) -> int | None:
+        """The compiled eclipse batch's ``ramp_at`` of a ramp at ``theta[k]``; None: numpy's."""
+        return k
+
+    def bound(self, lo: np.ndarray, hi: np.ndarray, k: int, exposure_d: float,
+              span_d: float) -> None:
+        """Set the bounds of the ramp's parameters at ``k`` (default: unbounded)."""
+
+    def start(self, theta: np.ndarray, k: int, span_d: float) -> None:
+        """Set the ramp's starting parameters at ``k`` (default: 0, set by the caller)."""
+
+
+class NoRamp(Ramp):
+    """R = 1."""
+
+    kind = "none"
+
+    def factor(self, r, dt):
+        return np.ones_like(dt)
+
+    def rows(self, r, dt):
+        return np.ones((len(r), len(dt)))
+
+    def apply(self, flux, r, dt):
+        return flux
+
+    def apply_rows(self, flux, r, dt):
+        return flux
+
+    def kernel_index(self, k):
+        return -1
+
+
+class LinearRamp(Ramp):
+    """R = 1 + r1 (t - t0)."""
+
+    kind = "linear"
+    names = ("ramp_slope_per_day",)
+
+    def factor(self, r, dt):
+        return 1.0 + r[0] * dt
+
+    def rows(self, r, dt):
+        return 1.0 + r[:, :1] * dt
+
+
+class ExponentialRamp(Ramp):
+    """R = 1 - a exp(-(t - t0) / tau): amplitude in (-0.2, 0.2), tau between one
+    frame and the time span (starting at 0.02 d or a quarter of the span)."""
+
+    kind = "exponential"
+    names = ("ramp_amplitude", "ramp_tau_days")
+
+    def factor(self, r, dt):
+        return 1.0 - r[0] * np.exp(-dt / r[1])
+
+    def rows(self, r, dt):
+        return 1.0 - r[:, :1] * np.exp(-dt / r[:, 1:2])
+
+    def kernel_index(self, k):
+        return None
+
+    def bound(self, lo, hi, k, exposure_d, span_d):
+        lo[k], hi[k] = -0.2, 0.2
+        lo[k + 1] = exposure_d
+        hi[k + 1] = span_d
+
+    def start(self, theta, k, span_d):
+        theta[k + 1] = min(0.02, 0.25 * span_d)
+
+
+#: Every phase model's term by its name (:data:`~eclipsebench.fit.names.PHASE_MODELS` and
+#: :data:`~eclipsebench.fit.names.PHASE_CURVE_MODELS`).
+PHASE_TERMS: dict[str, PhaseTerm] = {
+    t.kind: t for t in (FlatPhase(), LinearPhase(), QuadraticPhase(), SinusoidPhase(),
+                        FirstHarmonic(), SecondHarmonic())}
+#: Every ramp by its name (:data:`~eclipsebench.fit.names.RAMP_MODELS`).
+RAMPS: dict[str, Ramp] = {r.kind: r for r in (NoRamp(), LinearRamp(), ExponentialRamp())}
