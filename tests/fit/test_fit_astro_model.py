@@ -101,3 +101,39 @@ def test_box_duration_of_a_real_system_even_from_a_short_span():
     short = t_ecl + np.linspace(-0.03, 0.03, 200)  # shorter than the eclipse
     m = AstroModel(short, system, phase="flat", eclipse_shape="box")
     assert m.box_duration_d == pytest.approx(expected, abs=2 / 86400)
+
+
+def test_the_model_is_one_class_per_event_built_by_astro_model(shape):
+    """Issue 27: AstroModel(...) builds the event's subclass; each subclass stands alone."""
+    import pickle
+
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.fit.astro_model import (
+        PHASE_CURVE_MODELS,
+        PHASE_MODELS,
+        RAMP_MODELS,
+        EclipseModel,
+        PhaseCurveModel,
+        TransitModel,
+    )
+    from eclipsebench.fit.astro_parts import PHASE_TERMS, RAMPS
+
+    # every name the command line offers has its phase term or ramp
+    assert set(PHASE_TERMS) == set(PHASE_MODELS) | set(PHASE_CURVE_MODELS)
+    assert set(RAMPS) == set(RAMP_MODELS)
+    system = get_system("XO-3b")
+    for event, cls, phase in (("eclipse", EclipseModel, "flat"),
+                              ("transit", TransitModel, "flat"),
+                              ("phase-curve", PhaseCurveModel, "harmonic1")):
+        m = AstroModel(TIME, system, event=event, phase=phase, ramp="linear")
+        assert type(m) is cls and isinstance(m, AstroModel) and m.event == event
+        direct = cls(TIME, system, phase=phase, ramp="linear")
+        theta = m.initial()
+        assert np.array_equal(direct(theta), m(theta))
+        copy = pickle.loads(pickle.dumps(m))
+        assert type(copy) is cls and np.array_equal(copy(theta), m(theta))
+    assert type(AstroModel(TIME, None, phase="flat", shape=shape())) is EclipseModel
+    with pytest.raises(InputError, match="TransitModel models event 'transit'"):
+        TransitModel(TIME, system, event="eclipse")
+    with pytest.raises(InputError, match="--event 'occultation'"):
+        AstroModel(TIME, system, event="occultation")
