@@ -262,7 +262,7 @@ _PLD_PAPER = PaperProfile(
 
 
 @register
-class PixelLevelDecorrelation(Systematics):
+class PixelLevelDecorrelation(Systematics[PldOptions]):
     """PLD (Deming et al. 2015; paper Appendix B.5), fitted on binned data.
 
     Options (:class:`PldOptions`)
@@ -300,7 +300,6 @@ class PixelLevelDecorrelation(Systematics):
     name: ClassVar[str] = "pld"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldOptions
-    options: PldOptions
     record: ClassVar[MethodRecord] = MethodRecord(
         label="PLD", paper=_PLD_PAPER,
         policy=FitterPolicy(),
