@@ -14,11 +14,16 @@ from dataclasses import replace
 from typing import Any
 
 from ..config.reduce import ReduceSection
-from ..decorrelate.base import MethodOptions
 from ..errors import InputError
 from .astro_model import PHASE_CURVE_MODELS
 from .epoch_fit import fit_prepared
-from .prepare import _DEFAULT_OPTIONS, PreparedEpoch, _resources, prepare_epoch
+from .prepare import (
+    _DEFAULT_OPTIONS,
+    PreparedEpoch,
+    _resources,
+    prepare_epoch,
+    resolve_method_options,
+)
 from .profiles import PROFILES, PaperProfile, paper_profile
 from .result import EpochResult
 
@@ -49,8 +54,10 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     epoch : int or None
         Epoch number (default: the table's ``EPOCH`` metadata).
     method_options : Mapping or MethodOptions, optional
-        The method's options, over those of ``options.options[method]``
-        (``[reduce.options.<method>]``).
+        The method's options: an instance of its options dataclass as it is (the
+        caller resolved it, :func:`~eclipsebench.fit.prepare.resolve_method_options`),
+        or a mapping over ``options.options[method]`` (``[reduce.options.<method>]``)
+        and, in the paper profile, the team's options; parsed once, here.
     resources : Mapping, optional
         Inputs a method declares in its ``resources`` (``{"pmap": path or
         loaded map}`` for ``kr-pmap``), loaded by the method's ``load_resources``.
@@ -82,8 +89,7 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     """
     requested = options.profile if profile is None else profile
     options, team = resolve_profile(method, options, profile)
-    if team is not None and not isinstance(method_options, MethodOptions):
-        method_options = {**team.method_options, **dict(method_options or {})}
+    method_options = resolve_method_options(method, options, method_options, profile=requested)
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
