@@ -37,13 +37,13 @@ def reduce_key(method: str, epoch: int, flat: bool = False, profile: str = "cont
     return f"reduce{suffix}/{method}/epoch_{epoch:02d}"
 
 
-def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int,
+def reduce_task(cfg: Config, table_path: str, method: str, epoch: int,
                 method_options: MethodOptions, out_path: str,
                 profile: str = "controlled") -> None:
     """Reduce one epoch with one method; write the light curve, then the result JSON.
 
     ``method_options`` are the method's options as the planner resolved them
-    (:func:`plan_reduce_tasks`).
+    (:func:`plan_reduce_tasks`); the run seed is ``cfg.challenge.seed``.
 
     A method that refuses the epoch's data (an :class:`InputError`, e.g.
     frames outside KR/Pmap's calibration coverage) is an outcome of the
@@ -55,7 +55,7 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int
     system = system_for(cfg.system)
     try:
         result = fit_reduce.reduce_epoch(table_path, method, options=cfg.reduce, system=system,
-                                         seed=seed, epoch=epoch,
+                                         seed=cfg.challenge.seed, epoch=epoch,
                                          method_options=method_options, profile=profile)
     except InputError as exc:
         log.warning("%s epoch %d: %s", method, epoch, exc)
@@ -105,14 +105,13 @@ def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: l
     method_options = {m: fit_reduce.resolve_method_options(m, cfg.reduce, profile=profile,
                                                            configured=configured)
                       for m in methods}
-    seed = cfg.challenge.seed
     tasks = []
     for e in epochs:
         table = layout.photometry(e, flat)
         for m in methods:
             out = layout.result(m, e, flat, profile)
             tasks.append(Task(reduce_key(m, e, flat, profile), "reduce", reduce_task,
-                              (cfg, str(table), m, e, seed, method_options[m], str(out), profile),
+                              (cfg, str(table), m, e, method_options[m], str(out), profile),
                               (out,), (photometry_key(e, flat),),
                               check=partial(result_ok, m, e)))
     return tasks
