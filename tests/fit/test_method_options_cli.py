@@ -4,7 +4,7 @@
 * ``[reduce.options.<method>]`` in a configuration file reaches the fit, and an
   unknown key there is one line naming the dotted key;
 * ``--seed`` reaches the stochastic method (ICA): the same seed gives the same
-  bytes, another seed another result.
+  bytes, another seed another result; ``run --seed`` goes in as the int it is.
 """
 
 from __future__ import annotations
@@ -86,6 +86,15 @@ def test_ica_seed_same_bytes_other_seed_other_result(tmp_path, table_file):
     a, c = json.loads(one), json.loads(two)
     assert a["seed"] == 1 and c["seed"] == 2
     assert a["diagnostics"] != c["diagnostics"]
+
+
+def test_run_seed_goes_in_as_the_int_given_over_a_set():
+    from eclipsebench.cli import build_parser
+    from eclipsebench.commands import run as run_cmd
+
+    args = build_parser().parse_args(["run", "--seed", "123", "--set", "challenge.seed=5"])
+    assert run_cmd._overrides(args) == ["challenge.seed=5"]   # --seed is not made text
+    assert run_cmd._config(args).challenge.seed == 123
 
 
 @pytest.mark.parametrize("toml, key", [

@@ -17,6 +17,7 @@ from pathlib import Path
 from .. import __version__
 from ..astro.catalogue import system_for
 from ..config import Config
+from ..decorrelate.base import MethodOptions
 from ..engine.layout import Layout
 from ..engine.tasks import Task
 from ..errors import InputError
@@ -36,9 +37,13 @@ def reduce_key(method: str, epoch: int, flat: bool = False, profile: str = "cont
     return f"reduce{suffix}/{method}/epoch_{epoch:02d}"
 
 
-def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int,
-                out_path: str, profile: str = "controlled") -> None:
+def reduce_task(cfg: Config, table_path: str, method: str, epoch: int,
+                method_options: MethodOptions, out_path: str,
+                profile: str = "controlled") -> None:
     """Reduce one epoch with one method; write the light curve, then the result JSON.
+
+    ``method_options`` are the method's options as the planner resolved them
+    (:func:`plan_reduce_tasks`); the run seed is ``cfg.challenge.seed``.
 
     A method that refuses the epoch's data (an :class:`InputError`, e.g.
     frames outside KR/Pmap's calibration coverage) is an outcome of the
@@ -50,7 +55,8 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int, seed: int
     system = system_for(cfg.system)
     try:
         result = fit_reduce.reduce_epoch(table_path, method, options=cfg.reduce, system=system,
-                                         seed=seed, epoch=epoch, profile=profile)
+                                         seed=cfg.challenge.seed, epoch=epoch,
+                                         method_options=method_options, profile=profile)
     except InputError as exc:
         log.warning("%s epoch %d: %s", method, epoch, exc)
         write_json(out, {"method": method, "epoch": epoch, "failed": True, "error": str(exc),
@@ -87,20 +93,25 @@ def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: l
                       flat: bool = False, profile: str = "controlled") -> list[Task]:
     """One task per (method, epoch) in one profile, each after its epoch's photometry task.
 
-    ``[reduce.options.<method>]`` is checked first: a bad key stops the run
-    before any work, naming it.
+    ``[reduce.options.<method>]`` is parsed first, once: a bad key stops the run
+    before any work, naming it. Each method's options (its table, and its team's
+    in the paper profile) are resolved here into its options dataclass, which
+    every task of the method gets.
     """
-    fit_reduce.check_method_options(cfg.reduce)
+    configured = fit_reduce.configured_method_options(cfg.reduce)
     if profile != "controlled":
         for m in methods:
             fit_reduce.resolve_profile(m, cfg.reduce, profile)  # an unknown method stops here
-    seed = cfg.challenge.seed
+    method_options = {m: fit_reduce.resolve_method_options(m, cfg.reduce, profile=profile,
+                                                           configured=configured)
+                      for m in methods}
     tasks = []
     for e in epochs:
         table = layout.photometry(e, flat)
         for m in methods:
             out = layout.result(m, e, flat, profile)
             tasks.append(Task(reduce_key(m, e, flat, profile), "reduce", reduce_task,
-                              (cfg, str(table), m, e, seed, str(out), profile), (out,),
-                              (photometry_key(e, flat),), check=partial(result_ok, m, e)))
+                              (cfg, str(table), m, e, method_options[m], str(out), profile),
+                              (out,), (photometry_key(e, flat),),
+                              check=partial(result_ok, m, e)))
     return tasks

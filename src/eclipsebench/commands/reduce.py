@@ -274,7 +274,7 @@ def _table_paths(items: list[str]) -> list[Path]:
 def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
     """Several epochs with one depth (issue 17 point 4): ``reduce_joint``, one JSON."""
     from ..fit.data import standardise_table
-    from ..fit.reduce import check_method_options, reduce_joint
+    from ..fit.reduce import configured_method_options, reduce_joint, resolve_method_options
     from ..photometry.table import read_table
 
     for flag, value in (("--sampler mcmc", args.sampler == "mcmc"),
@@ -286,7 +286,9 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
     out = Path(args.out) if args.out else paths[0].parent / f"joint.{args.method}.json"
     check_output_path(out, "--out", "file")
     options, section = _options(args)
-    check_method_options(options)
+    method_options = resolve_method_options(args.method, options,
+                                            _method_options(args.method_options),
+                                            configured=configured_method_options(options))
     tables = []
     for path in paths:
         table = read_table(path)
@@ -302,7 +304,7 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
             raise InputError(f"{path}: names {other.name}, {paths[0]} names {system.name}; a "
                              "joint fit is of one planet (give --system NAME)")
     result = reduce_joint(tables, args.method, options=options, system=system, seed=args.seed,
-                          pmap=args.pmap, method_options=_method_options(args.method_options))
+                          pmap=args.pmap, method_options=method_options)
     summary = _clean({**result.to_dict(), "tables": [str(p) for p in paths]})
     write_json(out, summary)
     summary["result_file"] = str(out)
@@ -316,19 +318,17 @@ def chain_file(result_path: str | Path) -> Path:
     return chain_path(result_path)
 
 
-def _check_pmap(args: argparse.Namespace, table, table_path: Path, method_options: dict) -> None:
+def _check_pmap(args: argparse.Namespace, table, table_path: Path) -> None:
     """kr-pmap needs a map: ``--pmap``, or a simulated table's SIMDIR (named on the command line).
 
-    The ``--option`` values are checked first, so an unknown option is the
-    error reported, as for any other method.
+    The ``--option`` values were resolved before (:func:`run`), so an unknown
+    option is the error reported, as for any other method.
     """
     from ..decorrelate import get_method
-    from ..decorrelate.base import parse_method_options
 
     cls = get_method(args.method)
     if cls.name != "kr-pmap" or args.pmap is not None:
         return
-    parse_method_options(cls, method_options)
     if not (table.meta.get("SIMDIR") or table.meta.get("simdir")):
         raise InputError(f"--method kr-pmap: needs --pmap PATH (a calibration-star table, the "
                          f"SSC pmap, or a folder of its versions); {table_path} names no "
@@ -345,7 +345,12 @@ def run(args: argparse.Namespace) -> dict:
     if len(paths) > 1:
         return _run_joint(args, paths)
     from ..fit.data import standardise_table
-    from ..fit.reduce import check_method_options, reduce_epoch, select_phase_model
+    from ..fit.reduce import (
+        configured_method_options,
+        reduce_epoch,
+        resolve_method_options,
+        select_phase_model,
+    )
     from ..photometry.table import read_table
 
     table_path = paths[0]
@@ -358,15 +363,19 @@ def run(args: argparse.Namespace) -> dict:
     if args.plot:
         check_plot_path(args.plot, "--plot")
     options, section = _options(args)
-    check_method_options(options)
-    method_options = _method_options(args.method_options)
+    # The method's options, parsed once here (the configuration's tables, the team's in
+    # the paper profile, --option) and passed down as its options dataclass.
+    configured = configured_method_options(options)
+    given = _method_options(args.method_options)
+    method_options = resolve_method_options(args.method, options, given,
+                                            profile=options.profile, configured=configured)
     table = read_table(table_path)
     table.meta.setdefault("FILENAME", str(table_path))
     table = standardise_table(table, columns=_column_map(args.columns),
                               time_column=args.time_column, time_format=args.time_format,
                               labels=_TABLE_LABELS)
     check_columns(table, str(table_path), radius_px=args.radius)
-    _check_pmap(args, table, table_path, method_options)
+    _check_pmap(args, table, table_path)
     system = _system(args, section, table, table_path)
     result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
@@ -377,10 +386,12 @@ def run(args: argparse.Namespace) -> dict:
                          f"{result.depth_ppm:.1f} +- {error:.3g} ppm: a zero or non-finite error "
                          "is not a result (constant flux or a degenerate fit); nothing written")
     summary = result.to_dict()
-    if args.compare_phases:
+    if args.compare_phases:   # the controlled settings: the team's options only in the paper fit
+        phase_options = (method_options if options.profile != "paper" else
+                         resolve_method_options(args.method, options, given, configured=configured))
         sel = select_phase_model(table, args.method, options=options, system=system,
                                  seed=args.seed, epoch=args.epoch, pmap=args.pmap,
-                                 method_options=method_options)
+                                 method_options=phase_options)
         summary["phase_models"] = sel.to_dict()
     summary.update({"table": str(table_path), "lightcurve_file": str(lc_path)})
     chain_path = chain_file(out) if result.chain is not None else None

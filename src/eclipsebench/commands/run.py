@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 from pathlib import Path
 
-from ..config import load_config
+from ..config import Config, load_config
 from ..engine.cluster import (
     DEFAULT_CONNECT_TIMEOUT_S,
     TLS_ENV,
@@ -80,8 +81,6 @@ def _profile_list(text: str) -> list[str]:
 
 def _overrides(args: argparse.Namespace) -> list[str]:
     extra = []
-    if args.seed is not None:
-        extra.append(f"challenge.seed={args.seed}")
     if args.epochs is not None:
         extra.append(f"challenge.epochs={args.epochs}")
     if args.methods is not None:
@@ -91,6 +90,15 @@ def _overrides(args: argparse.Namespace) -> list[str]:
     if args.workers is not None:
         extra.append(f"run.workers={args.workers}")
     return list(args.overrides) + extra + planet_overrides(args)
+
+
+def _config(args: argparse.Namespace) -> Config:
+    """CONFIG with ``--set`` and the options that name a key; ``--seed``, parsed to an int,
+    goes in as that int (``challenge.seed``), not through the text of an override."""
+    cfg = load_config(args.config, _overrides(args))
+    if args.seed is not None:
+        cfg = replace(cfg, challenge=replace(cfg.challenge, seed=args.seed))
+    return cfg
 
 
 def _scheduler(args: argparse.Namespace) -> str | None:
@@ -106,7 +114,7 @@ def run(args: argparse.Namespace) -> dict:
     # every stage's modules (~1.5 s to import): loaded by this command only, not at CLI start
     from ..challenge.runner import Layout, run_challenge
 
-    cfg = load_config(args.config, _overrides(args))
+    cfg = _config(args)
     out = Path(args.out) if args.out else Path(
         "runs") / f"{cfg.challenge.name}-seed{cfg.challenge.seed}-{cfg.challenge.epochs}ep"
     check_output_path(out, "--out", "folder")

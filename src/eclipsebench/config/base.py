@@ -26,7 +26,7 @@ from typing import Any, Literal, get_args, get_origin, get_type_hints
 
 from ..errors import ConfigError, InputError
 
-__all__ = ["from_mapping", "to_mapping", "check", "parse_override", "apply_overrides",
+__all__ = ["from_mapping", "to_mapping", "check", "coerce", "parse_override", "apply_overrides",
            "load_toml", "dump_toml"]
 
 
@@ -104,6 +104,20 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
             raise ConfigError(key, f"expected a string, got {value!r}")
         return value
     raise ConfigError(key, f"unsupported type {tp!r}")
+
+
+def coerce(value: Any, tp: Any, key: str) -> Any:
+    """``value`` as the annotated type ``tp``, as :func:`from_mapping` takes each value.
+
+    A list becomes a tuple, an integer a float where a number is declared;
+    anything else of the wrong type is a :class:`ConfigError` naming ``key``.
+
+    Examples
+    --------
+    >>> coerce([1, 2], tuple[float, ...], "knot_spacing_px")
+    (1.0, 2.0)
+    """
+    return _coerce(value, tp, key)
 
 
 def from_mapping(cls: type, mapping: Mapping[str, Any], prefix: str = "") -> Any:

@@ -42,11 +42,11 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
-from typing import Any, ClassVar, Self, TypeVar
+from typing import Any, ClassVar, Generic, Self, TypeVar, cast, get_type_hints
 
 import numpy as np
 
-from ..config.base import from_mapping
+from ..config.base import coerce
 from ..errors import ConfigError, InputError
 from ..io.paths import SAFE_NAME, is_safe_name
 from ..seeding import rng, spawn_ints
@@ -157,8 +157,13 @@ class MethodOptions:
 
     A subclass declares typed fields with defaults and may add range checks
     in ``validate`` (raise :class:`~eclipsebench.errors.ConfigError` naming
-    the field, with :func:`eclipsebench.config.check`). Build one with
-    :func:`parse_method_options`, which checks names and types.
+    the field, with :func:`eclipsebench.config.check`). An instance is
+    checked when it is made (``__post_init__``): each value given is taken
+    as its field's type (a list as a tuple, an integer as a float where a
+    number is declared), then ``validate`` runs; so an options object is
+    valid from the moment it exists, and a method trusts the one it gets.
+    Build one from names and values with :func:`parse_method_options`, which
+    also refuses unknown names.
 
     Examples
     --------
@@ -170,6 +175,15 @@ class MethodOptions:
     {'k': 50}
     """
 
+    def __post_init__(self) -> None:
+        # A subclass that defines its own __post_init__ calls this one.
+        types = get_type_hints(type(self))
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if value is not f.default:   # the class's own default is as it declared it
+                object.__setattr__(self, f.name, coerce(value, types[f.name], f.name))
+        self.validate()
+
     def validate(self) -> None:
         """Range checks beyond the field types (default: none)."""
 
@@ -180,20 +194,34 @@ class MethodOptions:
         return {f.name: plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
 
-def parse_method_options(cls: type[Systematics], options: Any = None, *,
-                         prefix: str | None = None) -> MethodOptions:
-    """``cls.Options`` from None, a mapping or an options instance, validated.
+#: The options dataclass of a method (``Systematics[BlissOptions]``).
+OptionsT = TypeVar("OptionsT", bound=MethodOptions)
+
+
+def parse_method_options(cls: type[Systematics[OptionsT]], options: Any = None, *,
+                         prefix: str | None = None,
+                         base: OptionsT | None = None) -> OptionsT:
+    """``cls.Options`` from None, a mapping or an options instance: the one place options
+    are parsed.
+
+    An instance of ``cls.Options`` is returned as it is (it was checked when
+    it was made); a mapping is checked once, names and values, into a new
+    instance.
 
     Parameters
     ----------
     cls : type
         The method class (its ``Options`` and ``name`` are used).
     options : None, Mapping or MethodOptions
-        The options to check; None gives the defaults.
+        The options to check; None gives ``base`` (default: the defaults).
     prefix : str, optional
         A configuration path (``"reduce.options.bliss"``): errors are then
         :class:`~eclipsebench.errors.ConfigError` naming the dotted key.
         Without it, errors name the method and the option.
+    base : MethodOptions, optional
+        An instance of ``cls.Options`` whose values a mapping overrides, name
+        by name (e.g. a configuration's table under the command line's
+        ``--option`` values); default the class's defaults.
 
     Raises
     ------
@@ -209,25 +237,34 @@ def parse_method_options(cls: type[Systematics], options: Any = None, *,
     Traceback (most recent call last):
     ...
     eclipsebench.errors.InputError: method 'kr-data' option 'kk': unknown option (known: k, use_noise_pixels)
+    >>> kr = parse_method_options(get_method("kr-data"), {"k": 30})
+    >>> parse_method_options(get_method("kr-data"), {"use_noise_pixels": True}, base=kr)
+    KrDataOptions(k=30, use_noise_pixels=True)
     """
     opts_cls = cls.Options
     if isinstance(options, opts_cls):
-        mapping = options.to_dict()
-    elif isinstance(options, MethodOptions):
+        return cast(OptionsT, options)
+    if isinstance(options, MethodOptions):
         raise InputError(f"method '{cls.name}' options: expected {opts_cls.__name__}, "
                          f"got {type(options).__name__}")
-    elif options is None:
-        mapping = {}
+    if options is None:
+        mapping: dict[str, Any] = {}
     elif isinstance(options, Mapping):
         mapping = {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in options.items()}
     else:
         raise InputError(f"method '{cls.name}' options: expected a mapping of option names "
                          f"to values, got {type(options).__name__}")
-    if prefix is not None:
-        return from_mapping(opts_cls, mapping, prefix=prefix)
     try:
-        return from_mapping(opts_cls, mapping)
+        known = sorted(f.name for f in dataclasses.fields(opts_cls))
+        for key in mapping:
+            if key not in known:
+                raise ConfigError(key, "unknown key (known: " + ", ".join(known) + ")")
+        if base is None:
+            return cast(OptionsT, opts_cls(**mapping))
+        return dataclasses.replace(base, **mapping) if mapping else base
     except ConfigError as exc:
+        if prefix is not None:
+            raise ConfigError(f"{prefix}.{exc.key}", exc.problem) from None
         problem = exc.problem.replace("unknown key", "unknown option")
         raise InputError(f"method '{cls.name}' option '{exc.key}': {problem}") from None
 
@@ -292,21 +329,25 @@ class MethodContext:
                              "which was not given") from None
 
 
-class Systematics(ABC):
+class Systematics(ABC, Generic[OptionsT]):
     """Base class of a systematics model.
 
     Subclasses set ``name`` (the registry name), ``requires`` (the EpochData
     attributes that must not be None), ``Options`` (a :class:`MethodOptions`
-    subclass) and implement :meth:`predict`. They do all parameter-independent
-    work in ``__init__``, reading their settings from ``self.options`` and
-    their random streams and resources from ``self.context``.
+    subclass, also the class's type parameter: ``class Bliss(Systematics[BlissOptions])``,
+    so that ``self.options`` is typed) and implement :meth:`predict`. They do
+    all parameter-independent work in ``__init__``, reading their settings
+    from ``self.options`` and their random streams and resources from
+    ``self.context``.
 
     Parameters
     ----------
     data : EpochData
         The frames to model. Never modified.
     options : Mapping or MethodOptions, optional
-        The method's options (``cls.Options``); unknown names are refused.
+        The method's options: an instance of ``cls.Options``, taken as it is
+        (the caller's edge parsed it), or a mapping, parsed here
+        (:func:`parse_method_options`); unknown names are refused.
     context : MethodContext, optional
         Random streams and loaded resources (default: seed 0, epoch 0).
     **kwargs
@@ -328,15 +369,15 @@ class Systematics(ABC):
     #: gives a class that sets none its own default record (its parent's policy, no
     #: paper profile: it runs in the paper profile as in the controlled one).
     record: ClassVar[MethodRecord] = MethodRecord()
+    #: The method's options: an instance of ``type(self).Options``.
+    options: OptionsT
 
     def __init__(self, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
                  *, context: MethodContext | None = None, **kwargs: Any) -> None:
+        cls = type(self)
+        self.options = parse_method_options(cls, options)
         if kwargs:
-            base = parse_method_options(type(self), options).to_dict()
-            options = {**base, **kwargs}
-        #: The method's options: an instance of ``type(self).Options`` (a subclass
-        #: narrows the annotation to its own dataclass, ``options: BlissOptions``).
-        self.options: MethodOptions = parse_method_options(type(self), options)
+            self.options = parse_method_options(cls, kwargs, base=self.options)
         missing = [data.table_column(c) for c in self.requires if getattr(data, c, None) is None]
         if missing:
             raise InputError(f"method '{self.name}' needs the column(s) {', '.join(missing)} "

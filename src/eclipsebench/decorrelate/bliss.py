@@ -159,7 +159,8 @@ def bliss_setup(x: np.ndarray, y: np.ndarray, *, dx_px: float, dy_px: float,
     x, y : ndarray, shape (n,)
         Centroids (pixels).
     dx_px, dy_px : float
-        Requested knot spacing along x and y (pixels), > 0.
+        Requested knot spacing along x and y (pixels), finite and > 0 (as
+        :class:`BlissOptions` checks them, or derived from centroids that move).
     min_points : int
         POET's ``minnumpts``: a frame whose nearest knot holds fewer frames is
         masked out (``BlissGrid.keep`` is False).
@@ -177,8 +178,6 @@ def bliss_setup(x: np.ndarray, y: np.ndarray, *, dx_px: float, dy_px: float,
     """
     x = np.asarray(x, float)
     y = np.asarray(y, float)
-    if not (dx_px > 0 and dy_px > 0 and np.isfinite(dx_px) and np.isfinite(dy_px)):
-        raise InputError(f"option knot_spacing_px: expected positive spacings, got ({dx_px}, {dy_px})")
     n_grid = _axis_extent(x, dx_px)[3] * _axis_extent(y, dy_px)[3]
     if n_grid > max(len(x), _MAX_KNOTS):  # e.g. centroids that do not move: spacing ~ 1e-13 px
         raise InputError(f"method 'bliss': knot spacing ({dx_px:.3g}, {dy_px:.3g}) px gives "
@@ -256,7 +255,8 @@ class BlissOptions(MethodOptions):
 
     def validate(self) -> None:
         sp = self.knot_spacing_px
-        check(sp is None or (np.size(sp) in (1, 2) and bool(np.all(np.asarray(sp) > 0))),
+        check(sp is None or (np.size(sp) in (1, 2) and bool(np.all(np.asarray(sp) > 0))
+                             and bool(np.all(np.isfinite(sp)))),
               "knot_spacing_px", "one or two positive spacings in pixels")
         check(self.min_points_per_knot >= 1, "min_points_per_knot", "an integer >= 1")
 
@@ -278,7 +278,7 @@ _BLISS_PAPER = PaperProfile(
 
 
 @register
-class Bliss(Systematics):
+class Bliss(Systematics[BlissOptions]):
     """BLISS mapping (Stevenson et al. 2012; paper Appendix B.1), with POET's rules.
 
     The frames whose nearest knot is sparse are left out: ``self.data`` is the
@@ -309,7 +309,6 @@ class Bliss(Systematics):
     name: ClassVar[str] = "bliss"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = BlissOptions
-    options: BlissOptions
     #: DE-MC, as the BLISS team sampled (ter Braak 2006). The grid and the mask depend
     #: only on the centroids, which a refit does not change; a rebuild on the kept subset
     #: would re-derive the spacing from other frame-to-frame differences, so refits keep

@@ -219,7 +219,7 @@ _GP_PAPER = PaperProfile(
 
 
 @register
-class GaussianProcess(Systematics):
+class GaussianProcess(Systematics[GpOptions]):
     """GP systematics over (x, y, t) on binned data (Evans et al. 2015).
 
     Options (:class:`GpOptions`)
@@ -248,7 +248,6 @@ class GaussianProcess(Systematics):
     #: the order of option ``hyperparameters`` (and of ``diagnostics()["hyperparameters"]``)
     hyperparameter_names: ClassVar[tuple[str, ...]] = HYPER_NAMES
     Options: ClassVar[type[MethodOptions]] = GpOptions
-    options: GpOptions
     # No prayer bead: cyclic shifts of the residuals carry the correlated part the kernel
     # already models, so the bead double-counts it (199 vs 80 ppm on a simulated epoch)
     # and costs one kernel optimisation per shift; Evans et al. (2015) took their errors

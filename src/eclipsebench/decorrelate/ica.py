@@ -540,7 +540,7 @@ _ICA_PAPER = PaperProfile(
 
 
 @register
-class IndependentComponents(Systematics):
+class IndependentComponents(Systematics[IcaOptions]):
     """Wavelet pixel-ICA systematics (Morello et al. 2014, 2015, 2016).
 
     Options (:class:`IcaOptions`)
@@ -574,7 +574,6 @@ class IndependentComponents(Systematics):
     name: ClassVar[str] = "ica"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = IcaOptions
-    options: IcaOptions
     record: ClassVar[MethodRecord] = MethodRecord(
         label="ICA", paper=_ICA_PAPER,
         policy=FitterPolicy(stochastic=True),

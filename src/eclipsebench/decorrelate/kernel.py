@@ -227,7 +227,7 @@ _KR_DATA_PAPER = PaperProfile(
 
 
 @register
-class KernelRegressionData(Systematics):
+class KernelRegressionData(Systematics[KrDataOptions]):
     """KR/Data: leave-one-out Gaussian kernel regression on the science frames.
 
     Each frame's kernel widths are the standard deviations of its k
@@ -257,7 +257,6 @@ class KernelRegressionData(Systematics):
     name: ClassVar[str] = "kr-data"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = KrDataOptions
-    options: KrDataOptions
     record: ClassVar[MethodRecord] = MethodRecord(
         label="KR/Data", paper=_KR_DATA_PAPER,
         policy=FitterPolicy(),
@@ -412,7 +411,7 @@ _KR_PMAP_PAPER = PaperProfile(
 
 
 @register
-class KernelRegressionPmap(Systematics):
+class KernelRegressionPmap(Systematics[KrPmapOptions]):
     """KR/Pmap: kernel regression trained on a calibration star (Krick et al. 2016).
 
     The calibration set is the context resource ``pmap``: a calibration-star
@@ -468,7 +467,6 @@ class KernelRegressionPmap(Systematics):
     name: ClassVar[str] = "kr-pmap"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = KrPmapOptions
-    options: KrPmapOptions
     record: ClassVar[MethodRecord] = MethodRecord(
         label="KR/Pmap", paper=_KR_PMAP_PAPER,
         policy=FitterPolicy(),

@@ -22,7 +22,7 @@ from abc import abstractmethod
 
 import numpy as np
 
-from .base import Systematics
+from .base import OptionsT, Systematics
 
 __all__ = ["LinearDesign", "solve_coefficients", "fit_residuals", "fit_log_likelihood",
            "fit_log_likelihood_batch", "binned_design_batch", "weighted_lstsq", "gram_lstsq",
@@ -265,7 +265,7 @@ def gram_lstsq(design: np.ndarray, target: np.ndarray) -> np.ndarray:
     return coef
 
 
-class LinearSystematics(Systematics):
+class LinearSystematics(Systematics[OptionsT]):
     """A method whose model is ``a * (D c)``, ``c`` solved on :attr:`design` for each ``a``.
 
     ``D`` are the design's scaled regressors and ``a`` the curve they multiply

@@ -256,7 +256,7 @@ _PLD_PAPER = PaperProfile(
 
 
 @register
-class PixelLevelDecorrelation(LinearSystematics):
+class PixelLevelDecorrelation(LinearSystematics[PldOptions]):
     """PLD (Deming et al. 2015; paper Appendix B.5), fitted on binned data.
 
     Options (:class:`PldOptions`)
@@ -294,7 +294,6 @@ class PixelLevelDecorrelation(LinearSystematics):
     name: ClassVar[str] = "pld"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldOptions
-    options: PldOptions
     record: ClassVar[MethodRecord] = MethodRecord(
         label="PLD", paper=_PLD_PAPER,
         policy=FitterPolicy(),

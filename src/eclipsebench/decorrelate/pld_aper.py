@@ -52,7 +52,7 @@ class PldAperOptions(MethodOptions):
 
 
 @register
-class PldAperture(LinearDetectorModel):
+class PldAperture(LinearDetectorModel[PldAperOptions]):
     """SPCA's PLDAper: the aperture flux fitted with normalised 3x3 or 5x5 pixels.
 
     Options (:class:`PldAperOptions`)
@@ -68,7 +68,6 @@ class PldAperture(LinearDetectorModel):
     name: ClassVar[str] = "pld-aper"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
     Options: ClassVar[type[MethodOptions]] = PldAperOptions
-    options: PldAperOptions
     record: ClassVar[MethodRecord] = MethodRecord(label="pld-aper", paper=SPCA_PAPER,
                                                   docs_anchor=SPCA_DOCS_ANCHOR)
     description: ClassVar[str] = "aperture flux on normalised pixels (SPCA's PLDAper)"

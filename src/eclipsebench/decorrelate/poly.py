@@ -48,7 +48,7 @@ from numpy.polynomial import legendre
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, register
+from .base import EpochData, MethodContext, MethodOptions, OptionsT, register
 from .linear import LinearDesign, LinearSystematics
 from .record import MethodRecord, PaperProfile
 
@@ -170,7 +170,7 @@ class LinearModelOptions(Protocol):
     psf_width: bool
 
 
-class LinearDetectorModel(LinearSystematics):
+class LinearDetectorModel(LinearSystematics[OptionsT]):
     """A detector model linear in its coefficients, times SPCA's optional PSF-width term.
 
     ``flux = astro * W(theta) * (R c)``: ``R`` are the regressors of the
@@ -259,13 +259,12 @@ class PolyOptions(MethodOptions):
         check(self.bin_frames >= 1, "bin_frames", "an integer >= 1")
 
 
-class _Polynomial(LinearDetectorModel):
+class _Polynomial(LinearDetectorModel[PolyOptions]):
     """SPCA's 2-D polynomial of total degree ``order`` in the centroid (module docstring)."""
 
     order: ClassVar[int] = 0
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = PolyOptions
-    options: PolyOptions
 
     def regressors(self, data: EpochData) -> np.ndarray:
         """Legendre products of the scaled centroids up to total degree ``order``."""

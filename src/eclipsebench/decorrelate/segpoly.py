@@ -391,7 +391,7 @@ _SEGPOLY_PAPER = PaperProfile(
 
 
 @register
-class SegmentedPolynomial(Systematics):
+class SegmentedPolynomial(Systematics[SegpolyOptions]):
     """SP(K2): stage-1 global and stage-2 segmented polynomial detrending (Buzasi et al. 2015).
 
     By default the detrend is the K2 pipeline's, blind to the eclipse: it
@@ -449,7 +449,6 @@ class SegmentedPolynomial(Systematics):
     name: ClassVar[str] = "segpoly"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     Options: ClassVar[type[MethodOptions]] = SegpolyOptions
-    options: SegpolyOptions
     #: The prayer bead's refits keep the detrend of the original data (see with_flux).
     record: ClassVar[MethodRecord] = MethodRecord(
         label="SP(K2)", paper=_SEGPOLY_PAPER,

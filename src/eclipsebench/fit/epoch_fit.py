@@ -120,7 +120,7 @@ def _transit_detail(astro_model: AstroModel, rp_rs: float, rp_rs_err: float,
 
 
 def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
-                 seed: int = 0, phase: str | None = None, errors: bool = True,
+                 phase: str | None = None, errors: bool = True,
                  reported: tuple[str, ...] | None = None) -> EpochResult:
     """Fit a :class:`PreparedEpoch` (used by :func:`reduce_epoch` and the phase comparison).
 
@@ -131,6 +131,9 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     (the depth, or a transit's Rp/R*) and time ``names[1]``; the ``depth_*``
     fields hold them as the event's depth (:meth:`AstroModel.depth_ppm`), and
     a transit's ``event_detail`` has Rp/R* and its error as fitted.
+
+    The run seed is the method's (``prep.systematics.context.seed``): the one
+    that seeded its streams and the MCMC's, and the one the result records.
     """
     systematics = prep.systematics
     astro_model = prep.astro_model(options, phase=phase)
@@ -212,7 +215,8 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         phase=astro_model.phase, ramp=astro_model.ramp, eclipse_shape=astro_model.eclipse_shape,
         sampler="mcmc" if mc is not None else "leastsq", converged=converged,
         params=params, param_errors=param_err,
-        mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)), seed=int(seed),
+        mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)),
+        seed=systematics.context.seed,
         options=systematics.options.to_dict(), diagnostics=jsonable(systematics.diagnostics()),
         depth_err_own_ppm={k: ppm(v) for k, v in own.items()}, lightcurve=lightcurve,
         chain=None if mc is None else {"names": np.asarray(mc.names),

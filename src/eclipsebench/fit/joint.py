@@ -22,7 +22,7 @@ from .leastsq import (
     _summarise,
     fit_leastsq,
 )
-from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch
+from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch, resolve_method_options
 from .result import joint_extra_keys, joint_fields_shown
 
 __all__ = ["JointResult", "reduce_joint"]
@@ -144,6 +144,7 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     epochs = list(epochs) if epochs is not None else [None] * len(tables)
     if len(epochs) != len(tables):
         raise InputError("reduce_joint: give one epoch number per table")
+    method_options = resolve_method_options(method, options, method_options)  # once, for all
     problems, fits, preps = [], [], []
     for table, ep in zip(tables, epochs, strict=True):
         prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, seed=seed,

@@ -61,7 +61,7 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
         phases = PHASE_CURVE_MODELS
     rows: list[dict[str, Any]] = []
     for phase in phases:
-        res = fit_prepared(prep, method, options=options, seed=seed, phase=phase, errors=False)
+        res = fit_prepared(prep, method, options=options, phase=phase, errors=False)
         rows.append({"phase": phase, "k": res.k, "depth_ppm": res.depth_ppm,
                      "depth_err_ppm": res.depth_err_ppm, "bic": res.bic, "aic": res.aic,
                      "chi2_red": res.chi2_red, "beta_red": res.beta_red})

@@ -25,11 +25,11 @@ from ..photometry.table import read_table
 from .astro_model import PHASE_CURVE_MODELS, AstroModel
 from .data import epoch_data_from_table, standardise_table
 from .frames import per_aor_systematics, settling_aor
-from .profiles import centroid_columns
+from .profiles import centroid_columns, paper_profile
 from .target import system_of_table
 
 __all__ = ["prepare_epoch", "PreparedEpoch", "resolve_system", "predicted_eclipse_bmjd",
-           "resolve_method_options", "check_method_options"]
+           "resolve_method_options", "configured_method_options"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
 _DEFAULT_OPTIONS = ReduceSection()
@@ -142,11 +142,50 @@ class PreparedEpoch:
                           limb_darkening_q=options.limb_darkening_q)
 
 
+def configured_method_options(options: ReduceSection) -> dict[str, MethodOptions]:
+    """Every ``[reduce.options.<method>]`` table parsed into its method's options, once.
+
+    Called at the edge, before any work (the reduce command, the runner's
+    planner, trust), so that a typo in a configuration file is one line naming
+    the dotted key; the caller keeps the result and gives it to
+    :func:`resolve_method_options` (``configured=``).
+
+    Raises
+    ------
+    ConfigError
+        ``reduce.options.<name>`` for an unknown method, or
+        ``reduce.options.<name>.<key>`` for an unknown or ill-typed option.
+
+    Examples
+    --------
+    >>> from dataclasses import replace
+    >>> configured_method_options(replace(_DEFAULT_OPTIONS, options={"kr-data": {"k": 20}}))
+    {'kr-data': KrDataOptions(k=20, use_noise_pixels=False)}
+    """
+    known = available_methods()
+    parsed: dict[str, MethodOptions] = {}
+    for name, table in options.options.items():
+        if name not in known:
+            raise ConfigError(f"reduce.options.{name}",
+                              f"unknown method (known: {', '.join(known)})")
+        parsed[name] = parse_method_options(get_method(name), table,
+                                            prefix=f"reduce.options.{name}")
+    return parsed
+
+
 def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
-                           method_options: Mapping[str, Any] | MethodOptions | None = None,
+                           method_options: Mapping[str, Any] | MethodOptions | None = None, *,
+                           profile: str = "controlled",
+                           configured: Mapping[str, MethodOptions] | None = None,
                            ) -> MethodOptions:
-    """The effective options of ``method``: ``[reduce.options.<method>]`` overlaid by
-    ``method_options``, checked against the method's options dataclass.
+    """The options ``method`` runs with, parsed once into its options dataclass.
+
+    ``[reduce.options.<method>]`` (``configured[method]`` when the caller parsed
+    the tables already, :func:`configured_method_options`), overlaid in the
+    paper profile (``profile="paper"``) by the options of the method's team
+    (its record's ``PaperProfile.method_options``), overlaid by
+    ``method_options``. An options instance is the whole answer: it is
+    returned as it is.
 
     Raises
     ------
@@ -158,35 +197,19 @@ def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTION
     --------
     >>> resolve_method_options("kr-data", method_options={"k": 20}).k
     20
+    >>> resolve_method_options("gp", profile="paper").bin_seconds   # the team's 30 s bins
+    30.0
     """
     cls = get_method(method)
-    configured = options.options.get(method, {})
-    base = parse_method_options(cls, configured, prefix=f"reduce.options.{method}")
-    if method_options is None:
-        return base
     if isinstance(method_options, MethodOptions):
-        return parse_method_options(cls, method_options)
-    return parse_method_options(cls, {**base.to_dict(), **dict(method_options)})
-
-
-def check_method_options(options: ReduceSection) -> None:
-    """Every ``[reduce.options.<method>]`` table names a registered method and its options.
-
-    Called before any work (the runner's planner, the reduce command), so that
-    a typo in a configuration file is one line naming the dotted key.
-
-    Raises
-    ------
-    ConfigError
-        ``reduce.options.<name>`` for an unknown method, or
-        ``reduce.options.<name>.<key>`` for an unknown or ill-typed option.
-    """
-    known = available_methods()
-    for name, table in options.options.items():
-        if name not in known:
-            raise ConfigError(f"reduce.options.{name}",
-                              f"unknown method (known: {', '.join(known)})")
-        parse_method_options(get_method(name), table, prefix=f"reduce.options.{name}")
+        return parse_method_options(cls, method_options)   # its class checked, nothing parsed
+    base = (configured or {}).get(method)
+    if base is None:
+        base = parse_method_options(cls, options.options.get(method, {}),
+                                    prefix=f"reduce.options.{method}")
+    team = paper_profile(method) if profile == "paper" else None
+    given = {**(team.method_options if team is not None else {}), **dict(method_options or {})}
+    return parse_method_options(cls, given, base=base)
 
 
 def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
@@ -197,7 +220,9 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                   centroid: str | None = None) -> PreparedEpoch:
     """Read the table, keep the good frames, build the method and predict the eclipse time.
 
-    The method gets its options (:func:`resolve_method_options`) and a
+    The method gets its options, ``method_options``: an options instance (the
+    caller's edge resolved it, :func:`resolve_method_options`) as it is, a
+    mapping or None resolved here over ``[reduce.options.<method>]``; and a
     :class:`~eclipsebench.decorrelate.base.MethodContext` with the run seed,
     the epoch and the resources it declares, loaded by its ``load_resources``
     from ``resources`` (paths or loaded objects). ``centroid`` ("col",

@@ -14,11 +14,16 @@ from dataclasses import replace
 from typing import Any
 
 from ..config.reduce import ReduceSection
-from ..decorrelate.base import MethodOptions
 from ..errors import InputError
 from .astro_model import PHASE_CURVE_MODELS
 from .epoch_fit import fit_prepared
-from .prepare import _DEFAULT_OPTIONS, PreparedEpoch, _resources, prepare_epoch
+from .prepare import (
+    _DEFAULT_OPTIONS,
+    PreparedEpoch,
+    _resources,
+    prepare_epoch,
+    resolve_method_options,
+)
 from .profiles import PROFILES, PaperProfile, paper_profile
 from .result import EpochResult
 
@@ -44,13 +49,16 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         The planet (default: the one the table names, a simulation's ``SYSTEM`` or the
         archive's ``OBJECT`` through the catalogue; InputError when it names none).
     seed : int
-        Run seed; every stream of the fit and of the method is
+        Run seed, carried from here by the method's context (``MethodContext.seed``,
+        also what the result records); every stream of the fit and of the method is
         ``rng(seed, "reduce", epoch, method, ...)`` (the MCMC's ends in ``"mcmc"``).
     epoch : int or None
         Epoch number (default: the table's ``EPOCH`` metadata).
     method_options : Mapping or MethodOptions, optional
-        The method's options, over those of ``options.options[method]``
-        (``[reduce.options.<method>]``).
+        The method's options: an instance of its options dataclass as it is (the
+        caller resolved it, :func:`~eclipsebench.fit.prepare.resolve_method_options`),
+        or a mapping over ``options.options[method]`` (``[reduce.options.<method>]``)
+        and, in the paper profile, the team's options; parsed once, here.
     resources : Mapping, optional
         Inputs a method declares in its ``resources`` (``{"pmap": path or
         loaded map}`` for ``kr-pmap``), loaded by the method's ``load_resources``.
@@ -82,27 +90,25 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     """
     requested = options.profile if profile is None else profile
     options, team = resolve_profile(method, options, profile)
-    if team is not None and not isinstance(method_options, MethodOptions):
-        method_options = {**team.method_options, **dict(method_options or {})}
+    method_options = resolve_method_options(method, options, method_options, profile=requested)
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
                          centroid=None if team is None else team.centroid)
-    options, bic = _phase_curve_choice(prep, method, options, seed)
+    options, bic = _phase_curve_choice(prep, method, options)
     if team is None:
-        result = replace(fit_prepared(prep, method, options=options, seed=seed),
-                         profile=requested)
+        result = replace(fit_prepared(prep, method, options=options), profile=requested)
         if requested == "paper":
             result = replace(result, profile_detail={"team": None, "settings": "controlled"})
     else:
-        result = _fit_paper_profile(prep, method, team, options=options, seed=seed)
+        result = _fit_paper_profile(prep, method, team, options=options)
     if bic:
         result = replace(result, event_detail={**result.event_detail, "phase_curve_bic": bic})
     return result
 
 
 def _phase_curve_choice(prep: PreparedEpoch, method: str, options: ReduceSection,
-                        seed: int) -> tuple[ReduceSection, dict[str, float]]:
+                        ) -> tuple[ReduceSection, dict[str, float]]:
     """A whole phase curve with ``phase_curve_model = "bic"``: the harmonic order of least BIC.
 
     Both orders are fitted by least squares (no errors) and the options come
@@ -111,7 +117,7 @@ def _phase_curve_choice(prep: PreparedEpoch, method: str, options: ReduceSection
     """
     if options.event != "phase-curve" or options.phase_curve_model != "bic":
         return options, {}
-    bic: dict[str, float] = {phase: float(fit_prepared(prep, method, options=options, seed=seed,
+    bic: dict[str, float] = {phase: float(fit_prepared(prep, method, options=options,
                                                        phase=phase, errors=False).bic)
                              for phase in PHASE_CURVE_MODELS}
     best = min(PHASE_CURVE_MODELS, key=lambda phase: bic[phase])
@@ -147,7 +153,7 @@ def resolve_profile(method: str, options: ReduceSection = _DEFAULT_OPTIONS,
 
 
 def _fit_paper_profile(prep: PreparedEpoch, method: str, team: PaperProfile, *,
-                       options: ReduceSection, seed: int) -> EpochResult:
+                       options: ReduceSection) -> EpochResult:
     """The team's fit: its phase and ramp (least BIC among its candidates), its error."""
     bic: dict[str, float] = {}
     if len(team.phases) * len(team.ramps) > 1:
@@ -155,12 +161,11 @@ def _fit_paper_profile(prep: PreparedEpoch, method: str, team: PaperProfile, *,
                       for ramp in team.ramps for phase in team.phases}
         for key, (phase, ramp) in candidates.items():
             trial = fit_prepared(prep, method, options=replace(options, ramp=ramp),
-                                 seed=seed, phase=phase, errors=False)
+                                 phase=phase, errors=False)
             bic[key] = float(trial.bic)
         phase, ramp = candidates[min(bic, key=lambda k: bic[k])]
         options = replace(options, phase=phase, ramp=ramp)
-    result = fit_prepared(prep, method, options=options, seed=seed,
-                          reported=team.reported_error)
+    result = fit_prepared(prep, method, options=options, reported=team.reported_error)
     return replace(result, profile="paper",
                    profile_detail={"team": team.team, "centroid": prep.centroid,
                                    "reported_error": list(team.reported_error),

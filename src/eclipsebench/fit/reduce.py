@@ -21,7 +21,7 @@ from .joint import JointResult, reduce_joint
 from .phase_select import PhaseSelection, select_phase_model
 from .prepare import (
     PreparedEpoch,
-    check_method_options,
+    configured_method_options,
     predicted_eclipse_bmjd,
     prepare_epoch,
     resolve_method_options,
@@ -33,4 +33,4 @@ from .result import EpochResult
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
            "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options",
-           "check_method_options", "resolve_profile", "phase_curve_detail"]
+           "configured_method_options", "resolve_profile", "phase_curve_detail"]

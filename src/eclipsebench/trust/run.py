@@ -28,6 +28,7 @@ from ..astro.catalogue import PlanetSystem
 from ..config.base import to_mapping
 from ..config.reduce import ReduceSection
 from ..decorrelate import get_method
+from ..decorrelate.base import MethodOptions, parse_method_options
 from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import InputError
@@ -65,6 +66,9 @@ class TrustSettings:
     depth_ppm: float | None = None
     method_options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     pmap: str | None = None
+    #: Each method's options as resolved once by :func:`make_settings` (the
+    #: configuration's table, the team's in the paper profile, ``method_options``).
+    resolved_options: Mapping[str, MethodOptions] = field(default_factory=dict)
 
     def describe(self) -> dict[str, Any]:
         """A JSON-able view (the guard and the result both record it)."""
@@ -78,10 +82,12 @@ class TrustSettings:
 # ----------------------------------------------------------------------------- tasks
 def _reduce(settings: TrustSettings, table, method: str, *, seed: int, epoch: int | None,
             extra_options: Mapping[str, Any] | None = None):
-    options = {**settings.method_options.get(method, {}), **(extra_options or {})}
+    """``method`` on ``table`` with its resolved options (``extra_options`` over them)."""
+    options = parse_method_options(get_method(method), extra_options,
+                                   base=settings.resolved_options[method])
     return fit_reduce.reduce_epoch(table, method, options=settings.reduce,
                                    system=settings.system, seed=seed, epoch=epoch,
-                                   method_options=options or None, pmap=settings.pmap)
+                                   method_options=options, pmap=settings.pmap)
 
 
 def _write_result(result, out: Path) -> None:
@@ -296,10 +302,12 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     for m in options:
         if m not in chosen:
             raise InputError(f"option for {m!r}: not one of the methods of this run")
-    fit_reduce.check_method_options(reduce)
-    for m in chosen:
-        fit_reduce.resolve_method_options(m, reduce, options.get(m))
+    configured = fit_reduce.configured_method_options(reduce)
+    resolved = {m: fit_reduce.resolve_method_options(m, reduce, options.get(m),
+                                                     profile=reduce.profile,
+                                                     configured=configured)
+                for m in chosen}
     return TrustSettings(table=str(path.resolve()), system=planet, methods=chosen,
                          n_twins=int(n_twins), seed=int(seed), reduce=reduce,
                          depth_ppm=None if depth_ppm is None else float(depth_ppm),
-                         method_options=options, pmap=pmap)
+                         method_options=options, pmap=pmap, resolved_options=resolved)
