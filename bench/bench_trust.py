@@ -157,9 +157,20 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
             f"{m} {summary['methods'][m]['depth_ppm'] - depth[e]:+.0f} (RMSE "
             f"{summary['methods'][m]['rmse_ppm']:.0f})" for m in summary["methods"])
             + f"; recommended {summary['recommended']}", flush=True)
+    # With n twins the predicted RMSE is itself estimated: if a method's twin errors are
+    # N(0, s^2), n RMSE^2 / s^2 is chi^2 with n degrees of freedom, so even a perfect
+    # prediction gives E[(error / RMSE)^2] = n / (n - 2) (1.25 for 10 twins).
+    print(f"a perfect prediction from {n_twins} twins: rms {np.sqrt(n_twins / (n_twins - 2)):.2f} "
+          "expected")
+    boot = np.random.default_rng(0)
     for m, r in ratios.items():
+        arr = np.asarray(r)
+        draws = np.sqrt(np.mean(np.square(arr[boot.integers(0, len(arr), (2000, len(arr)))]),
+                                axis=1))
+        lo, hi = np.percentile(draws, [5, 95])
         print(f"{m}: rms(actual error / predicted RMSE) over {len(r)} epochs = "
-              f"{float(np.sqrt(np.mean(np.square(r)))):.2f}")
+              f"{float(np.sqrt(np.mean(np.square(arr)))):.2f} (bootstrap over epochs, 90 %: "
+              f"{lo:.2f}-{hi:.2f})")
     if rec_err:
         print(f"recommended method's mean |error| {np.mean(rec_err):.1f} ppm against the "
               f"median method's {np.mean(med_err):.1f} ppm over {len(rec_err)} epochs")
