@@ -66,7 +66,8 @@ def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
 
 @pytest.mark.parametrize("extra, what", [
     (["--twins", "9"], "--twins"), (["--depth", "nan"], "--depth"),
-    (["--depth", "-5"], "--depth"), (["--methods", "no-such"], "no-such")])
+    (["--depth", "-5"], "--depth"), (["--methods", "no-such"], "no-such"),
+    (["--pmap", "no-such-map"], "no-such-map")])
 def test_bad_input_is_one_line_exit_2_and_nothing_written(small_table, tmp_path, capsys,
                                                           extra, what):
     out = tmp_path / "trust"

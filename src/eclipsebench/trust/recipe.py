@@ -28,7 +28,7 @@ from ..photometry.table import read_table
 from .observation import Observation, observation_from_table
 from .twin import TwinRecipe, calibrate_motion, gain_model, make_recipe, map_gain
 
-__all__ = ["twin_light_curve", "build_recipe", "twin_gain", "write_recipe", "read_recipe", "EVENTS"]
+__all__ = ["twin_light_curve", "build_recipe", "twin_map", "twin_gain", "write_recipe", "read_recipe", "EVENTS"]
 
 #: The events a twin can carry (a whole phase curve is several AORs of its own kind).
 EVENTS = ("eclipse", "transit")
@@ -62,19 +62,31 @@ def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
     return np.asarray(model(theta), dtype=float)
 
 
+def twin_map(obs: Observation, pmap: str | None) -> tuple[Path, GriddedPmap | None] | None:
+    """The map ``pmap`` names for ``obs`` (a folder of versions: the one in force at the
+    observation's date), loaded: ``(path, map)``, the map None for a calibration-star
+    table; None without ``pmap``. Raises InputError/DataError in one line for a path
+    that holds no readable map."""
+    if pmap is None or str(pmap) == "":
+        return None
+    path = find_pmap_path(pmap, {"CHANNEL": obs.channel}, float(obs.time_bmjd[0]))
+    found = load_pmap(path)
+    return path, (found if isinstance(found, GriddedPmap) else None)
+
+
 def twin_gain(obs: Observation, pmap: str | None) -> tuple[GainPolynomial | None, str, dict]:
-    """The twins' intra-pixel gain: fitted to the gridded SSC map ``pmap`` (a folder of
-    versions: the one in force at the observation's date), else the simulator's model.
+    """The twins' intra-pixel gain: fitted to the gridded SSC map ``pmap`` (:func:`twin_map`),
+    else the simulator's model.
 
     Returns the gain (None: the simulator's), its description and the map fit's
     diagnostics. A calibration-star table is not a gridded map: the twins keep the
     simulator's model and the description says so.
     """
-    if pmap is None or str(pmap) == "":
+    chosen = twin_map(obs, pmap)
+    if chosen is None:
         return None, gain_model(obs.channel), {}
-    path = find_pmap_path(pmap, {"CHANNEL": obs.channel}, float(obs.time_bmjd[0]))
-    found = load_pmap(path)
-    if not isinstance(found, GriddedPmap):
+    path, found = chosen
+    if found is None:
         return None, (gain_model(obs.channel) + f"; {path.name} is a calibration-star table, "
                       "not a gridded map of the gain, so the twins keep the simulator's model"), {}
     poly, text, info = map_gain(obs.channel, found.x_grid, found.y_grid, found.gain,

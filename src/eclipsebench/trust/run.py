@@ -267,12 +267,13 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         One line naming the argument: a missing or unreadable table, one that
         cannot be twinned (another pipeline's, fewer than 100 good frames), a
         twin count outside 10-10,000, a depth that is not finite and positive,
-        an unknown method, a whole phase curve, or a table naming no planet.
+        an unknown method, a whole phase curve, a table naming no planet, or a
+        ``pmap`` that holds no readable map.
     """
     from ..decorrelate import available_methods
     from ..fit.target import system_of_table
     from .observation import observation_from_table
-    from .recipe import EVENTS
+    from .recipe import EVENTS, twin_map
 
     if isinstance(n_twins, bool) or not isinstance(n_twins, int) \
             or not MIN_TWINS <= n_twins <= MAX_TWINS:
@@ -295,7 +296,7 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     if not path.is_file():
         raise InputError(f"{path}: no such photometry table")
     data = read_table(path)
-    observation_from_table(data, str(path))
+    twin_map(observation_from_table(data, str(path)), pmap)   # a bad --pmap stops here
     planet = system_of_table(data.meta, system=system, section=system_section,
                              source=str(path), hint=hint)
     options = {m: dict(v) for m, v in (method_options or {}).items()}
