@@ -319,7 +319,8 @@ def chain_file(result_path: str | Path) -> Path:
 
 
 def _check_pmap(args: argparse.Namespace, table, table_path: Path) -> None:
-    """kr-pmap needs a map: ``--pmap``, or a simulated table's SIMDIR (named on the command line).
+    """A method that needs the ``pmap`` resource (kr-pmap) needs a map: ``--pmap``, or a
+    simulated table's SIMDIR (named on the command line).
 
     The ``--option`` values were resolved before (:func:`run`), so an unknown
     option is the error reported, as for any other method.
@@ -327,10 +328,10 @@ def _check_pmap(args: argparse.Namespace, table, table_path: Path) -> None:
     from ..decorrelate import get_method
 
     cls = get_method(args.method)
-    if cls.name != "kr-pmap" or args.pmap is not None:
+    if "pmap" not in cls.resources or args.pmap is not None:
         return
     if not (table.meta.get("SIMDIR") or table.meta.get("simdir")):
-        raise InputError(f"--method kr-pmap: needs --pmap PATH (a calibration-star table, the "
+        raise InputError(f"--method {cls.name}: needs --pmap PATH (a calibration-star table, the "
                          f"SSC pmap, or a folder of its versions); {table_path} names no "
                          "simulation folder (SIMDIR) to find one in")
 
