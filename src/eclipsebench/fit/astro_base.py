@@ -14,12 +14,14 @@ every event shares (the size, the event's time, the ramp), the eclipse's depth
 conversions and the Gaussian priors (which an event overrides where it
 differs), and the description of the settings. Each event's class fills in
 its setup, ``visible_fraction``, ``stellar_flux`` and the model itself
-(``_model``). The base is not an ``abc.ABC``: it is also the constructor
-that callers name, which a type checker would refuse to instantiate.
+(``_model``), the base's abstract methods. Typed code builds a model with
+:meth:`AstroModel.build` (a type checker refuses to call an abstract class);
+``AstroModel(...)`` gives the same object.
 """
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -49,7 +51,7 @@ class EventSettings:
     nonnegative_planet: bool = False
 
 
-class AstroModel:
+class AstroModel(ABC):
     """The astrophysical model of one event at fixed times: ``AstroModel(...)`` builds the
     event's subclass.
 
@@ -151,17 +153,28 @@ class AstroModel:
         if cls.__dict__.get("event"):
             AstroModel._event_classes[cls.event] = cls
 
-    def __new__(cls, *args: Any, event: str | None = None, **kwargs: Any) -> AstroModel:
-        """The event's subclass when called as ``AstroModel(...)``, else ``cls`` itself."""
-        if cls is not AstroModel:
-            return super().__new__(cls)
+    @staticmethod
+    def event_class(event: str | None) -> type[AstroModel]:
+        """The model class of ``event`` (None: the eclipse's)."""
         event = "eclipse" if event is None else event
         if event not in EVENTS:
             raise InputError(f"--event {event!r}: expected one of {', '.join(EVENTS)}")
         if event not in AstroModel._event_classes:
             raise InputError(f"event {event!r}: its model is not loaded (import AstroModel "
                              "from eclipsebench.fit.astro_model)")
-        return super().__new__(AstroModel._event_classes[event])
+        return AstroModel._event_classes[event]
+
+    @classmethod
+    def build(cls, *args: Any, event: str | None = None, **kwargs: Any) -> AstroModel:
+        """The model of ``event``: what ``AstroModel(..., event=...)`` gives, in a form a
+        type checker accepts (the base is abstract)."""
+        return AstroModel.event_class(event)(*args, event=event, **kwargs)
+
+    def __new__(cls, *args: Any, event: str | None = None, **kwargs: Any) -> AstroModel:
+        """The event's subclass when called as ``AstroModel(...)``, else ``cls`` itself."""
+        if cls is not AstroModel:
+            return super().__new__(cls)
+        return super().__new__(AstroModel.event_class(event))
 
     def __init__(self, time_bmjd, system: Any = None, *, phase: str = "quadratic",
                  ramp: str = "none", eclipse_shape: str = "physical",
@@ -221,9 +234,9 @@ class AstroModel:
             raise InputError("aorkey, exposure_s, nonnegative_planet: apply to event "
                              "'phase-curve' only")
 
+    @abstractmethod
     def _setup(self, system: Any, settings: EventSettings) -> None:
         """The event's own settings, its geometry and its parameter names."""
-        raise NotImplementedError(f"{type(self).__name__}: an event's model defines _setup")
 
     def __len__(self) -> int:
         return len(self.names)
@@ -267,6 +280,7 @@ class AstroModel:
 
     def _bound_event(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """Set the event's own bounds in place (default: none)."""
+        return None   # a hook: nothing to do by default
 
     def initial(self, *, depth: float | None = None, t_ecl_bmjd: float | None = None,
                 rp_rs: float | None = None) -> np.ndarray:
@@ -304,15 +318,13 @@ class AstroModel:
         theta[0] = 1e-3 if depth is None else depth
 
     # ------------------------------------------------------------------ the model's parts
+    @abstractmethod
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
         """v(t): 1 = planet fully visible, 0 = fully eclipsed."""
-        raise NotImplementedError(f"{type(self).__name__}: an event's model defines "
-                                  "visible_fraction")
 
+    @abstractmethod
     def stellar_flux(self, theta) -> np.ndarray:
         """T(t), the star's flux in transit (1 outside)."""
-        raise NotImplementedError(f"{type(self).__name__}: an event's model defines "
-                                  "stellar_flux")
 
     def planet(self, theta) -> np.ndarray:
         """p(t), the planet-to-star flux ratio; p(t_ecl) = depth for every phase model."""
@@ -354,9 +366,9 @@ class AstroModel:
                              f"got {len(theta)}")
         return self._model(theta)
 
+    @abstractmethod
     def _model(self, theta: np.ndarray) -> np.ndarray:
         """A(t) of a parameter vector of the right length."""
-        raise NotImplementedError(f"{type(self).__name__}: an event's model defines _model")
 
     def batch(self, thetas) -> np.ndarray:
         """The model of every row of ``thetas`` at once: shape (m, n) (the MCMC's call).

@@ -35,6 +35,7 @@ Kipping's (2013) limb-darkening parametrisation (:func:`u_from_q`,
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -192,7 +193,7 @@ def known_period(period_d: float | None) -> float:
     return period_d
 
 
-class PhaseTerm:
+class PhaseTerm(ABC):
     """p(t), the planet-to-star flux ratio of one phase model, ``p(t_ecl) = level``.
 
     ``level`` is the depth (an eclipse or phase curve) or 0 (a transit's
@@ -219,10 +220,10 @@ class PhaseTerm:
     #: The model's code in the compiled eclipse batch (``_astro_rows``); None: numpy's.
     kernel_code: ClassVar[int | None] = None
 
+    @abstractmethod
     def value(self, level: float, c: np.ndarray, dt: np.ndarray,
               period_d: float | None) -> np.ndarray:
         """p at the times ``dt`` from mid-eclipse of one parameter vector."""
-        raise NotImplementedError
 
     def rows(self, level: np.ndarray, c: np.ndarray, dt: np.ndarray,
              period_d: float | None) -> np.ndarray:
@@ -311,7 +312,7 @@ class SecondHarmonic(FirstHarmonic):
     names = ("phase_a1", "phase_b1", "phase_a2", "phase_b2")
 
 
-class Ramp:
+class Ramp(ABC):
     """R(t), a multiplicative detector ramp; ``r`` its coefficients (:attr:`names` first),
     ``dt = time - t0`` (the first frame).
 
@@ -329,13 +330,13 @@ class Ramp:
     #: Its coefficients' names, in the parameter vector's order.
     names: ClassVar[tuple[str, ...]] = ()
 
+    @abstractmethod
     def factor(self, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """R at ``dt`` for one parameter vector."""
-        raise NotImplementedError
 
+    @abstractmethod
     def rows(self, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """R of every row of ``r`` (m, >= len(names)): shape (m, len(dt))."""
-        raise NotImplementedError
 
     def apply(self, flux: np.ndarray, r: np.ndarray, dt: np.ndarray) -> np.ndarray:
         """``flux`` times R (:meth:`factor`), in place."""
@@ -354,9 +355,11 @@ class Ramp:
     def bound(self, lo: np.ndarray, hi: np.ndarray, k: int, exposure_d: float,
               span_d: float) -> None:
         """Set the bounds of the ramp's parameters at ``k`` (default: unbounded)."""
+        return None   # a hook: nothing to do by default
 
     def start(self, theta: np.ndarray, k: int, span_d: float) -> None:
         """Set the ramp's starting parameters at ``k`` (default: 0, set by the caller)."""
+        return None   # a hook: nothing to do by default
 
 
 class NoRamp(Ramp):

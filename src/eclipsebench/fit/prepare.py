@@ -126,7 +126,7 @@ class PreparedEpoch:
             # a whole phase curve: its own phase models, the physical eclipse repeated each
             # orbit, an offset per AOR unless each AOR has its own systematics
             data = self.systematics.data
-            return AstroModel(
+            return AstroModel.build(
                 data.time_bmjd, self.system, event="phase-curve",
                 phase=phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model,
                 ramp=options.ramp, eclipse_shape=shape,
@@ -135,11 +135,12 @@ class PreparedEpoch:
                         else None),
                 exposure_s=options.exposure_s or None,
                 nonnegative_planet=options.nonnegative_planet)
-        return AstroModel(self.systematics.data.time_bmjd, self.system,
-                          phase=phase or options.phase, ramp=options.ramp, eclipse_shape=shape,
-                          event=options.event, transit_free=options.transit_free,
-                          transit_priors=options.transit_priors,
-                          limb_darkening_q=options.limb_darkening_q)
+        return AstroModel.build(self.systematics.data.time_bmjd, self.system,
+                                phase=phase or options.phase, ramp=options.ramp,
+                                eclipse_shape=shape, event=options.event,
+                                transit_free=options.transit_free,
+                                transit_priors=options.transit_priors,
+                                limb_darkening_q=options.limb_darkening_q)
 
 
 def configured_method_options(options: ReduceSection) -> dict[str, MethodOptions]:

@@ -31,27 +31,14 @@ import numpy as np
 from scipy import interpolate
 
 from ..errors import InputError
-from ..photometry.estimators import aperture_flux, centroid_col
-from .prf import PRF, GainPolynomial
+from .prf import PRF, GainPolynomial, polynomial_powers, true_grid_photometry
 
-__all__ = ["OCCUPANCY_MIN", "fit_centroid_gain", "fit_true_phase_gain", "trusted_box",
-           "polynomial_powers"]
+__all__ = ["OCCUPANCY_MIN", "fit_centroid_gain", "fit_true_phase_gain", "trusted_box"]
 
 #: Occupancy above which a map cell is well sampled (weight 1 in the fits).
 OCCUPANCY_MIN = 20.0
 
 Box = tuple[tuple[float, float], tuple[float, float]]
-
-
-def polynomial_powers(degree: int) -> list[tuple[int, int]]:
-    """The ``(m, n)`` powers of ``u^m v^n`` of a 2-D polynomial of total ``degree``.
-
-    Examples
-    --------
-    >>> polynomial_powers(1)
-    [(0, 0), (1, 0), (0, 1)]
-    """
-    return [(m, t - m) for t in range(degree + 1) for m in range(t, -1, -1)]
 
 
 def _weighted_fit(u: np.ndarray, v: np.ndarray, target: np.ndarray, weights: np.ndarray,
@@ -145,16 +132,7 @@ def fit_true_phase_gain(prf: PRF, x_grid, y_grid, gain, occupancy, *, radius_px:
     """
     x_grid, y_grid, gain, occupancy = _check_map(x_grid, y_grid, gain, occupancy)
     box = trusted_box(x_grid, y_grid, gain, occupancy)
-    g = np.arange(-0.5, 0.5 + 1e-9, step_px)
-    gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
-    xs, ys = gx.ravel(), gy.ravel()
-    saved, prf.gain = prf.gain, None
-    try:
-        images = prf.render(xs, ys)
-    finally:
-        prf.gain = saved
-    xc, yc = centroid_col(images, around=(15, 15))
-    ap_flux = aperture_flux(images, xc, yc, radius_px)
+    xs, ys, xc, yc, ap_flux = true_grid_photometry(prf, step_px, radius_px)
     at = np.column_stack([yc, xc])
     value = interpolate.RegularGridInterpolator((y_grid, x_grid), gain, bounds_error=False,
                                                 fill_value=np.nan)(at)

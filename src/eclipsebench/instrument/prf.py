@@ -69,7 +69,8 @@ from ..detector import constants
 from ..photometry.estimators import aperture_flux, centroid_col
 from . import _spline
 
-__all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial",
+__all__ = ["PRF", "BuiltinPRF", "IrsaPRF", "TaylorStamps", "GainPolynomial", "polynomial_powers",
+           "true_grid_photometry",
            "load_gainmap_coefficients", "irsa_prf_channel",
            "electrons_per_second_scale", "jy_to_electrons_per_second", "psf_fine",
            "pixel_integrated_table", "warm_rescaling"]
@@ -477,6 +478,36 @@ class IrsaPRF(PRF):
         return obj
 
 
+def polynomial_powers(degree: int) -> list[tuple[int, int]]:
+    """The ``(m, n)`` powers of ``u^m v^n`` of a 2-D polynomial of total ``degree``.
+
+    Examples
+    --------
+    >>> polynomial_powers(1)
+    [(0, 0), (1, 0), (0, 1)]
+    """
+    return [(m, t - m) for t in range(degree + 1) for m in range(t, -1, -1)]
+
+
+def true_grid_photometry(prf: PRF, step_px: float, radius_px: float) -> tuple[np.ndarray, ...]:
+    """Stars of ``prf`` without its gain on a grid of true positions across pixel (15, 15)
+    (step ``step_px``), measured: ``(x, y, x_centroid, y_centroid, aperture_sum)``.
+
+    The 7x7 centre-of-light centroid and the aperture sum of radius
+    ``radius_px`` at it; ``prf``'s own gain is restored afterwards.
+    """
+    g = np.arange(-0.5, 0.5 + 1e-9, step_px)
+    gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
+    xs, ys = gx.ravel(), gy.ravel()
+    saved, prf.gain = prf.gain, None
+    try:
+        images = prf.render(xs, ys)
+    finally:
+        prf.gain = saved
+    xc, yc = centroid_col(images, around=(15, 15))
+    return xs, ys, xc, yc, aperture_flux(images, xc, yc, radius_px)
+
+
 def warm_rescaling(prf: PRF, *, step_px: float = 0.05, degree: int = 6,
                    channel: int = 2) -> GainPolynomial:
     """The gain that makes aperture photometry of ``prf`` follow the warm gain map.
@@ -487,20 +518,15 @@ def warm_rescaling(prf: PRF, *, step_px: float = 0.05, degree: int = 6,
     (its committed polynomial ``pmap_poly`` in the centroid phase, clamped to
     its trusted box when it has one). Solved on a grid of true sub-pixel
     positions and fitted with a polynomial of total ``degree`` in the true
-    phase.
+    phase. (:func:`eclipsebench.instrument.gain_fit.fit_true_phase_gain` fits
+    the gridded map itself, weighted by its occupancy.)
     """
     coeff = load_gainmap_coefficients(channel)
     pmap = GainPolynomial.from_dict(coeff["pmap_poly"])
     radius = float(coeff["builtin"]["aperture_radius_px"])
-    g = np.arange(-0.5, 0.5 + 1e-9, step_px)
-    gx, gy = np.meshgrid(15.0 + g, 15.0 + g)
-    xs, ys = gx.ravel(), gy.ravel()
-    saved, prf.gain = prf.gain, None
-    images = prf.render(xs, ys)
-    prf.gain = saved
-    xc, yc = centroid_col(images, around=(15, 15))
-    ratio = pmap.evaluate(xc, yc) / aperture_flux(images, xc, yc, radius)
-    powers = [(m, t - m) for t in range(degree + 1) for m in range(t, -1, -1)]
+    xs, ys, xc, yc, ap_flux = true_grid_photometry(prf, step_px, radius)
+    ratio = pmap.evaluate(xc, yc) / ap_flux
+    powers = polynomial_powers(degree)
     design = np.stack([(xs - 15.0) ** m * (ys - 15.0) ** n for m, n in powers], axis=-1)
     c, *_ = np.linalg.lstsq(design, ratio / ratio.mean(), rcond=None)
     return GainPolynomial(tuple(powers), tuple(float(v) for v in c))

@@ -50,7 +50,7 @@ def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
     if event not in EVENTS:
         raise InputError(f"event {event!r}: twins carry an eclipse or a transit "
                          f"({', '.join(EVENTS)})")
-    model = AstroModel(time_bmjd, system, phase=str(fit.get("phase", "flat")), event=event)
+    model = AstroModel.build(time_bmjd, system, phase=str(fit.get("phase", "flat")), event=event)
     when = "t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"
     size = np.sqrt(depth_ppm * 1e-6) if event == "transit" else depth_ppm * 1e-6
     theta = model.initial(t_ecl_bmjd=float(fit[when]))
