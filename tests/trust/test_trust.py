@@ -89,7 +89,7 @@ def test_a_table_with_fewer_than_100_good_frames_is_refused(small_table, tmp_pat
 
 @pytest.mark.slow
 def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small_table,
-                                                                           tmp_path):
+                                                                           tmp_path, capsys):
     one, two = tmp_path / "one", tmp_path / "two"
     assert main(["trust", str(small_table), "--out", str(one), "--workers", "1"] + FAST) == 0
     assert main(["trust", str(small_table), "--out", str(two), "--workers", "2"] + FAST) == 0
@@ -115,6 +115,19 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     assert main(["trust", str(small_table), "--out", str(one), "--workers", "1", "--json"]
                 + FAST) == 0
     assert (one / "trust.json").read_bytes() == result
+    # more twins in the same folder: the ten made are kept, the score covers twelve;
+    # back to ten, the answer is the ten-twin one again
+    made = (one / "twins" / "twin_001.fits").stat().st_mtime_ns
+    more = [a if a != "10" else "12" for a in FAST]
+    assert main(["trust", str(small_table), "--out", str(one)] + more) == 0
+    assert json.loads((one / "trust.json").read_bytes())["n_twins"] == 12
+    assert (one / "twins" / "twin_001.fits").stat().st_mtime_ns == made
+    assert main(["trust", str(small_table), "--out", str(one)] + FAST) == 0
+    assert (one / "trust.json").read_bytes() == result
+    # other settings in the same folder are refused
+    capsys.readouterr()
+    assert main(["trust", str(small_table), "--out", str(one), "--seed", "5"] + FAST) == 2
+    assert "other settings" in capsys.readouterr().err
 
 
 @pytest.mark.shared_data

@@ -211,12 +211,27 @@ def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[st
 
 
 def _guard(settings: TrustSettings, layout: TrustLayout) -> None:
-    text = json.dumps(settings.describe(), sort_keys=True, indent=1)
+    """Refuse a folder of other settings; another number of twins is the same run, resumed.
+
+    Twin ``i`` depends on the seed and ``i`` only, so asking for more twins keeps
+    the ones already made and reduced, and the score (whose inputs change) is
+    redone over twins 1 to ``n_twins``.
+    """
+    described = settings.describe()
+    text = json.dumps(described, sort_keys=True, indent=1)
     if layout.config.is_file():
-        if layout.config.read_text() != text:
+        held = layout.config.read_text()
+        if held == text:
+            return
+        try:
+            before = json.loads(held)
+        except ValueError:
+            before = None
+        if not isinstance(before, dict) or {**before, "n_twins": settings.n_twins} != described:
             raise InputError(f"{layout.root}: holds a trust run with other settings (see "
                              f"{layout.config.name}); use another --out or remove it")
-        return
+        log.info("%s: %s twins asked where %s were; the twins made are kept", layout.root,
+                 settings.n_twins, before.get("n_twins"))
     write_text(layout.config, text)
 
 
