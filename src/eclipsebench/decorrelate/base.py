@@ -46,13 +46,13 @@ from typing import Any, ClassVar, Generic, Self, TypeVar, cast, get_type_hints
 
 import numpy as np
 
-from ..config.base import coerce
+from ..config.base import check, coerce
 from ..errors import ConfigError, InputError
 from ..io.paths import SAFE_NAME, is_safe_name
 from ..seeding import rng, spawn_ints
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .record import FitterPolicy, MethodRecord, PaperProfile, heading_anchor
 
-__all__ = ["EpochData", "MethodOptions", "MethodContext", "Systematics", "MethodRecord",
+__all__ = ["EpochData", "AtLeast", "MethodOptions", "MethodContext", "Systematics", "MethodRecord",
            "FitterPolicy", "PaperProfile", "register",
            "get_method", "method_class", "available_methods", "parse_method_options",
            "ENTRY_POINT_GROUP"]
@@ -152,10 +152,21 @@ class EpochData:
 
 
 @dataclass(frozen=True)
+class AtLeast:
+    """An integer option's lower bound, declared with its type: ``k: Annotated[int, AtLeast(1)]``.
+
+    :class:`MethodOptions` checks it when an instance is made, before ``validate``.
+    """
+
+    minimum: int
+
+
+@dataclass(frozen=True)
 class MethodOptions:
     """Base of every method's options: a frozen dataclass, one field per option.
 
-    A subclass declares typed fields with defaults and may add range checks
+    A subclass declares typed fields with defaults (an integer's lower
+    bound with its type: ``Annotated[int, AtLeast(1)]``) and may add other checks
     in ``validate`` (raise :class:`~eclipsebench.errors.ConfigError` naming
     the field, with :func:`eclipsebench.config.check`). An instance is
     checked when it is made (``__post_init__``): each value given is taken
@@ -177,11 +188,16 @@ class MethodOptions:
 
     def __post_init__(self) -> None:
         # A subclass that defines its own __post_init__ calls this one.
-        types = get_type_hints(type(self))
+        types, declared = get_type_hints(type(self)), get_type_hints(type(self),
+                                                                     include_extras=True)
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
             if value is not f.default:   # the class's own default is as it declared it
-                object.__setattr__(self, f.name, coerce(value, types[f.name], f.name))
+                value = coerce(value, types[f.name], f.name)
+                object.__setattr__(self, f.name, value)
+            for bound in getattr(declared[f.name], "__metadata__", ()):
+                if isinstance(bound, AtLeast):
+                    check(value >= bound.minimum, f.name, f"an integer >= {bound.minimum}")
         self.validate()
 
     def validate(self) -> None:
@@ -333,11 +349,12 @@ class Systematics(ABC, Generic[OptionsT]):
     """Base class of a systematics model.
 
     Subclasses set ``name`` (the registry name), ``requires`` (the EpochData
-    attributes that must not be None), ``Options`` (a :class:`MethodOptions`
-    subclass, also the class's type parameter: ``class Bliss(Systematics[BlissOptions])``,
-    so that ``self.options`` is typed) and implement :meth:`predict`. They do
-    all parameter-independent work in ``__init__``, reading their settings
-    from ``self.options`` and their random streams and resources from
+    attributes that must not be None), their options as the class's type
+    parameter (``class Bliss(Systematics[BlissOptions])``: a
+    :class:`MethodOptions` dataclass, which becomes ``Options`` and types
+    ``self.options``) and implement :meth:`predict`. They do all
+    parameter-independent work in :meth:`setup`, reading their settings from
+    ``self.options`` and their random streams and resources from
     ``self.context``.
 
     Parameters
@@ -384,6 +401,29 @@ class Systematics(ABC, Generic[OptionsT]):
                              "in the photometry table")
         self.data = data
         self.context = context if context is not None else MethodContext(method=self.name)
+        self.setup(data)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """What a subclass does not set itself: ``Options`` from its type parameter
+        (``Systematics[BlissOptions]``), ``description`` from its docstring's summary."""
+        super().__init_subclass__(**kwargs)
+        if "description" not in cls.__dict__ and cls.__doc__:
+            cls.description = " ".join(cls.__doc__.strip().split("\n\n")[0].split())
+        if "Options" in cls.__dict__:
+            return
+        for base in cls.__dict__.get("__orig_bases__", ()):
+            for arg in getattr(base, "__args__", ()):
+                if isinstance(arg, type) and issubclass(arg, MethodOptions):
+                    cls.Options = arg
+                    return
+
+    def setup(self, data: EpochData) -> None:
+        """The method's parameter-independent work, once, when it is built.
+
+        Called at the end of ``__init__`` with its options parsed
+        (``self.options``) and its streams and resources in ``self.context``.
+        The default does nothing.
+        """
 
     @classmethod
     def build(cls, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
@@ -627,10 +667,14 @@ def register(cls: type[_S]) -> type[_S]:
         raise TypeError(f"{cls.__name__}.Options is not a MethodOptions dataclass")
     if cls.name in _REGISTRY and _REGISTRY[cls.name] is not cls:
         raise TypeError(f"method name '{cls.name}' is registered twice")
-    if not isinstance(cls.__dict__.get("record"), MethodRecord):
+    own = cls.__dict__.get("record")
+    if not isinstance(own, MethodRecord):
         # a class with no record of its own (a plugin subclassing a built-in method):
         # its parent's policy (the code it runs), no team's profile, no docs section
         cls.record = MethodRecord(policy=cls.record.policy)
+    elif not own.docs_anchor:
+        heading = f"{own.label or cls.name} (`{cls.name}`)"
+        cls.record = dataclasses.replace(own, docs_anchor=heading_anchor(heading))
     _REGISTRY[cls.name] = cls
     return cls
 

@@ -27,15 +27,15 @@ once in :func:`bliss_setup`; :func:`bliss_gain` is the cheap evaluation.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .base import AtLeast, EpochData, MethodOptions, Systematics, register
+from .record import FitterPolicy, MethodRecord, team_profile
 
 __all__ = ["BlissGrid", "knot_spacing_from_data", "poet_axis_knots", "bliss_setup",
            "bliss_knot_values", "bliss_gain", "Bliss"]
@@ -251,30 +251,13 @@ class BlissOptions(MethodOptions):
     """Options of ``bliss`` (:class:`Bliss`)."""
 
     knot_spacing_px: float | tuple[float, ...] | None = None
-    min_points_per_knot: int = 4
+    min_points_per_knot: Annotated[int, AtLeast(1)] = 4
 
     def validate(self) -> None:
         sp = self.knot_spacing_px
         check(sp is None or (np.size(sp) in (1, 2) and bool(np.all(np.asarray(sp) > 0))
                              and bool(np.all(np.isfinite(sp)))),
               "knot_spacing_px", "one or two positive spacings in pixels")
-        check(self.min_points_per_knot >= 1, "min_points_per_knot", "an integer >= 1")
-
-
-#: How the 2015 challenge's team ran ``bliss`` (paper, Appendix B): the paper profile.
-_BLISS_PAPER = PaperProfile(
-    team="H. Diamond-Lowe, K. Stevenson (POET)", centroid="gauss-fixed",
-    phases=("flat", "linear", "quadratic", "sinusoid"), ramps=("none", "linear"),
-    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
-    fit="least squares, then DE-MC",
-    why={"centroid": "App. B.1: 'Centroid positions were measured by fitting a 2D Gaussian "
-                     "profile with fixed width'",
-         "phase": "App. B.1: 'flat, linear, quadratic, or sinusoidal phase variations' ... "
-                  "'Acceptance of model parameters was decided by minimizing the BIC'",
-         "ramp": "App. B.1: 'a flat or possible linear detector ramp', chosen by BIC",
-         "fit": "App. B.1: 'A Differential Evolution Markov Chain (DE-MC) routine ... was used "
-                "to explore the phase space of parameters'",
-         "error": "App. B.1: DE-MC '... and estimate their uncertainties'"})
 
 
 @register
@@ -308,20 +291,15 @@ class Bliss(Systematics[BlissOptions]):
 
     name: ClassVar[str] = "bliss"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
-    Options: ClassVar[type[MethodOptions]] = BlissOptions
     #: DE-MC, as the BLISS team sampled (ter Braak 2006). The grid and the mask depend
     #: only on the centroids, which a refit does not change; a rebuild on the kept subset
     #: would re-derive the spacing from other frame-to-frame differences, so refits keep
     #: the grid (``with_flux_rebuilds=False``).
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="BLISS", paper=_BLISS_PAPER,
-        policy=FitterPolicy(preferred_move="de", with_flux_rebuilds=False),
-        docs_anchor="bliss-bliss", in_paper=True)
-    description: ClassVar[str] = "bilinearly interpolated knot means of flux/astro over (x, y)"
+        label="BLISS", paper=team_profile("bliss"), in_paper=True,
+        policy=FitterPolicy(preferred_move="de", with_flux_rebuilds=False))
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         x = np.asarray(data.x, float)
         y = np.asarray(data.y, float)
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):

@@ -61,8 +61,8 @@ from scipy.optimize import minimize
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .base import EpochData, MethodOptions, Systematics, register
+from .record import FitterPolicy, MethodRecord, team_profile
 
 __all__ = ["GaussianProcess", "bin_epoch", "bin_index", "kernel_matrix", "KERNELS", "HYPER_NAMES",
            "OFFSET_NAMES"]
@@ -201,23 +201,6 @@ class GpOptions(MethodOptions):
               f"5 finite numbers ({', '.join(HYPER_NAMES)}) or none")
 
 
-#: How the 2015 challenge's team ran ``gp`` (paper, Appendix B): the paper profile.
-_GP_PAPER = PaperProfile(
-    team="T. Evans", centroid="col", phases=("linear",), ramps=("none",),
-    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
-    fit="ML hyperparameters on 30 s bins, then MCMC with the kernel fixed",
-    method_options={"bin_seconds": 30.0},
-    why={"centroid": "Appendix B is silent; Evans et al. (2015) not read here; the centre of light "
-                               "(the paper's Section 3.1 default)",
-         "phase": "Sect. 5: 'eclipse fits using a linear (BLISS, GP, ICA, KR/Data) ... "
-                  "phase curve'",
-         "ramp": "Appendix B is silent; none (B.2 lists no ramp among the parameters)",
-         "fit": "App. B.2: 'maximum likelihood fit ... fluxes and centroids were binned ... "
-                "in groups of ~30 s'",
-         "error": "App. B.2: 'MCMC with Metropolis-Hastings ... the covariance kernel "
-                  "parameters and white noise variance were held fixed'"})
-
-
 @register
 class GaussianProcess(Systematics[GpOptions]):
     """GP systematics over (x, y, t) on binned data (Evans et al. 2015).
@@ -247,22 +230,16 @@ class GaussianProcess(Systematics[GpOptions]):
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
     #: the order of option ``hyperparameters`` (and of ``diagnostics()["hyperparameters"]``)
     hyperparameter_names: ClassVar[tuple[str, ...]] = HYPER_NAMES
-    Options: ClassVar[type[MethodOptions]] = GpOptions
     # No prayer bead: cyclic shifts of the residuals carry the correlated part the kernel
     # already models, so the bead double-counts it (199 vs 80 ppm on a simulated epoch)
     # and costs one kernel optimisation per shift; Evans et al. (2015) took their errors
     # from MCMC with the kernel fixed, which `--sampler mcmc` does. The kernel's
     # white-noise term ``s`` models the noise (likelihood_models_noise).
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="GP", paper=_GP_PAPER,
-        policy=FitterPolicy(use_prayer_bead=False, likelihood_models_noise=True),
-        docs_anchor="gp-gp", in_paper=True)
-    description: ClassVar[str] = ("Gaussian process over (x, y, t) with white noise on ~30 s "
-                                  "bins; kernel by maximum likelihood (Evans et al. 2015)")
+        label="GP", paper=team_profile("gp"), in_paper=True,
+        policy=FitterPolicy(use_prayer_bead=False, likelihood_models_noise=True))
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         opts = self.options
         kernel, bin_seconds, max_points = opts.kernel, opts.bin_seconds, opts.max_points
         hyperparameters = opts.hyperparameters or None

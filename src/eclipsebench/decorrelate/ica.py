@@ -55,9 +55,9 @@ import pywt
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .base import EpochData, MethodOptions, Systematics, register
 from .linear import weighted_lstsq
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .record import FitterPolicy, MethodRecord, team_profile
 
 __all__ = ["IndependentComponents", "IcaOptions", "wavelet_coefficients", "separate",
            "time_domain_components", "common_mode_gains", "eclipse_component_by_gain",
@@ -525,20 +525,6 @@ class IcaOptions(MethodOptions):
         check(self.tol > 0, "tol", "a positive tolerance")
 
 
-#: How the 2015 challenge's team ran ``ica`` (paper, Appendix B): the paper profile.
-_ICA_PAPER = PaperProfile(
-    team="G. Morello", centroid="col", phases=("linear",), ramps=("none",),
-    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
-    fit="eclipse plus scaled components, adaptive-Metropolis MCMC",
-    why={"centroid": "App. B.3: pixel light curves; no centroid enters the model",
-         "phase": "App. B.3: 'an eclipse light curve model (including a linear phase "
-                  "variation)'",
-         "ramp": "Appendix B is silent; none",
-         "fit": "App. B.3: 'An Adaptive Metropolis MCMC algorithm with delayed rejection'",
-         "error": "App. B.3: 'The final error bars were then increased to include the ICA "
-                  "component separation error' (added in quadrature)"})
-
-
 @register
 class IndependentComponents(Systematics[IcaOptions]):
     """Wavelet pixel-ICA systematics (Morello et al. 2014, 2015, 2016).
@@ -573,18 +559,11 @@ class IndependentComponents(Systematics[IcaOptions]):
 
     name: ClassVar[str] = "ica"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
-    Options: ClassVar[type[MethodOptions]] = IcaOptions
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="ICA", paper=_ICA_PAPER,
-        policy=FitterPolicy(stochastic=True),
-        docs_anchor="ica-ica", in_paper=True)
-    description: ClassVar[str] = ("wavelet pixel-ICA: FastICA on DWT coefficients of the pixel "
-                                  "light curves, eclipse + the scaled non-eclipse components, "
-                                  "ISR separation error (Morello et al. 2016)")
+        label="ICA", paper=team_profile("ica"), in_paper=True,
+        policy=FitterPolicy(stochastic=True))
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         opts = self.options
         pix = np.asarray(data.pixels, dtype=float).reshape(len(data), -1)
         n, p = pix.shape

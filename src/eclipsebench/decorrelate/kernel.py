@@ -35,7 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
@@ -44,9 +44,9 @@ from scipy.spatial import cKDTree
 from ..config.base import check
 from ..errors import InputError
 from ..io.pmap_files import find_pmap_path, load_pmap
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .base import AtLeast, EpochData, MethodOptions, Systematics, register
 from .pmap import CalibrationSet, GriddedPmap, interpolate_grid, kernel_occupancy
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .record import MethodRecord, team_profile
 
 __all__ = ["scale_lengths", "knn_weights", "local_kernel_weights", "smoother_trace",
            "KernelRegressionData", "KernelRegressionPmap", "pmap_gain", "noise_pixels_offset"]
@@ -204,26 +204,8 @@ def _check_finite(name: str, method: str, *arrays) -> None:
 class KrDataOptions(MethodOptions):
     """Options of ``kr-data`` (:class:`KernelRegressionData`)."""
 
-    k: int = 50
+    k: Annotated[int, AtLeast(1)] = 50
     use_noise_pixels: bool = False
-
-    def validate(self) -> None:
-        check(self.k >= 1, "k", "an integer >= 1")
-
-
-#: How the 2015 challenge's team ran ``kr-data`` (paper, Appendix B): the paper profile.
-_KR_DATA_PAPER = PaperProfile(
-    team="I. Wong", centroid="col", phases=("linear",), ramps=("none",),
-    eclipse_shape="physical", sampler="mcmc", reported_error=("prayer_bead", "mcmc"),
-    fit="Levenberg-Marquardt", method_options={"k": 50},
-    why={"centroid": "App. B.4: 'only the x and y centroids (as measured using the center of "
-                     "light technique ...) were used in the kernel's distance metric'",
-         "phase": "App. B.4: 'eclipse depth, time of mid-eclipse, and linear slope of phase "
-                  "curve'",
-         "ramp": "Appendix B is silent; none (B.4 lists the fitted parameters without one)",
-         "fit": "App. B.4: 'Levenberg-Marquardt (L-M) nonlinear least squares'",
-         "error": "App. B.4: 'both a prayer-bead method and an MCMC routine ... reported the "
-                  "largest uncertainty of the two'"})
 
 
 @register
@@ -256,16 +238,10 @@ class KernelRegressionData(Systematics[KrDataOptions]):
 
     name: ClassVar[str] = "kr-data"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
-    Options: ClassVar[type[MethodOptions]] = KrDataOptions
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="KR/Data", paper=_KR_DATA_PAPER,
-        policy=FitterPolicy(),
-        docs_anchor="krdata-kr-data", in_paper=True)
-    description: ClassVar[str] = "k-nearest-neighbour Gaussian kernel regression of flux/astro"
+        label="KR/Data", paper=team_profile("kr-data"), in_paper=True)
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         k = self.options.k
         use_np = self.options.use_noise_pixels
         if use_np and data.noise_pixels is None:
@@ -376,10 +352,9 @@ def noise_pixels_offset(pmap: CalibrationSet, x: np.ndarray, y: np.ndarray,
 
 
 @dataclass(frozen=True)
-class KrPmapOptions(MethodOptions):
-    """Options of ``kr-pmap`` (:class:`KernelRegressionPmap`)."""
+class KrPmapOptions(KrDataOptions):
+    """Options of ``kr-pmap`` (:class:`KernelRegressionPmap`): KR/Data's, and the map's."""
 
-    k: int = 50
     use_noise_pixels: bool = True
     match_noise_pixels: bool = True
     max_distance_px: float = 0.1
@@ -388,26 +363,11 @@ class KrPmapOptions(MethodOptions):
     occupancy_sigma_px: float = 0.004
 
     def validate(self) -> None:
-        check(self.k >= 1, "k", "an integer >= 1")
         check(self.max_distance_px > 0, "max_distance_px", "a positive distance in pixels")
         check(0 <= self.max_uncovered_fraction <= 1, "max_uncovered_fraction",
               "a fraction 0-1")
         check(self.min_occupancy >= 0, "min_occupancy", "an occupancy >= 0")
         check(self.occupancy_sigma_px > 0, "occupancy_sigma_px", "a positive width in pixels")
-
-
-#: How the 2015 challenge's team ran ``kr-pmap`` (paper, Appendix B): the paper profile.
-_KR_PMAP_PAPER = PaperProfile(
-    team="J. Krick, J. Ingalls", centroid="col", phases=("flat",), ramps=("none",),
-    eclipse_shape="physical", sampler="leastsq", reported_error=("jacobian",),
-    fit="Levenberg-Marquardt, Mandel & Agol shape", method_options={"k": 50},
-    why={"centroid": "App. B.4: 'Euclidean distance in x and y centroid and noise pixels'; "
-                     "Sect. 3.1 centre of light",
-         "phase": "App. B.4: 'a Mandel & Agol light curve shape with no phase trend'",
-         "ramp": "Appendix B is silent; none",
-         "fit": "App. B.4: 'using an L-M nonlinear least squares algorithm'",
-         "error": "App. B.4: 'The uncertainties returned were solely the formal "
-                  "uncertainties in the L-M fit'"})
 
 
 @register
@@ -466,13 +426,9 @@ class KernelRegressionPmap(Systematics[KrPmapOptions]):
 
     name: ClassVar[str] = "kr-pmap"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
-    Options: ClassVar[type[MethodOptions]] = KrPmapOptions
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="KR/Pmap", paper=_KR_PMAP_PAPER,
-        policy=FitterPolicy(),
-        docs_anchor="krpmap-kr-pmap", in_paper=True)
+        label="KR/Pmap", paper=team_profile("kr-pmap"), in_paper=True)
     resources: ClassVar[tuple[str, ...]] = ("pmap",)
-    description: ClassVar[str] = "fixed gain from kernel regression on a calibration star"
 
     @classmethod
     def load_resources(cls, data: EpochData, sources: Mapping[str, Any]) -> dict[str, Any]:
@@ -484,9 +440,7 @@ class KernelRegressionPmap(Systematics[KrPmapOptions]):
         time = float(np.min(data.time_bmjd)) if len(data.time_bmjd) else None
         return {"pmap": load_pmap(find_pmap_path(given, data.meta, time))}
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         o = self.options
         k, use_np, match_np = o.k, o.use_noise_pixels, o.match_noise_pixels
         max_d, max_frac = o.max_distance_px, o.max_uncovered_fraction

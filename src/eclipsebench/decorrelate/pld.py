@@ -45,9 +45,9 @@ import numpy as np
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, register
+from .base import EpochData, MethodOptions, register
 from .linear import LinearDesign, LinearSystematics, solve_coefficients
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .record import MethodRecord, team_profile
 
 __all__ = ["normalised_pixels", "central_stamp", "time_basis", "residual_scatter_curve", "scatter_slope",
            "eclipse_frames", "time_averaging_error", "PixelLevelDecorrelation"]
@@ -239,22 +239,6 @@ class PldOptions(MethodOptions):
               "bin_candidates", "one or more integers >= 1")
 
 
-#: How the 2015 challenge's team ran ``pld`` (paper, Appendix B): the paper profile.
-_PLD_PAPER = PaperProfile(
-    team="D. Deming", centroid="gauss", phases=("quadratic",), ramps=("none",),
-    eclipse_shape="physical", sampler="leastsq", reported_error=("time_averaging",),
-    fit="binned, Deming et al. 2015",
-    why={"centroid": "App. B.5: '2D Gaussian centroiding ... only to determine where to "
-                     "place the circular aperture, but not as a decorrelation variable'",
-         "phase": "App. B.5: 'simultaneously with the pixel coefficients and a quadratic "
-                  "phase curve'",
-         "ramp": "Appendix B is silent; none",
-         "fit": "App. B.5; Deming et al. (2015) Sect. 3: fitted on binned data",
-         "error": "App. B.5: 'error bars were estimated using the slope of the standard "
-                  "deviation vs. bin size relationship ... to extrapolate to bins the width "
-                  "of the eclipse duration'"})
-
-
 @register
 class PixelLevelDecorrelation(LinearSystematics[PldOptions]):
     """PLD (Deming et al. 2015; paper Appendix B.5), fitted on binned data.
@@ -293,16 +277,10 @@ class PixelLevelDecorrelation(LinearSystematics[PldOptions]):
 
     name: ClassVar[str] = "pld"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
-    Options: ClassVar[type[MethodOptions]] = PldOptions
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="PLD", paper=_PLD_PAPER,
-        policy=FitterPolicy(),
-        docs_anchor="pld-pld", in_paper=True)
-    description: ClassVar[str] = "linear regression on normalised pixel values, fitted on binned data"
+        label="PLD", paper=team_profile("pld"), in_paper=True)
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         stamp = int(self.options.stamp)
         degree = int(self.options.time_poly_degree)
         n = len(data)

@@ -30,25 +30,19 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 
-from ..config.base import check
-from .base import EpochData, MethodOptions, register
+from .base import EpochData, register
 from .pld import central_stamp, normalised_pixels
-from .poly import SPCA_DOCS_ANCHOR, SPCA_PAPER, LinearDetectorModel
-from .record import MethodRecord
+from .poly import SPCA_DOCS_ANCHOR, LinearDetectorModel, PolyOptions
+from .record import MethodRecord, team_profile
 
 __all__ = ["PldAperOptions", "PldAperture"]
 
 
 @dataclass(frozen=True)
-class PldAperOptions(MethodOptions):
+class PldAperOptions(PolyOptions):
     """Options of ``pld-aper`` (:class:`PldAperture`)."""
 
     stamp: Literal[3, 5] = 3
-    bin_frames: int = 64
-    psf_width: bool = False
-
-    def validate(self) -> None:
-        check(self.bin_frames >= 1, "bin_frames", "an integer >= 1")
 
 
 @register
@@ -67,10 +61,8 @@ class PldAperture(LinearDetectorModel[PldAperOptions]):
 
     name: ClassVar[str] = "pld-aper"
     requires: ClassVar[tuple[str, ...]] = ("pixels",)
-    Options: ClassVar[type[MethodOptions]] = PldAperOptions
-    record: ClassVar[MethodRecord] = MethodRecord(label="pld-aper", paper=SPCA_PAPER,
+    record: ClassVar[MethodRecord] = MethodRecord(label="pld-aper", paper=team_profile("spca"),
                                                   docs_anchor=SPCA_DOCS_ANCHOR)
-    description: ClassVar[str] = "aperture flux on normalised pixels (SPCA's PLDAper)"
 
     def regressors(self, data: EpochData) -> np.ndarray:
         """The normalised pixels ``P_i / sum P`` of the central stamp."""

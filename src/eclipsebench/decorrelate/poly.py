@@ -41,16 +41,15 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar, Protocol, cast
+from typing import Annotated, Any, ClassVar, Protocol, cast
 
 import numpy as np
 from numpy.polynomial import legendre
 
-from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, OptionsT, register
+from .base import AtLeast, EpochData, MethodOptions, OptionsT, register
 from .linear import LinearDesign, LinearSystematics
-from .record import MethodRecord, PaperProfile
+from .record import MethodRecord, team_profile
 
 __all__ = ["polynomial_terms", "legendre_design", "scaled_coordinate", "psf_width_columns",
            "whitened_basis", "LinearDetectorModel", "PolyOptions", "Poly2", "Poly3", "Poly4",
@@ -147,18 +146,6 @@ def psf_width_columns(data: EpochData, method: str) -> np.ndarray:
 
 
 #: SPCA's pipeline (Bell et al. 2021) for the paper profile: not a team of the paper.
-SPCA_PAPER = PaperProfile(
-    team="SPCA (Bell et al. 2021)", centroid="col", phases=("quadratic",), ramps=("none",),
-    eclipse_shape="physical", sampler="mcmc", reported_error=("mcmc",),
-    fit="emcee, 64-frame bins",
-    why={"centroid": "Not a team of the paper (Appendix B is silent); Bell et al. (2021) "
-                     "re-scored the XO-3b eclipses with SPCA; we use the centre of light "
-                     "(Sect. 3.1 default)",
-         "phase": "Appendix B is silent; the quadratic phase of the controlled profile (the "
-                  "challenge's phase curve is curved, Sect. 4.2)",
-         "ramp": "Appendix B is silent; none",
-         "fit": "SPCA fits with emcee (Bell et al. 2021), 64-frame bins (the method's default)",
-         "error": "SPCA reports the posterior width"})
 #: The section of docs/methods.md on SPCA's family.
 SPCA_DOCS_ANCHOR = "spcas-model-family-poly2--poly5-pld-aper"
 
@@ -189,9 +176,7 @@ class LinearDetectorModel(LinearSystematics[OptionsT]):
         """``self.options`` seen as what this class reads (``bin_frames``, ``psf_width``)."""
         return cast(LinearModelOptions, self.options)
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         bin_frames = int(self.linear_options.bin_frames)
         self.widths = psf_width_columns(data, self.name) if self.linear_options.psf_width else None
         self.param_names = self.PSFW_PARAMS if self.widths is not None else ()
@@ -252,11 +237,8 @@ class LinearDetectorModel(LinearSystematics[OptionsT]):
 class PolyOptions(MethodOptions):
     """Options of ``poly2`` ... ``poly5``."""
 
-    bin_frames: int = 64
+    bin_frames: Annotated[int, AtLeast(1)] = 64
     psf_width: bool = False
-
-    def validate(self) -> None:
-        check(self.bin_frames >= 1, "bin_frames", "an integer >= 1")
 
 
 class _Polynomial(LinearDetectorModel[PolyOptions]):
@@ -264,7 +246,6 @@ class _Polynomial(LinearDetectorModel[PolyOptions]):
 
     order: ClassVar[int] = 0
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
-    Options: ClassVar[type[MethodOptions]] = PolyOptions
 
     def regressors(self, data: EpochData) -> np.ndarray:
         """Legendre products of the scaled centroids up to total degree ``order``."""
@@ -290,9 +271,8 @@ def _polynomial_method(order: int) -> type[_Polynomial]:
     cls = type(f"Poly{order}", (_Polynomial,), {
         "__doc__": _poly_doc(order), "__module__": __name__, "name": f"poly{order}",
         "order": order,
-        "record": MethodRecord(label=f"poly{order}", paper=SPCA_PAPER,
-                               docs_anchor=SPCA_DOCS_ANCHOR),
-        "description": f"2-D polynomial of degree {order} in the centroid (SPCA)"})
+        "record": MethodRecord(label=f"poly{order}", paper=team_profile("spca"),
+                               docs_anchor=SPCA_DOCS_ANCHOR)})
     return register(cls)
 
 

@@ -9,7 +9,9 @@ registry branches on a method's name:
   white noise, whether it draws random numbers, whether ``with_flux`` equals
   a fresh build);
 * :class:`PaperProfile`: how its team ran it for the 2015 Data Challenge
-  (paper, Appendix B), which the ``paper`` profile reproduces, including the
+  (paper, Appendix B; the teams' table is the data file
+  ``eclipsebench/data/paper_teams.toml``, read by :func:`team_profile`),
+  which the ``paper`` profile reproduces, including the
   one statement of the error its authors reported (``reported_error``, also
   what ``[reduce] error_rule = "method"`` reports). A method without one (a
   plugin, say) runs in the ``paper`` profile as in the ``controlled`` one;
@@ -28,13 +30,18 @@ True
 
 from __future__ import annotations
 
+import dataclasses
+import re
+import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
 from typing import Any, Literal
 
 from ..config.reduce import PhaseModel, RampModel
 
-__all__ = ["FitterPolicy", "PaperProfile", "MethodRecord"]
+__all__ = ["FitterPolicy", "PaperProfile", "MethodRecord", "heading_anchor", "team_profile"]
 
 
 @dataclass(frozen=True)
@@ -139,7 +146,10 @@ class MethodRecord:
         Its team's pipeline for the ``paper`` profile; None: the method runs
         in the ``paper`` profile as in the ``controlled`` one.
     docs_anchor : str
-        The anchor of its section in ``docs/methods.md`` (empty: none).
+        The anchor of its section in ``docs/methods.md``. A class that
+        declares its own record and leaves this empty gets the anchor of the
+        heading ``LABEL (`name`)`` when it is registered (:func:`heading_anchor`);
+        a class without a record of its own has none.
     in_paper : bool
         Whether the method is one of the paper's seven (its rows of Tables 3
         and 4 are then looked up under ``label``).
@@ -150,3 +160,42 @@ class MethodRecord:
     paper: PaperProfile | None = None
     docs_anchor: str = ""
     in_paper: bool = False
+
+
+def heading_anchor(heading: str) -> str:
+    """The anchor MyST makes of a Markdown heading (``myst_heading_anchors``, GitHub's rule).
+
+    Lower case; characters other than letters, digits, ``-``, ``_`` and spaces
+    dropped; each space a ``-``.
+
+    Examples
+    --------
+    >>> heading_anchor("KR/Data (`kr-data`)")
+    'krdata-kr-data'
+    >>> heading_anchor("SP(K2) (`segpoly`)")
+    'spk2-segpoly'
+    """
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+@cache
+def _teams() -> dict[str, Any]:
+    text = resources.files("eclipsebench.data").joinpath("paper_teams.toml").read_text("utf-8")
+    return tomllib.loads(text)
+
+
+def team_profile(name: str) -> PaperProfile:
+    """The paper profile ``name`` of ``eclipsebench/data/paper_teams.toml`` (Appendix B).
+
+    Examples
+    --------
+    >>> p = team_profile("pld")
+    >>> p.team, p.centroid, p.reported_error
+    ('D. Deming', 'gauss', ('time_averaging',))
+    """
+    entry = dict(_teams()[name])
+    names = {f.name for f in dataclasses.fields(PaperProfile)}
+    if not set(entry) <= names:   # a typo in the package's own data: a bug, said loudly
+        raise KeyError(f"paper_teams.toml [{name}]: unknown keys {sorted(set(entry) - names)}")
+    values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in entry.items()}
+    return PaperProfile(**values)

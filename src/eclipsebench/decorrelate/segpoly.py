@@ -61,9 +61,9 @@ import numpy as np
 
 from ..config.base import check
 from ..errors import InputError
-from .base import EpochData, MethodContext, MethodOptions, Systematics, register
+from .base import EpochData, MethodOptions, Systematics, register
 from .linear import gram_lstsq
-from .record import FitterPolicy, MethodRecord, PaperProfile
+from .record import FitterPolicy, MethodRecord, team_profile
 
 __all__ = ["SegmentedPolynomial", "SegpolyOptions", "PolyDetrend", "SPK2Detrend", "hf_scatter",
            "poly_design", "iterative_poly_detrend", "segment_slices", "sp_k2_detrend",
@@ -378,18 +378,6 @@ class SegpolyOptions(MethodOptions):
         check(0 <= self.initial_mask_fraction < 0.9, "initial_mask_fraction", "a number 0-0.9")
 
 
-#: How the 2015 challenge's team ran ``segpoly`` (paper, Appendix B): the paper profile.
-_SEGPOLY_PAPER = PaperProfile(
-    team="D. Buzasi", centroid="col", phases=("flat",), ramps=("none",),
-    eclipse_shape="box", sampler="leastsq", reported_error=("jacobian",),
-    fit="two-stage detrend, then box fit",
-    why={"centroid": "Appendix B is silent; the centre of light (Sect. 3.1 default)",
-         "phase": "Sect. 5: 'a ... flat [KR/Pmap, SP(K2)] phase curve'",
-         "ramp": "Appendix B is silent; none",
-         "fit": "App. B.6: 'a simple box function was used to fit the eclipse profile'",
-         "error": "App. B.6: 'the uncertainties reported are formal fit errors'"})
-
-
 @register
 class SegmentedPolynomial(Systematics[SegpolyOptions]):
     """SP(K2): stage-1 global and stage-2 segmented polynomial detrending (Buzasi et al. 2015).
@@ -448,19 +436,12 @@ class SegmentedPolynomial(Systematics[SegpolyOptions]):
 
     name: ClassVar[str] = "segpoly"
     requires: ClassVar[tuple[str, ...]] = ("x", "y")
-    Options: ClassVar[type[MethodOptions]] = SegpolyOptions
     #: The prayer bead's refits keep the detrend of the original data (see with_flux).
     record: ClassVar[MethodRecord] = MethodRecord(
-        label="SP(K2)", paper=_SEGPOLY_PAPER,
-        policy=FitterPolicy(with_flux_rebuilds=False),
-        docs_anchor="spk2-segpoly", in_paper=True)
-    description: ClassVar[str] = ("SP(K2): iterated cubic (x, y) polynomial, then ten segmented "
-                                  "detrendings combined by the median, blind to the eclipse "
-                                  "(Buzasi et al. 2015)")
+        label="SP(K2)", paper=team_profile("segpoly"), in_paper=True,
+        policy=FitterPolicy(with_flux_rebuilds=False))
 
-    def __init__(self, data: EpochData, options: Any = None, *,
-                 context: MethodContext | None = None, **kwargs: Any) -> None:
-        super().__init__(data, options, context=context, **kwargs)
+    def setup(self, data: EpochData) -> None:
         o = self.options
         time = np.asarray(data.time_bmjd, dtype=float)
         if np.any(np.diff(time) < 0):
