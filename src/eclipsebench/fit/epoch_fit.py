@@ -119,6 +119,24 @@ def _transit_detail(astro_model: AstroModel, rp_rs: float, rp_rs_err: float,
             "transit_model": astro_model.describe()}
 
 
+def _method_error_estimates(systematics, astro_model, fit, errors: bool
+                            ) -> tuple[dict[str, float], float]:
+    """The method's own depth errors and its separation variance, in the event's size parameter.
+
+    The methods' hooks see the derivative per unit of the event's depth and give
+    depth errors; ``scale`` (d size / d depth: 1 for an eclipse) turns them into
+    errors of the size.
+    """
+    astro_fit, dastro = _depth_derivative(astro_model, fit)
+    scale = astro_model.size_per_depth(fit.theta[0])
+    dastro = dastro * scale
+    separation_var = _extra_depth_variance(systematics, astro_fit, dastro) * scale ** 2
+    own = {name: float(v) * scale for name, v in systematics.depth_error_estimates(
+        astro_fit, dastro, fit.theta[fit.n_astro:] if len(systematics.param_names) else None
+    ).items()} if errors else {}
+    return own, separation_var
+
+
 def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
                  phase: str | None = None, errors: bool = True,
                  reported: tuple[str, ...] | None = None) -> EpochResult:
@@ -158,17 +176,10 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     mc, mcmc_info = (_sample_posterior(systematics, astro_model, fit, options, size) if sample
                      else (None, None))
 
-    astro_fit, dastro = _depth_derivative(astro_model, fit)
-    # the methods' hooks see the derivative per unit of the event's depth and give depth
-    # errors; `scale` (d size / d depth: 1 for an eclipse) turns them into errors of the size
-    scale = astro_model.size_per_depth(fit.theta[0])
-    dastro = dastro * scale
-    separation_var = _extra_depth_variance(systematics, astro_fit, dastro) * scale ** 2
+    # the method's own depth-error estimates (size units) and its separation variance
+    own, separation_var = _method_error_estimates(systematics, astro_model, fit, errors)
     shared = {"jacobian_beta": jac_depth * inflate, "prayer_bead": pb_depth,
               "mcmc": mc.error(size) if mc is not None else None}
-    own = {name: float(v) * scale for name, v in systematics.depth_error_estimates(
-        astro_fit, dastro, fit.theta[fit.n_astro:] if len(systematics.param_names) else None
-    ).items()} if errors else {}
     team = paper_profile(method)   # the errors the method's authors reported, if known
     depth_err, err_method = reported_depth_error(
         shared, error_rule=options.error_rule, jacobian=jac_depth, own=own, reported=reported,
