@@ -140,6 +140,7 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
     depth = {int(r["epoch"]): float(r["depth_ppm"]) for r in truth}
     rcfg = load_config(None, ["reduce.sampler=\"leastsq\""])
     ratios: dict[str, list[float]] = {m: [] for m in PREDICT_METHODS}
+    redder: dict[str, list[bool]] = {m: [] for m in PREDICT_METHODS}
     rec_err, med_err = [], []
     for e in range(1, n_epochs + 1):
         table = phot / f"epoch_{e:02d}.fits"
@@ -150,6 +151,7 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
         for m, s in summary["methods"].items():
             errors[m] = abs(s["depth_ppm"] - depth[e])
             ratios[m].append((s["depth_ppm"] - depth[e]) / s["rmse_ppm"])
+            redder[m].append(bool(s["redder_than_twins"]))
         if summary["recommended"] in errors:
             rec_err.append(errors[summary["recommended"]])
             med_err.append(float(np.median(list(errors.values()))))
@@ -171,6 +173,11 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
         print(f"{m}: rms(actual error / predicted RMSE) over {len(r)} epochs = "
               f"{float(np.sqrt(np.mean(np.square(arr)))):.2f} (bootstrap over epochs, 90 %: "
               f"{lo:.2f}-{hi:.2f})")
+        flagged = np.asarray(redder[m])
+        print(f"  epochs whose real residuals are redder than the twins' ({int(flagged.sum())}): "
+              + ", ".join(f"rms {float(np.sqrt(np.mean(np.square(arr[sel])))):.2f} over "
+                          f"{int(sel.sum())} {name}" for sel, name in
+                          ((flagged, "flagged"), (~flagged, "others")) if sel.any()))
     if rec_err:
         print(f"recommended method's mean |error| {np.mean(rec_err):.1f} ppm against the "
               f"median method's {np.mean(med_err):.1f} ppm over {len(rec_err)} epochs")

@@ -103,6 +103,9 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     assert summary["recommended"] in (None, "poly2")
     s = summary["methods"]["poly2"]
     assert s["honest_err_ppm"] >= s["depth_err_ppm"] and 0 <= s["coverage_1sigma"] <= 1
+    # the real residuals' red noise against the twins': a fraction, flagged at 0.95
+    assert 0 <= s["beta_red_twins_below"] <= 1 and s["beta_red_real"] > 0
+    assert s["redder_than_twins"] == (s["beta_red_twins_below"] >= 0.95)
     answer = read_trust(one)           # the notebook face of trust.json
     assert answer == summary and "TrustResult" in repr(answer)
     assert len(answer._repr_html_()) < 2048
@@ -218,3 +221,19 @@ def test_twins_of_real_epoch1_take_the_map_of_its_date(real_epoch1_table, shared
     assert "120827" in text and "120827" in info["path"] and gain is not None
     none, default_text, _ = twin_gain(obs, None)
     assert none is None and "simulator's gain model" in default_text
+
+
+def test_the_real_residuals_are_flagged_redder_than_the_twins_only_above_95_percent():
+    from eclipsebench.trust.score import red_noise_check
+
+    twins = [0.80 + 0.01 * i for i in range(20)] + [float("nan")]   # 0.80 ... 0.99
+    above_19 = red_noise_check(0.995, twins)                          # above all 20
+    assert above_19["beta_red_twins_below"] == 1.0 and above_19["redder_than_twins"]
+    at_95 = red_noise_check(0.985, twins)                             # above 19 of 20
+    assert at_95["beta_red_twins_below"] == pytest.approx(0.95) and at_95["redder_than_twins"]
+    inside = red_noise_check(0.975, twins)                            # above 18 of 20
+    assert inside["beta_red_twins_below"] == pytest.approx(0.90)
+    assert not inside["redder_than_twins"]
+    assert inside["beta_red_twins_median"] == pytest.approx(0.895)
+    unknown = red_noise_check(float("nan"), twins)
+    assert np.isnan(unknown["beta_red_twins_below"]) and not unknown["redder_than_twins"]

@@ -122,6 +122,12 @@ def format_text(result: dict) -> str:
                      f"{s['mean_err_ppm']:6.1f} {s['z_rms']:5.2f} {s['coverage_1sigma']:5.2f} "
                      f"{s['coverage_2sigma']:5.2f}")
     lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
+    for m, s in result["methods"].items():
+        if s.get("redder_than_twins"):
+            lines.append(f"caution       {m}: the real residuals are redder than "
+                         f"{s['beta_red_twins_below']:.0%} of the twins' (beta_red "
+                         f"{s['beta_red_real']:.2f}, twins' median "
+                         f"{s['beta_red_twins_median']:.2f}): its RMSE may under-predict")
     for m, why in result["skipped"].items():
         lines.append(f"skipped       {m}: {why}")
     run = result.get("_run")

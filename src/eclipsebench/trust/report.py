@@ -21,13 +21,20 @@ from ..io.atomic import atomic_path, write_json, write_text
 from ..photometry.binning import bin_indices, bin_values
 from ..photometry.table import read_table
 from .layout import TrustLayout
-from .score import observation_statistics, recommend, score_methods
+from .score import (
+    REDDER_THAN,
+    observation_statistics,
+    recommend,
+    red_noise_check,
+    score_methods,
+)
 
 __all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS"]
 
 #: The per-method columns of ``trust.ecsv`` (ppm unless dimensionless).
 ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "coverage_1sigma",
-                "coverage_2sigma", "depth_ppm", "depth_err_ppm", "honest_err_ppm", "n_twins")
+                "coverage_2sigma", "depth_ppm", "depth_err_ppm", "honest_err_ppm", "n_twins",
+                "beta_red_real", "beta_red_twins_below")
 
 
 def _load(path: Path) -> dict[str, Any]:
@@ -36,7 +43,8 @@ def _load(path: Path) -> dict[str, Any]:
 
 def collect(root: Path, methods: Sequence[str], n_twins: int
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
-    """Real results, twin ``(depths, errors)`` per method, skipped methods, failed twins."""
+    """Real results, twin ``(depths, errors, beta_red)`` per method, skipped methods, failed
+    twins."""
     layout = TrustLayout(Path(root))
     real: dict = {}
     twins: dict = {}
@@ -48,7 +56,7 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
             skipped[m] = data["error"]
             continue
         real[m] = data
-        d, e = [], []
+        d, e, b = [], [], []
         for i in range(1, n_twins + 1):
             res = _load(layout.twin_result(m, i))
             if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
@@ -56,11 +64,12 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
                 continue
             d.append(res["depth_ppm"])
             e.append(res["depth_err_ppm"])
+            b.append(np.nan if res.get("beta_red") is None else res["beta_red"])
         if len(d) < 2:
             skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
             del real[m]
             continue
-        twins[m] = (d, e)
+        twins[m] = (d, e, b)
     return real, twins, skipped, failed
 
 
@@ -69,7 +78,10 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
                   ) -> dict[str, Any]:
     """The answer: per-method statistics, the recommendation and what the twins were."""
     truth = float(recipe["depth_ppm"])
-    scores = score_methods(twins, real, truth)
+    scores = score_methods({m: t[:2] for m, t in twins.items()}, real, truth)
+    for m, s in scores.items():
+        beta = real[m].get("beta_red")
+        s.update(red_noise_check(np.nan if beta is None else beta, twins[m][2]))
     for m, n in failed.items():
         if m in scores:
             scores[m]["n_twins_failed"] = n
@@ -137,7 +149,7 @@ def _figure_z(summary, twins, path: Path) -> None:
     fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 2.4 * rows), squeeze=False)
     grid = np.linspace(-5, 5, 200)
     for ax, m in zip(axes.ravel(), methods, strict=False):
-        d, e = (np.asarray(v) for v in twins[m])
+        d, e = (np.asarray(v) for v in twins[m][:2])
         z = (d - summary["twin_depth_ppm"]) / e
         ax.hist(np.clip(z, -5, 5), bins=np.linspace(-5, 5, 21), density=True, color="C0")
         ax.plot(grid, np.exp(-0.5 * grid**2) / np.sqrt(2 * np.pi), "k-", lw=1)
@@ -202,6 +214,11 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
         f"<tr><td>{esc(k)}</td><td>{v:.4g}</td><td>{like['twin_001'][k]:.4g}</td></tr>"
         for k, v in like.get("real", {}).items())
     tw = summary["twins"]
+    redder = [m for m, s in summary["methods"].items() if s.get("redder_than_twins")]
+    caution = (f"<p><b>Caution:</b> the real residuals of {esc(', '.join(redder))} are redder "
+               f"(beta_red) than {REDDER_THAN:.0%} of the twins': they hold correlated noise "
+               "the twins lack, so the twins' RMSE may under-predict the error.</p>"
+               if redder else "")
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>How far to trust "
             f"{esc(summary['system'])}</title><style>body{{font-family:sans-serif;max-width:"
             f"1100px;margin:auto}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}"
@@ -215,7 +232,7 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
             f"{table}<p>Honest error: the reported error times max(1, z_rms). Twins: motion "
             f"within an exposure {tw['motion_rms_px']:.3f} px rms (median noise pixels "
             f"{tw['calibration']['noise_pixels_real']:.2f} real); gain: "
-            f"{esc(tw['gain_model'])}.</p>"
+            f"{esc(tw['gain_model'])}.</p>" + caution
             + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
             + ("<h2>The real observation and twin 1</h2><table><tr><th>good frames</th>"
                f"<th>real</th><th>twin 1</th></tr>{resemblance}</table>" if resemblance else "")

@@ -55,7 +55,8 @@ class TrustResult(dict):
         """One row per scored method: the statistics, ppm columns with their unit."""
         methods = list(self.get("methods", {}))
         table = QTable({"method": methods})
-        for key in ("n_twins", *_PPM, "z_rms", "coverage_1sigma", "coverage_2sigma"):
+        for key in ("n_twins", *_PPM, "z_rms", "coverage_1sigma", "coverage_2sigma",
+                    "beta_red_real", "beta_red_twins_below"):
             values = [self["methods"][m].get(key) for m in methods]
             table[key] = u.Quantity(values, _PPM_UNIT) if key in _PPM else values
         table.meta.update({"recommended": self.get("recommended"),

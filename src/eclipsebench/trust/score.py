@@ -16,6 +16,12 @@ give (``docs/trust.md``):
 
 The recommended method has the lowest RMSE among those whose 1-sigma
 coverage interval contains 68.3 %.
+
+:func:`red_noise_check` compares the real fit's ``beta_red`` (the
+time-averaging factor of its residuals) with the twins': where the real
+residuals are redder than :data:`REDDER_THAN` of the twins', they hold
+correlated noise the twins lack, and the twin RMSE may under-predict the
+error (``docs/trust.md``, "Validation").
 """
 
 from __future__ import annotations
@@ -28,7 +34,12 @@ import numpy as np
 from ..photometry.binning import bin_indices, bin_values
 from ..stats.ensemble import GAUSS_1SIGMA, coverage
 
-__all__ = ["method_score", "recommend", "score_methods", "observation_statistics"]
+__all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "REDDER_THAN",
+           "observation_statistics"]
+
+#: The real residuals are flagged redder than the twins' when their ``beta_red`` exceeds
+#: this fraction of the twins' (a one-sided test at 5 %).
+REDDER_THAN = 0.95
 
 
 def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_ppm: float
@@ -96,6 +107,29 @@ def score_methods(twin_depths: Mapping[str, tuple[Sequence[float], Sequence[floa
                   "honest_err_ppm": err * max(1.0, s["z_rms"])})
         out[method] = s
     return out
+
+
+def red_noise_check(real_beta_red: float, twin_beta_red: Sequence[float]) -> dict[str, Any]:
+    """Whether the real residuals hold more correlated noise than the twins'.
+
+    Returns ``beta_red_real``, ``beta_red_twins_median``, ``beta_red_twins_below``
+    (the fraction of twins whose ``beta_red`` is below the real one; non-finite
+    values left out) and ``redder_than_twins`` (that fraction at least
+    :data:`REDDER_THAN`).
+
+    Examples
+    --------
+    >>> c = red_noise_check(1.14, [0.85, 0.88, 0.9, 0.92, 0.87])
+    >>> c["beta_red_twins_below"], c["redder_than_twins"]
+    (1.0, True)
+    """
+    twins = np.asarray(twin_beta_red, float)
+    twins = twins[np.isfinite(twins)]
+    real = float(real_beta_red)
+    below = float(np.mean(twins < real)) if twins.size and np.isfinite(real) else float("nan")
+    return {"beta_red_real": real,
+            "beta_red_twins_median": float(np.median(twins)) if twins.size else float("nan"),
+            "beta_red_twins_below": below, "redder_than_twins": bool(below >= REDDER_THAN)}
 
 
 def observation_statistics(table) -> dict[str, float]:
