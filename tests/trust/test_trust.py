@@ -67,31 +67,21 @@ def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
 def test_the_motion_within_an_exposure_is_calibrated_cube_by_cube(small_table):
     from eclipsebench.trust.twin import calibrate_motion
 
-    def calibrated(table):
-        obs = observation_from_table(table)
-        return calibrate_motion(make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25),
-                                PhotometrySection())
-
     table = read_table(small_table)
     obs = observation_from_table(table)
-    rms, info = calibrated(table)
+    rms, info = calibrate_motion(make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25),
+                                 PhotometrySection())
     assert rms.shape == (obs.n_frames,) and info["per_cube"]["n_cubes"] == len(obs.cubes())
-    for cube in obs.cubes():                    # one value per cube
-        assert np.ptp(rms[cube]) == 0.0
     half = obs.cubes()[len(obs.cubes()) // 2][0]
     broader = table.copy()                      # the second half's real images broader
-    broader["noise_pixels"][half:] += 0.1
-    rms2, info2 = calibrated(broader)
-    assert np.median(rms2[half:]) > np.median(rms2[:half]) + 0.01
-    assert info2["per_cube"]["shrink"] > 0.3
-    # a twin made with one motion rms for every cube: its cubes' noise pixels differ by
-    # noise alone, and the calibration keeps (nearly) one rms
-    twin = twin_table(make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25,
-                                  motion_rms_px=float(np.median(rms))),
-                      PhotometrySection(), seed=5, twin=1)
-    _, info3 = calibrated(twin)
-    p5, _, p95 = info3["per_cube"]["rms_px_5_50_95"]
-    assert info3["per_cube"]["shrink"] < 0.2 and p95 - p5 < 0.005, info3["per_cube"]
+    broader["noise_pixels"][half:] += 0.3
+    obs2 = observation_from_table(broader)
+    rms2, _ = calibrate_motion(make_recipe(obs2, np.ones(obs2.n_frames), radius_px=2.25),
+                               PhotometrySection())
+    assert np.array_equal(rms2[:half], rms[:half])
+    assert np.median(rms2[half:]) > np.median(rms[half:]) + 0.01
+    for cube in obs.cubes():                    # one value per cube
+        assert np.ptp(rms[cube]) == 0.0
 
 
 @pytest.mark.parametrize("extra, what", [

@@ -247,20 +247,13 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
                      ) -> tuple[np.ndarray, dict]:
     """The within-exposure motion rms, cube by cube, whose twins match the real noise pixels.
 
-    ``frames_per_cube`` good frames of each cube are rendered noise-free at
-    each rms of ``grid_px``; over all of them, the rms at which the median
-    noise pixels reach the real median is the observation's. Then every good
-    frame is rendered noise-free at that rms, and each cube's departure is
-    the real cube's median noise pixels minus the rendered cube's. Part of
-    that departure is noise (photon noise and the path of each exposure, in
-    both medians, its variance estimated from the spread of each cube's
-    frames), so the departures are shrunk by the fraction of their variance
-    that this noise does not explain (the empirical-Bayes factor, one for
-    the observation), and each cube's rms is where the median noise pixels
-    reach the observation's plus its shrunk departure. A twin made with one
-    rms for every cube is calibrated back to nearly one rms (a test). A cube
-    without good frames takes the observation's rms; outside the grid's
-    range the nearest end is taken, and the diagnostics count those cubes.
+    For each cube with good frames, ``frames_per_cube`` of them (spread over
+    the cube) are rendered noise-free at each rms of ``grid_px``; the cube's
+    rms is where the median noise pixels of its rendered frames reach the
+    median of its real ones (interpolated; outside the grid's range the
+    nearest end, counted in the diagnostics). A cube without good frames
+    takes the median of the others. The real cube's median carries its
+    photon noise, which the cube's rms takes as motion.
 
     Returns
     -------
@@ -270,16 +263,15 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
         ``noise_pixels_real`` (median over the good frames), the grid, the
         median noise pixels of all rendered frames at each rms, where the
         real median falls against them (``target_vs_grid``), and
-        ``per_cube``: the number of cubes, the shrinkage factor, the 5th,
-        50th and 95th percentiles of their rms and how many fell below or
-        above the grid.
+        ``per_cube``: the number of cubes, the 5th, 50th and 95th
+        percentiles of their rms and how many fell below or above the grid.
     """
     obs = recipe.obs
     cubes = [c[obs.good[c]] for c in obs.cubes()]
-    used = [c for c in cubes if c.size]
     picks = [c[np.linspace(0, c.size - 1, min(frames_per_cube, c.size)).astype(int)]
-             for c in used]
+             for c in cubes if c.size]
     rows = np.concatenate(picks)
+    owner = np.repeat(np.arange(len(picks)), [p.size for p in picks])
     noise_pixels = []
     for rms in grid_px:
         trial = replace(recipe, motion_rms_px=np.full(obs.n_frames, float(rms)))
@@ -287,53 +279,34 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
                                   noise_model="none", radius_px=options.radius_px)
         noise_pixels.append(_measure_rows(frames, obs, options))
     table = np.asarray(noise_pixels)                   # (grid, rendered frames)
-    curve = np.maximum.accumulate(np.median(table, axis=1))
+    overall = np.maximum.accumulate(np.median(table, axis=1))
     target = float(np.median(obs.noise_pixels[obs.good]))
-    rms_all, where_all = _interpolate_rms(target, curve, grid_px)
-    model = _cube_noise_pixels(replace(recipe, motion_rms_px=np.full(obs.n_frames, rms_all)),
-                               used, options)
-    real = [np.asarray(obs.noise_pixels[c], float) for c in used]
-    departure = np.array([np.median(r) - np.median(m) for r, m in zip(real, model, strict=True)])
-    # the variance of a median of n: (pi / 2) sigma^2 / n for Gaussian scatter
-    noise_var = np.array([np.pi / 2 * (np.var(r) + np.var(m)) / r.size for r, m in
-                          zip(real, model, strict=True)])
-    spread = float(np.var(departure)) if departure.size > 1 else 0.0
-    shrink = max(0.0, 1.0 - float(np.mean(noise_var)) / spread) if spread > 0 else 0.0
-    at_rms = float(np.interp(rms_all, grid_px, curve))
     per_cube, where = [], []
-    for d in departure:
-        rms_c, w = _interpolate_rms(at_rms + shrink * float(d), curve, grid_px)
+    for k, c in enumerate(c for c in cubes if c.size):
+        curve = np.maximum.accumulate(np.median(table[:, owner == k], axis=1))
+        rms_c, w = _interpolate_rms(float(np.median(obs.noise_pixels[c])), curve, grid_px)
         per_cube.append(rms_c)
         where.append(w)
-    rms_px = np.full(obs.n_frames, rms_all)
-    for all_rows, value in zip((a for a, c in zip(obs.cubes(), cubes, strict=True) if c.size),
-                               per_cube, strict=True):
-        rms_px[all_rows] = value
-    cube_rms = np.asarray(per_cube if per_cube else [rms_all])
+    fill = float(np.median(per_cube)) if per_cube else float(grid_px[0])
+    rms_px = np.full(obs.n_frames, fill)
+    values = iter(per_cube)
+    for all_rows, good_rows in zip(obs.cubes(), cubes, strict=True):
+        if good_rows.size:
+            rms_px[all_rows] = next(values)
+    cube_rms = np.asarray(per_cube if per_cube else [fill])
     return rms_px, {"noise_pixels_real": target, "motion_grid_px": list(grid_px),
                     "noise_pixels_grid": [float(v) for v in np.median(table, axis=1)],
-                    "target_vs_grid": where_all,
-                    "per_cube": {"n_cubes": len(per_cube), "shrink": shrink,
+                    "target_vs_grid": _interpolate_rms(target, overall, grid_px)[1],
+                    "per_cube": {"n_cubes": len(per_cube),
                                  "rms_px_5_50_95": [float(v) for v in
                                                     np.percentile(cube_rms, [5, 50, 95])],
                                  "below": where.count("below"), "above": where.count("above")}}
 
 
-def _cube_noise_pixels(recipe: TwinRecipe, cubes: list[np.ndarray],
-                       options: PhotometrySection) -> list[np.ndarray]:
-    """Noise pixels of the frames ``cubes`` rendered noise-free with the recipe's motion."""
-    frames = np.concatenate([render_frames_of(recipe, c, seed=0, key=("trust", "calibrate",
-                                                                      int(c[0])),
-                                              noise_model="none", radius_px=options.radius_px)
-                             for c in cubes])
-    measured = _measure_rows(frames, recipe.obs, options)
-    return np.split(measured, np.cumsum([c.size for c in cubes])[:-1])
-
-
 def _interpolate_rms(target: float, curve: np.ndarray, grid_px: tuple[float, ...]
                      ) -> tuple[float, str]:
     """The rms at which the (non-decreasing) noise-pixel ``curve`` reaches ``target``."""
-    if target <= curve[0] or curve[-1] <= curve[0]:
+    if target <= curve[0]:
         return float(grid_px[0]), "below"
     if target >= curve[-1]:
         return float(grid_px[-1]), "above"
