@@ -64,26 +64,6 @@ def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
     assert a.meta["TWIN"] == 1 and a.meta["SYSTEM"] == table.meta["SYSTEM"]
 
 
-def test_the_motion_within_an_exposure_is_calibrated_cube_by_cube(small_table):
-    from eclipsebench.trust.twin import calibrate_motion
-
-    table = read_table(small_table)
-    obs = observation_from_table(table)
-    rms, info = calibrate_motion(make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25),
-                                 PhotometrySection())
-    assert rms.shape == (obs.n_frames,) and info["per_cube"]["n_cubes"] == len(obs.cubes())
-    half = obs.cubes()[len(obs.cubes()) // 2][0]
-    broader = table.copy()                      # the second half's real images broader
-    broader["noise_pixels"][half:] += 0.3
-    obs2 = observation_from_table(broader)
-    rms2, _ = calibrate_motion(make_recipe(obs2, np.ones(obs2.n_frames), radius_px=2.25),
-                               PhotometrySection())
-    assert np.array_equal(rms2[:half], rms[:half])
-    assert np.median(rms2[half:]) > np.median(rms[half:]) + 0.01
-    for cube in obs.cubes():                    # one value per cube
-        assert np.ptp(rms[cube]) == 0.0
-
-
 @pytest.mark.parametrize("extra, what", [
     (["--twins", "9"], "--twins"), (["--depth", "nan"], "--depth"),
     (["--depth", "-5"], "--depth"), (["--methods", "no-such"], "no-such"),

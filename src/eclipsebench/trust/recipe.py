@@ -115,9 +115,8 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     gain, gain_text, gain_fit = twin_gain(obs, pmap)
     lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, gain=gain)
-    rms_px, calibration = calibrate_motion(recipe, options)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_rms_px=rms_px, gain=gain)
-    rms = float(np.median(rms_px[obs.good]))
+    rms, calibration = calibrate_motion(recipe, options)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_rms_px=rms, gain=gain)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
             "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
@@ -138,22 +137,12 @@ def photometry_options(obs: Observation) -> PhotometrySection:
     return from_mapping(PhotometrySection, dict(stored), prefix="photometry")
 
 
-#: The per-frame arrays of a recipe's ``.npz``.
-RECIPE_ARRAYS = ("light_curve", "sky_e_per_px", "motion_rms_px")
-
-
-def recipe_complete(json_path: str | Path, npz_path: str | Path) -> bool:
-    """Whether a written recipe holds every array this version reads (a resume's check)."""
-    with np.load(npz_path) as arrays:
-        return set(RECIPE_ARRAYS) <= set(arrays.files)
-
-
 def write_recipe(recipe: TwinRecipe, info: Mapping[str, Any], npz_path: Path,
                  json_path: Path) -> None:
     """The description (JSON), then the per-frame arrays (``.npz``, written last)."""
     write_json(json_path, dict(info))
     with atomic_path(npz_path) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, **{name: getattr(recipe, name) for name in RECIPE_ARRAYS})
+        np.savez(fh, light_curve=recipe.light_curve, sky_e_per_px=recipe.sky_e_per_px)
 
 
 def read_recipe(table_path: str, npz_path: Path, json_path: Path
@@ -166,7 +155,7 @@ def read_recipe(table_path: str, npz_path: Path, json_path: Path
                             flux_aperture_e=float(info["flux_aperture_e"]),
                             x_ref_px=float(info["x_ref_px"]), y_ref_px=float(info["y_ref_px"]),
                             sky_e_per_px=arrays["sky_e_per_px"],
-                            motion_rms_px=arrays["motion_rms_px"],
+                            motion_rms_px=float(info["motion_rms_px"]),
                             gain=(None if info.get("gain") is None
                                   else GainPolynomial.from_dict(info["gain"])))
     return recipe, info

@@ -40,13 +40,7 @@ from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
 from .layout import TrustLayout
-from .recipe import (
-    build_recipe,
-    photometry_options,
-    read_recipe,
-    recipe_complete,
-    write_recipe,
-)
+from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
 from .report import score_task
 from .result import TrustResult, read_trust
 from .twin import twin_table
@@ -196,7 +190,7 @@ def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[st
     tasks = [Task("recipe", "recipe", recipe_task,
                   (settings, first, str(layout.real(first)), str(layout.recipe_npz),
                    str(layout.recipe_json)), (layout.recipe_json, layout.recipe_npz),
-                  (f"real/{first}",), check=recipe_complete)]
+                  (f"real/{first}",))]
     results = []
     for i in range(1, settings.n_twins + 1):
         tasks.append(Task(f"twin/{i:03d}", "twin", twin_task,

@@ -7,10 +7,8 @@ A twin shares with the real observation everything but the noise draw
 - the pointing: the measured centroid of each real frame is the twin's
   exposure-mean position, and the simulator's motion within an exposure
   (fractional Brownian jitter, paper Appendix A.1) is added with an rms
-  chosen, cube by cube, so that the twins' median noise pixels match the
-  real cube's (:func:`calibrate_motion`): the motion within an exposure
-  changes over an observation, and with it the flux through the gain's
-  curvature;
+  chosen so that the twins' median noise pixels match the real ones
+  (:func:`calibrate_motion`);
 - the star's aperture flux and the background level in electrons, so the
   photon and read noise are the real ones;
 - the detector: the simulator's intra-pixel gain model of the channel
@@ -104,9 +102,8 @@ class TwinRecipe:
     sky_e_per_px : ndarray
         Sky per pixel and exposure under the star, per frame (the real annulus
         background, smoothed over a cube, minus the PRF's own wings).
-    motion_rms_px : ndarray
-        Rms of the within-exposure motion about each frame's mean position,
-        per frame (one value per cube).
+    motion_rms_px : float
+        Rms of the within-exposure motion about each frame's mean position.
     gain : GainPolynomial or None
         The intra-pixel gain in the true phase (:func:`map_gain`); None: the
         simulator's model of the channel.
@@ -118,7 +115,7 @@ class TwinRecipe:
     x_ref_px: float
     y_ref_px: float
     sky_e_per_px: np.ndarray
-    motion_rms_px: np.ndarray
+    motion_rms_px: float = 0.0
     gain: GainPolynomial | None = None
 
 
@@ -135,14 +132,12 @@ def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
 
 
 def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
-                motion_rms_px: float | np.ndarray = 0.0, gain: GainPolynomial | None = None
-                ) -> TwinRecipe:
+                motion_rms_px: float = 0.0, gain: GainPolynomial | None = None) -> TwinRecipe:
     """The shared part of the twins of ``obs`` with astrophysics ``light_curve``.
 
     The star's flux is the real median aperture flux divided by the median of
     ``light_curve`` over the good frames, so the twins' flux level is the
-    real one whatever the eclipse. ``motion_rms_px``: one rms for every frame,
-    or one per frame (:func:`calibrate_motion`).
+    real one whatever the eclipse.
     """
     good = obs.good
     x_ref, y_ref = float(np.median(obs.x_px[good])), float(np.median(obs.y_px[good]))
@@ -152,8 +147,7 @@ def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
     wing = star.annulus_per_unit * star.electrons_per_unit(flux)
     return TwinRecipe(obs=obs, light_curve=np.asarray(light_curve, float), flux_aperture_e=flux,
                       x_ref_px=x_ref, y_ref_px=y_ref, sky_e_per_px=np.clip(level - wing, 0, None),
-                      motion_rms_px=np.broadcast_to(np.asarray(motion_rms_px, float),
-                                                    (obs.n_frames,)).copy(), gain=gain)
+                      motion_rms_px=float(motion_rms_px), gain=gain)
 
 
 def _motion(model: FrameModel, n_frames: int, rms_px: float, stream: np.random.Generator
@@ -184,8 +178,7 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
                                                recipe.gain)
     x_track, y_track = obs.track_px()
-    rms = float(np.median(recipe.motion_rms_px[rows]))   # one value per cube
-    dx, dy = _motion(model, rows.size, rms, rng(seed, *key, "motion"))
+    dx, dy = _motion(model, rows.size, recipe.motion_rms_px, rng(seed, *key, "motion"))
     x_off, y_off, moments = tick_moments(dx, dy, model)
     x_f, y_f = x_track[rows] + x_off, y_track[rows] + y_off
     sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]), model.stamp_px,
@@ -238,79 +231,45 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     columns["flag"] = columns["flag"] | obs.flag
     meta = {k: v for k, v in obs.meta.items() if k not in ("FLAGCNT", "FILENAME")}
     meta.update({"TWIN": int(twin), "EPOCH": int(twin), "SIMULATE": True,
-                 "TWINMOT": float(np.median(recipe.motion_rms_px))})
+                 "TWINMOT": float(recipe.motion_rms_px)})
     return make_table(columns, meta)
 
 
-def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
-                     frames_per_cube: int = 4, grid_px: tuple[float, ...] = MOTION_GRID_PX
-                     ) -> tuple[np.ndarray, dict]:
-    """The within-exposure motion rms, cube by cube, whose twins match the real noise pixels.
+def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *, n_frames: int = 256,
+                     grid_px: tuple[float, ...] = MOTION_GRID_PX) -> tuple[float, dict]:
+    """The within-exposure motion rms whose noise-free twins match the real median noise pixels.
 
-    For each cube with good frames, ``frames_per_cube`` of them (spread over
-    the cube) are rendered noise-free at each rms of ``grid_px``; the cube's
-    rms is where the median noise pixels of its rendered frames reach the
-    median of its real ones (interpolated; outside the grid's range the
-    nearest end, counted in the diagnostics). A cube without good frames
-    takes the median of the others. The real cube's median carries its
-    photon noise, which the cube's rms takes as motion.
+    Renders ``n_frames`` frames spread over the good frames, noise-free, for
+    each rms of ``grid_px``, measures their median noise pixels and
+    interpolates to the real median. Outside the grid's range the nearest end
+    is taken and the returned diagnostics say so.
 
     Returns
     -------
-    rms_px : ndarray
-        Per frame (one value per cube).
+    rms_px : float
     diagnostics : dict
-        ``noise_pixels_real`` (median over the good frames), the grid, the
-        median noise pixels of all rendered frames at each rms, where the
-        real median falls against them (``target_vs_grid``), and
-        ``per_cube``: the number of cubes, the 5th, 50th and 95th
-        percentiles of their rms and how many fell below or above the grid.
+        ``noise_pixels_real``, the grid and the median noise pixels at each.
     """
     obs = recipe.obs
-    cubes = [c[obs.good[c]] for c in obs.cubes()]
-    picks = [c[np.linspace(0, c.size - 1, min(frames_per_cube, c.size)).astype(int)]
-             for c in cubes if c.size]
-    rows = np.concatenate(picks)
-    owner = np.repeat(np.arange(len(picks)), [p.size for p in picks])
-    noise_pixels = []
+    good = np.flatnonzero(obs.good)
+    rows = good[np.linspace(0, good.size - 1, min(n_frames, good.size)).astype(int)]
+    target = float(np.median(obs.noise_pixels[obs.good]))
+    medians = []
     for rms in grid_px:
-        trial = replace(recipe, motion_rms_px=np.full(obs.n_frames, float(rms)))
+        trial = replace(recipe, motion_rms_px=rms)
         frames = render_frames_of(trial, rows, seed=0, key=("trust", "calibrate"),
                                   noise_model="none", radius_px=options.radius_px)
-        noise_pixels.append(_measure_rows(frames, obs, options))
-    table = np.asarray(noise_pixels)                   # (grid, rendered frames)
-    overall = np.maximum.accumulate(np.median(table, axis=1))
-    target = float(np.median(obs.noise_pixels[obs.good]))
-    per_cube, where = [], []
-    for k, c in enumerate(c for c in cubes if c.size):
-        curve = np.maximum.accumulate(np.median(table[:, owner == k], axis=1))
-        rms_c, w = _interpolate_rms(float(np.median(obs.noise_pixels[c])), curve, grid_px)
-        per_cube.append(rms_c)
-        where.append(w)
-    fill = float(np.median(per_cube)) if per_cube else float(grid_px[0])
-    rms_px = np.full(obs.n_frames, fill)
-    values = iter(per_cube)
-    for all_rows, good_rows in zip(obs.cubes(), cubes, strict=True):
-        if good_rows.size:
-            rms_px[all_rows] = next(values)
-    cube_rms = np.asarray(per_cube if per_cube else [fill])
+        m = _measure_rows(frames, obs, options)
+        medians.append(float(np.median(m)))
+    medians_arr = np.maximum.accumulate(np.asarray(medians))
+    if target <= medians_arr[0]:
+        rms_px, where = float(grid_px[0]), "below"
+    elif target >= medians_arr[-1]:
+        rms_px, where = float(grid_px[-1]), "above"
+    else:
+        rms_px, where = float(np.interp(target, medians_arr, grid_px)), "inside"
     return rms_px, {"noise_pixels_real": target, "motion_grid_px": list(grid_px),
-                    "noise_pixels_grid": [float(v) for v in np.median(table, axis=1)],
-                    "target_vs_grid": _interpolate_rms(target, overall, grid_px)[1],
-                    "per_cube": {"n_cubes": len(per_cube),
-                                 "rms_px_5_50_95": [float(v) for v in
-                                                    np.percentile(cube_rms, [5, 50, 95])],
-                                 "below": where.count("below"), "above": where.count("above")}}
-
-
-def _interpolate_rms(target: float, curve: np.ndarray, grid_px: tuple[float, ...]
-                     ) -> tuple[float, str]:
-    """The rms at which the (non-decreasing) noise-pixel ``curve`` reaches ``target``."""
-    if target <= curve[0]:
-        return float(grid_px[0]), "below"
-    if target >= curve[-1]:
-        return float(grid_px[-1]), "above"
-    return float(np.interp(target, curve, grid_px)), "inside"
+                    "noise_pixels_grid": medians, "target_vs_grid": where}
 
 
 def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
