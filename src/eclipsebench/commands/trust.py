@@ -36,7 +36,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="planet (default: the one the table names, e.g. OBJECT XO-3 -> XO-3b)")
     add_planet_options(p)
     p.add_argument("--twins", type=_twin_count, default=50, metavar="N",
-                   help="number of twins (10-10000)")
+                   help="number of twins (10-10000); another number into the same --out "
+                        "keeps the twins already made")
     p.add_argument("--methods", type=method_list, metavar="A,B,...", default=None,
                    help="methods to measure (default: every registered method); the first "
                         "one's real depth is injected unless --depth is given")

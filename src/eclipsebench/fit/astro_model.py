@@ -37,12 +37,13 @@ all) and keeps the public names: import from here.
 Examples
 --------
 >>> import numpy as np
->>> class Flat:  # a planet that is always fully visible
-...     def visible_fraction(self, t_ecl_bmjd):
-...         return np.ones(3)
->>> m = AstroModel(np.array([0.0, 0.1, 0.2]), None, phase="linear", ramp="linear", shape=Flat())
+>>> from eclipsebench.astro.catalogue import get_system
+>>> time_bmjd = np.linspace(57215.3, 57215.5, 5)
+>>> m = AstroModel(time_bmjd, get_system("XO-3b"), phase="linear", ramp="linear")
 >>> isinstance(m, EclipseModel), m.names
 (True, ('depth', 't_ecl_bmjd', 'c1_per_day', 'ramp_slope_per_day'))
+>>> type(AstroModel(time_bmjd, get_system("XO-3b"), event="transit")).__name__
+'TransitModel'
 """
 
 from __future__ import annotations
