@@ -79,7 +79,8 @@ def resemble(work: Path, n_twins: int) -> None:
         t = twin_table(recipe, PhotometrySection(), seed=0, twin=i)
         twins.append(_statistics(t, eb.reduce(t, "bliss", system="XO-3b", sampler="leastsq",
                                               prayer_bead_shifts=0).rms_ppm))
-    print(f"within-exposure motion {info['motion_rms_px']:.3f} px rms; calibration "
+    print(f"within-exposure motion {info['motion_rms_px']:.3f} px rms (jitter peak "
+          f"{info['motion_peak_px']:.3f} px); calibration "
           f"{json.dumps(info['calibration'])}")
     print(f"| quantity | real epoch 1 | twins (mean of {n_twins}) | twins / real |")
     print("| --- | --- | --- | --- |")

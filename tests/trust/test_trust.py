@@ -19,10 +19,10 @@ from eclipsebench.cli import main
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table, write_photometry
 from eclipsebench.simulation.render import FrameModel, tick_moments
-from eclipsebench.trust.observation import observation_from_table
+from eclipsebench.trust.observation import Observation, observation_from_table
 from eclipsebench.trust.result import read_trust
 from eclipsebench.trust.score import observation_statistics
-from eclipsebench.trust.twin import _motion, make_recipe, twin_table
+from eclipsebench.trust.twin import ExposureMotion, make_recipe, twin_table
 
 from ..conftest import simulate_eclipse_epoch
 
@@ -38,14 +38,41 @@ def small_table(tmp_path_factory):
     return simulate_eclipse_epoch(tmp_path_factory.mktemp("trust_obs"), SETS, 0.12)
 
 
-def test_the_motion_within_an_exposure_keeps_each_frame_s_mean_and_has_its_rms():
+def _cubes_of_sub_2s(n_cubes: int) -> Observation:
+    """An observation of ``n_cubes`` back-to-back 64-frame sub_2s cubes (2.02 s cadence)."""
     from eclipsebench.detector.constants import SUB_2S
 
-    model = FrameModel(mode=SUB_2S, noise_model="physical", read_noise_e=9.4)
-    dx, dy = _motion(model, 8, 0.05, np.random.default_rng(1))
+    n = 64 * n_cubes
+    t = 57000.0 + (np.arange(n) * 2.02 + (np.arange(n) // 64) * 0.2) / 86400.0
+    return Observation(time_bmjd=t, aorkey=np.ones(n, int), expid=np.arange(n) // 64,
+                       frame=np.arange(n) % 64, x_px=np.full(n, 15.0), y_px=np.full(n, 15.0),
+                       flux_e=np.ones(n), background_e_per_px=np.ones(n), noise_pixels=np.ones(n),
+                       flag=np.zeros(n, int), channel=2, mode=SUB_2S, read_noise_e=9.4)
+
+
+def test_the_motion_within_an_exposure_is_the_simulator_s_block_scaled_jitter():
+    obs = _cubes_of_sub_2s(24)
+    model = FrameModel(mode=obs.mode, noise_model="physical", read_noise_e=9.4)
+    motion = ExposureMotion(obs, model, 0.4, np.random.default_rng(1))
+    rows = np.arange(obs.n_frames)
+    dx, dy = motion.offsets(rows)
     mx, my, _ = tick_moments(dx, dy, model)
     assert np.allclose(mx, 0.0, atol=1e-12) and np.allclose(my, 0.0, atol=1e-12)
-    assert np.sqrt(0.5 * (np.mean(dx**2) + np.mean(dy**2))) == pytest.approx(0.05)
+    # a frame's motion does not depend on the frames asked with it
+    some = rows[[5, 700, 1500]]
+    assert np.allclose(motion.offsets(some)[0], dx[some], rtol=0, atol=1e-12)
+    # each 131-s block of the jitter peaks at A_fbm (the frames cover 99 % of its samples) ...
+    block = motion.start_index // (2048 * 64)
+    peaks = [np.max(np.abs(np.concatenate(
+        [motion._pointing.fbm_samples(int(i), model.grid_samples_per_frame)[0]
+         for i in motion.start_index[block == b]]))) for b in np.unique(block)[:-1]]
+    assert np.allclose(peaks, 0.4, rtol=0.05) and max(peaks) <= 0.4 + 1e-9
+    # ... so its rms within an exposure changes from block to block (one rms throughout
+    # would give a spread of 0.5 %, the average of 64 frames)
+    var = np.array([np.mean(dx[block == b] ** 2 + dy[block == b] ** 2)
+                    for b in np.unique(block)[:-1]])
+    assert 0.02 < var.std() / var.mean() < 0.2
+    assert 0.06 < np.sqrt(0.5 * var.mean()) < 0.12   # 0.0895 px for the challenge's 0.4
 
 
 def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
@@ -202,7 +229,7 @@ def test_a_twin_carries_the_gain_of_a_given_map_through_its_recipe(small_table, 
     builtin = twin_table(plain, PhotometrySection(), seed=3, twin=1)
     assert not np.array_equal(np.asarray(with_map["flux"]), np.asarray(builtin["flux"]))
     write_recipe(recipe, {"flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
-                          "y_ref_px": recipe.y_ref_px, "motion_rms_px": 0.0,
+                          "y_ref_px": recipe.y_ref_px, "motion_peak_px": 0.0,
                           "gain": {"powers": [list(p) for p in gain.powers],
                                    "coeffs": list(gain.coeffs), "box": None}},
                  tmp_path / "r.npz", tmp_path / "r.json")

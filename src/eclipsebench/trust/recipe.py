@@ -115,13 +115,14 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     gain, gain_text, gain_fit = twin_gain(obs, pmap)
     lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, gain=gain)
-    rms, calibration = calibrate_motion(recipe, options)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_rms_px=rms, gain=gain)
+    peak, calibration = calibrate_motion(recipe, options)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
             "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
             "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
-            "y_ref_px": recipe.y_ref_px, "motion_rms_px": rms, "calibration": calibration,
+            "y_ref_px": recipe.y_ref_px, "motion_peak_px": peak,
+            "motion_rms_px": peak * calibration["rms_per_peak"], "calibration": calibration,
             "gain_model": gain_text, "gain": _gain_dict(gain), "gain_fit": gain_fit,
             "n_frames": obs.n_frames, "n_good": int(obs.good.sum())}
     return recipe, info
@@ -155,7 +156,7 @@ def read_recipe(table_path: str, npz_path: Path, json_path: Path
                             flux_aperture_e=float(info["flux_aperture_e"]),
                             x_ref_px=float(info["x_ref_px"]), y_ref_px=float(info["y_ref_px"]),
                             sky_e_per_px=arrays["sky_e_per_px"],
-                            motion_rms_px=float(info["motion_rms_px"]),
+                            motion_peak_px=float(info["motion_peak_px"]),
                             gain=(None if info.get("gain") is None
                                   else GainPolynomial.from_dict(info["gain"])))
     return recipe, info

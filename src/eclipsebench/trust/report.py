@@ -92,7 +92,7 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
             "seed": settings["seed"], "profile": settings["reduce"]["profile"],
             "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
                 "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
-                "motion_rms_px", "calibration", "gain_model", "gain_fit")},
+                "motion_peak_px", "motion_rms_px", "calibration", "gain_model", "gain_fit")},
             "eclipsebench_version": __version__}
 
 
@@ -230,7 +230,8 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
             f" profile, sampler {esc(summary['sampler'])}). Recommended: <b>"
             f"{esc(str(summary['recommended']))}</b> ({esc(summary['recommended_because'])}).</p>"
             f"{table}<p>Honest error: the reported error times max(1, z_rms). Twins: motion "
-            f"within an exposure {tw['motion_rms_px']:.3f} px rms (median noise pixels "
+            f"within an exposure {tw['motion_rms_px']:.3f} px rms, the simulator's jitter with "
+            f"a peak of {tw['motion_peak_px']:.3f} px per 131-s block (median noise pixels "
             f"{tw['calibration']['noise_pixels_real']:.2f} real); gain: "
             f"{esc(tw['gain_model'])}.</p>" + caution
             + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")

@@ -43,7 +43,7 @@ from .layout import TrustLayout
 from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
 from .report import score_task
 from .result import TrustResult, read_trust
-from .twin import twin_table
+from .twin import TWIN_MODEL, twin_table
 
 __all__ = ["TrustSettings", "make_settings", "run_trust", "MIN_TWINS", "MAX_TWINS"]
 
@@ -76,7 +76,7 @@ class TrustSettings:
                 "n_twins": self.n_twins, "seed": self.seed, "depth_ppm": self.depth_ppm,
                 "reduce": to_mapping(self.reduce),
                 "method_options": {k: dict(v) for k, v in self.method_options.items()},
-                "pmap": self.pmap}
+                "pmap": self.pmap, "twin_model": TWIN_MODEL}
 
 
 # ----------------------------------------------------------------------------- tasks

@@ -6,9 +6,10 @@ A twin shares with the real observation everything but the noise draw
 - the time stamps, channel, readout, cubes and the frames flagged bad;
 - the pointing: the measured centroid of each real frame is the twin's
   exposure-mean position, and the simulator's motion within an exposure
-  (fractional Brownian jitter, paper Appendix A.1) is added with an rms
-  chosen so that the twins' median noise pixels match the real ones
-  (:func:`calibrate_motion`);
+  (its fractional Brownian jitter, paper Appendix A.1, drawn as the
+  challenge simulator draws it: :class:`ExposureMotion`) is added with an
+  amplitude chosen so that the twins' median noise pixels match the real
+  ones (:func:`calibrate_motion`);
 - the star's aperture flux and the background level in electrons, so the
   photon and read noise are the real ones;
 - the detector: the simulator's intra-pixel gain model of the channel
@@ -25,29 +26,37 @@ twin's table is written.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from astropy.table import Table
 
 from ..config.photometry import PhotometrySection
 from ..instrument.gain_fit import fit_true_phase_gain
-from ..instrument.pointing import fbm_segments
+from ..instrument.pointing import PointingModel, PointingParams
 from ..instrument.prf import BuiltinPRF, GainPolynomial, load_gainmap_coefficients
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack
 from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
+from ..simulation.plan import SECONDS_PER_DAY
 from ..simulation.render import FrameModel, render_frames, stamp_origin, tick_moments
 from ..simulation.star import StarImager
 from .observation import Observation
 
-__all__ = ["TwinRecipe", "make_recipe", "render_frames_of", "twin_table", "calibrate_motion",
-           "MOTION_GRID_PX", "gain_model", "map_gain"]
+__all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
+           "calibrate_motion", "MOTION_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain"]
 
-#: Within-exposure motion rms (px) on which the noise pixels are calibrated.
-MOTION_GRID_PX = (0.0, 0.02, 0.04, 0.07, 0.1, 0.14, 0.2, 0.28)
+#: How twins are made (recorded with a trust run's settings, so a folder of twins made
+#: otherwise is refused rather than mixed): 2 since the motion within an exposure is the
+#: simulator's block-scaled jitter (:class:`ExposureMotion`), 1 before (one rms throughout).
+TWIN_MODEL = 2
+
+#: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
+#: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
+#: within an exposure.
+MOTION_GRID_PX = (0.0, 0.1, 0.2, 0.3, 0.45, 0.6, 0.9, 1.25)
 
 
 def gain_model(channel: int) -> str:
@@ -83,7 +92,6 @@ def map_gain(channel: int, x_grid: np.ndarray, y_grid: np.ndarray, gain: np.ndar
 
 
 _BACKGROUND_WINDOW = 65   # frames of the running median of the real background (one cube)
-_FBM_BETA = 1.0           # the jitter's spectral index (paper Table 5)
 
 
 @dataclass(frozen=True)
@@ -102,8 +110,10 @@ class TwinRecipe:
     sky_e_per_px : ndarray
         Sky per pixel and exposure under the star, per frame (the real annulus
         background, smoothed over a cube, minus the PRF's own wings).
-    motion_rms_px : float
-        Rms of the within-exposure motion about each frame's mean position.
+    motion_peak_px : float
+        Peak of the jitter's fractional Brownian motion in each block of the
+        simulator (Table 5's ``A_fbm``), which sets the motion within an
+        exposure (:class:`ExposureMotion`).
     gain : GainPolynomial or None
         The intra-pixel gain in the true phase (:func:`map_gain`); None: the
         simulator's model of the channel.
@@ -115,7 +125,7 @@ class TwinRecipe:
     x_ref_px: float
     y_ref_px: float
     sky_e_per_px: np.ndarray
-    motion_rms_px: float = 0.0
+    motion_peak_px: float = 0.0
     gain: GainPolynomial | None = None
 
 
@@ -132,7 +142,7 @@ def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
 
 
 def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
-                motion_rms_px: float = 0.0, gain: GainPolynomial | None = None) -> TwinRecipe:
+                motion_peak_px: float = 0.0, gain: GainPolynomial | None = None) -> TwinRecipe:
     """The shared part of the twins of ``obs`` with astrophysics ``light_curve``.
 
     The star's flux is the real median aperture flux divided by the median of
@@ -147,38 +157,99 @@ def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
     wing = star.annulus_per_unit * star.electrons_per_unit(flux)
     return TwinRecipe(obs=obs, light_curve=np.asarray(light_curve, float), flux_aperture_e=flux,
                       x_ref_px=x_ref, y_ref_px=y_ref, sky_e_per_px=np.clip(level - wing, 0, None),
-                      motion_rms_px=float(motion_rms_px), gain=gain)
+                      motion_peak_px=float(motion_peak_px), gain=gain)
 
 
-def _motion(model: FrameModel, n_frames: int, rms_px: float, stream: np.random.Generator
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """Within-exposure offsets (n_frames, grid samples) with zero Fowler-weighted mean per frame
-    and overall rms ``rms_px``: fractional Brownian motion, one segment per frame and axis."""
-    n_grid = model.grid_samples_per_frame
-    if rms_px <= 0:
-        return np.zeros((n_frames, n_grid)), np.zeros((n_frames, n_grid))
-    z = fbm_segments(stream, 2 * n_frames, n_grid, _FBM_BETA)
-    dx, dy = z[:n_frames], z[n_frames:]
-    mx, my, _ = tick_moments(dx, dy, model)
-    dx, dy = dx - mx[:, None], dy - my[:, None]
-    scale = rms_px / max(float(np.sqrt(0.5 * (np.mean(dx**2) + np.mean(dy**2)))), 1e-12)
-    return dx * scale, dy * scale
+class ExposureMotion:
+    """The simulator's jitter within each exposure of one observation's frames.
+
+    The fractional Brownian motion of :class:`~eclipsebench.instrument.pointing.PointingModel`
+    exactly as the challenge simulator draws it (paper Appendix A.1, Table 5:
+    ``beta = 1``; segments of 2048 samples at ``dt = SAMPTIME / subsamples``,
+    each block of 64 segments, 131 s, scaled so that its peak ``|FBM|`` is
+    ``peak_px`` on each axis, as IRACSIM scaled each cube), sampled at the
+    real frames' times, less each frame's Fowler-weighted mean, which the
+    measured centroid already holds. The peak scaling makes the motion's rms
+    change from block to block (for ``sub_2s`` frames its variance by about
+    6 % rms), and with it the flux through the curvature of the gain, as in
+    the simulator.
+
+    Parameters
+    ----------
+    obs : Observation
+    model : FrameModel
+    peak_px : float
+        ``A_fbm``.
+    stream : numpy.random.Generator
+        The motion's randomness (one seed is drawn from it; blocks derive
+        their own streams, so a frame's motion does not depend on which
+        frames are asked for with it).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from eclipsebench.trust.observation import Observation
+    >>> from eclipsebench.detector.constants import SUB_2S
+    >>> from eclipsebench.simulation.render import FrameModel
+    >>> n = 128
+    >>> obs = Observation(time_bmjd=57000.0 + np.arange(n) * 2.02 / 86400, aorkey=np.ones(n, int),
+    ...                   expid=np.arange(n) // 64, frame=np.arange(n) % 64, x_px=np.full(n, 15.0),
+    ...                   y_px=np.full(n, 15.0), flux_e=np.ones(n), background_e_per_px=np.ones(n),
+    ...                   noise_pixels=np.ones(n), flag=np.zeros(n, int), channel=2, mode=SUB_2S,
+    ...                   read_noise_e=9.4)
+    >>> motion = ExposureMotion(obs, FrameModel(mode=SUB_2S), 0.4, np.random.default_rng(1))
+    >>> dx, dy = motion.offsets(np.arange(64))
+    >>> dx.shape
+    (64, 2001)
+    """
+
+    def __init__(self, obs: Observation, model: FrameModel, peak_px: float,
+                 stream: np.random.Generator):
+        self.model = model
+        self.peak_px = float(peak_px)
+        self.dt_s = obs.mode.sample_time_s / model.subsamples
+        # frame starts from the first frame's, on the simulator's sample grid
+        elapsed_s = (obs.time_bmjd - np.min(obs.time_bmjd)) * SECONDS_PER_DAY
+        self.start_index = np.rint(elapsed_s / self.dt_s).astype(np.int64)
+        duration_s = float(elapsed_s.max()) + (model.grid_samples_per_frame + 1) * self.dt_s
+        jitter_only = PointingParams(a_j_px=0.0, a_fbm_px=self.peak_px, beta_fbm=1.0, a_w_px=0.0,
+                                     da_w_max_px=0.0, dp_w_max_s=0.0, a_sd_px=0.0,
+                                     a_ld_arcsec_per_hr=0.0)
+        self._pointing = PointingModel(jitter_only, duration_s=duration_s, dt_s=self.dt_s,
+                                       rng=stream)
+
+    def offsets(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Offsets (px) of frames ``rows`` at their grid samples, shape (rows.size, grid
+        samples per frame), each frame's Fowler-weighted mean zero."""
+        n_grid = self.model.grid_samples_per_frame
+        dx, dy = np.zeros((rows.size, n_grid)), np.zeros((rows.size, n_grid))
+        if self.peak_px > 0:
+            for i, start in enumerate(self.start_index[rows]):
+                dx[i], dy[i] = self._pointing.fbm_samples(int(start), n_grid)
+        mx, my, _ = tick_moments(dx, dy, self.model)
+        return dx - mx[:, None], dy - my[:, None]
 
 
 def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tuple,
+                     motion: tuple[np.ndarray, np.ndarray] | None = None,
                      noise_model: str = "physical", radius_px: float = 2.25,
                      star: StarImager | None = None) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
-    ``key`` names the random streams (``seed``, ``*key``, ``"motion"``/``"photon"``/
-    ``"read"``), one set per cube, so a cube's frames do not depend on the others.
+    ``motion``: the offsets within each exposure about the measured centroid
+    (:meth:`ExposureMotion.offsets` of ``rows``); None: none. ``key`` names
+    the noise's random streams (``seed``, ``*key``, ``"photon"``/``"read"``),
+    one set per cube, so a cube's frames do not depend on the others.
     """
     obs = recipe.obs
     model = _frame_model(obs, noise_model)
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
                                                recipe.gain)
     x_track, y_track = obs.track_px()
-    dx, dy = _motion(model, rows.size, recipe.motion_rms_px, rng(seed, *key, "motion"))
+    if motion is None:
+        dx = dy = np.zeros((rows.size, model.grid_samples_per_frame))
+    else:
+        dx, dy = motion
     x_off, y_off, moments = tick_moments(dx, dy, model)
     x_f, y_f = x_track[rows] + x_off, y_track[rows] + y_off
     sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]), model.stamp_px,
@@ -220,56 +291,64 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     """
     obs = recipe.obs
     star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain)
+    motion = ExposureMotion(obs, _frame_model(obs, noise_model), recipe.motion_peak_px,
+                            rng(seed, "trust", "twin", twin, "motion"))
     parts = []
     for rows in obs.aors():
         frames = np.concatenate([
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
-                             noise_model=noise_model, star=star)
+                             motion=motion.offsets(cube), noise_model=noise_model, star=star)
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     columns["flag"] = columns["flag"] | obs.flag
     meta = {k: v for k, v in obs.meta.items() if k not in ("FLAGCNT", "FILENAME")}
     meta.update({"TWIN": int(twin), "EPOCH": int(twin), "SIMULATE": True,
-                 "TWINMOT": float(recipe.motion_rms_px)})
+                 "TWINMOT": float(recipe.motion_peak_px)})
     return make_table(columns, meta)
 
 
 def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *, n_frames: int = 256,
                      grid_px: tuple[float, ...] = MOTION_GRID_PX) -> tuple[float, dict]:
-    """The within-exposure motion rms whose noise-free twins match the real median noise pixels.
+    """The jitter amplitude whose noise-free twins match the real median noise pixels.
 
-    Renders ``n_frames`` frames spread over the good frames, noise-free, for
-    each rms of ``grid_px``, measures their median noise pixels and
-    interpolates to the real median. Outside the grid's range the nearest end
-    is taken and the returned diagnostics say so.
+    Renders ``n_frames`` frames spread over the good frames, noise-free, with
+    one draw of :class:`ExposureMotion` scaled to each peak amplitude of
+    ``grid_px``, measures their median noise pixels and interpolates to the
+    real median. Outside the grid's range the nearest end is taken and the
+    returned diagnostics say so.
 
     Returns
     -------
-    rms_px : float
+    peak_px : float
+        ``A_fbm`` for :class:`ExposureMotion`.
     diagnostics : dict
-        ``noise_pixels_real``, the grid and the median noise pixels at each.
+        ``noise_pixels_real``, the grid, the median noise pixels at each, and
+        ``rms_per_peak``: the rms of the motion within an exposure per px of peak.
     """
     obs = recipe.obs
     good = np.flatnonzero(obs.good)
     rows = good[np.linspace(0, good.size - 1, min(n_frames, good.size)).astype(int)]
     target = float(np.median(obs.noise_pixels[obs.good]))
+    model = _frame_model(obs, "none")
+    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
     medians = []
-    for rms in grid_px:
-        trial = replace(recipe, motion_rms_px=rms)
-        frames = render_frames_of(trial, rows, seed=0, key=("trust", "calibrate"),
-                                  noise_model="none", radius_px=options.radius_px)
-        m = _measure_rows(frames, obs, options)
-        medians.append(float(np.median(m)))
+    for peak in grid_px:
+        frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
+                                  motion=(peak * unit_x, peak * unit_y), noise_model="none",
+                                  radius_px=options.radius_px)
+        medians.append(float(np.median(_measure_rows(frames, obs, options))))
     medians_arr = np.maximum.accumulate(np.asarray(medians))
     if target <= medians_arr[0]:
-        rms_px, where = float(grid_px[0]), "below"
+        peak_px, where = float(grid_px[0]), "below"
     elif target >= medians_arr[-1]:
-        rms_px, where = float(grid_px[-1]), "above"
+        peak_px, where = float(grid_px[-1]), "above"
     else:
-        rms_px, where = float(np.interp(target, medians_arr, grid_px)), "inside"
-    return rms_px, {"noise_pixels_real": target, "motion_grid_px": list(grid_px),
-                    "noise_pixels_grid": medians, "target_vs_grid": where}
+        peak_px, where = float(np.interp(target, medians_arr, grid_px)), "inside"
+    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
+    return peak_px, {"noise_pixels_real": target, "motion_grid_px": list(grid_px),
+                     "noise_pixels_grid": medians, "target_vs_grid": where,
+                     "rms_per_peak": rms_per_peak}
 
 
 def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
