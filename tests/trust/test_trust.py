@@ -61,16 +61,17 @@ def test_the_motion_within_an_exposure_is_the_simulator_s_block_scaled_jitter():
     # a frame's motion does not depend on the frames asked with it
     some = rows[[5, 700, 1500]]
     assert np.allclose(motion.offsets(some)[0], dx[some], rtol=0, atol=1e-12)
-    # each 131-s block of the jitter peaks at A_fbm (the frames cover 99 % of its samples) ...
+    # each whole 131-s block of the jitter peaks at A_fbm (the frames cover 99 % of it) ...
     block = motion.start_index // (2048 * 64)
     peaks = [np.max(np.abs(np.concatenate(
         [motion._pointing.fbm_samples(int(i), model.grid_samples_per_frame)[0]
-         for i in motion.start_index[block == b]]))) for b in np.unique(block)[:-1]]
-    assert np.allclose(peaks, 0.4, rtol=0.05) and max(peaks) <= 0.4 + 1e-9
+         for i in motion.start_index[block == b]]))) for b in np.unique(block)[1:-1]]
+    assert max(peaks) <= 0.4 + 1e-9 and min(peaks) > 0.3   # a peak can fall between frames
+    assert np.median(peaks) == pytest.approx(0.4, rel=1e-9)
     # ... so its rms within an exposure changes from block to block (one rms throughout
     # would give a spread of 0.5 %, the average of 64 frames)
     var = np.array([np.mean(dx[block == b] ** 2 + dy[block == b] ** 2)
-                    for b in np.unique(block)[:-1]])
+                    for b in np.unique(block)[1:-1]])
     assert 0.02 < var.std() / var.mean() < 0.2
     assert 0.06 < np.sqrt(0.5 * var.mean()) < 0.12   # 0.0895 px for the challenge's 0.4
 

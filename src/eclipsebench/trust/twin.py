@@ -33,7 +33,7 @@ from astropy.table import Table
 
 from ..config.photometry import PhotometrySection
 from ..instrument.gain_fit import fit_true_phase_gain
-from ..instrument.pointing import PointingModel, PointingParams
+from ..instrument.pointing import FBM_BLOCK_SEGMENTS, FBM_SEGMENT, PointingModel, PointingParams
 from ..instrument.prf import BuiltinPRF, GainPolynomial, load_gainmap_coefficients
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack
@@ -169,7 +169,9 @@ class ExposureMotion:
     each block of 64 segments, 131 s, scaled so that its peak ``|FBM|`` is
     ``peak_px`` on each axis, as IRACSIM scaled each cube), sampled at the
     real frames' times, less each frame's Fowler-weighted mean, which the
-    measured centroid already holds. The peak scaling makes the motion's rms
+    measured centroid already holds. Where the segments and blocks begin
+    among the frames is drawn (uniform over one block): the simulator counts
+    them from its epoch's start, which a real table does not give. The peak scaling makes the motion's rms
     change from block to block (for ``sub_2s`` frames its variance by about
     6 % rms), and with it the flux through the curvature of the gain, as in
     the simulator.
@@ -208,10 +210,12 @@ class ExposureMotion:
         self.model = model
         self.peak_px = float(peak_px)
         self.dt_s = obs.mode.sample_time_s / model.subsamples
-        # frame starts from the first frame's, on the simulator's sample grid
+        # where the segments and blocks fall among the frames: the table does not say, so each
+        # twin draws it (a grid shared by all twins would give them a common error pattern)
+        offset = int(stream.integers(0, FBM_SEGMENT * FBM_BLOCK_SEGMENTS))
         elapsed_s = (obs.time_bmjd - np.min(obs.time_bmjd)) * SECONDS_PER_DAY
-        self.start_index = np.rint(elapsed_s / self.dt_s).astype(np.int64)
-        duration_s = float(elapsed_s.max()) + (model.grid_samples_per_frame + 1) * self.dt_s
+        self.start_index = offset + np.rint(elapsed_s / self.dt_s).astype(np.int64)
+        duration_s = (float(self.start_index.max()) + model.grid_samples_per_frame + 1) * self.dt_s
         jitter_only = PointingParams(a_j_px=0.0, a_fbm_px=self.peak_px, beta_fbm=1.0, a_w_px=0.0,
                                      da_w_max_px=0.0, dp_w_max_s=0.0, a_sd_px=0.0,
                                      a_ld_arcsec_per_hr=0.0)
