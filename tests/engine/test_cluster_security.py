@@ -189,7 +189,8 @@ def test_a_tls_scheduler_runs_the_tasks_with_the_certificate_options(tmp_path):
                         tls_worker_key=pem["key"], tls_client_cert=pem["cert"],
                         tls_client_key=pem["key"], require_encryption=True)
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, host="127.0.0.1",
-                      protocol="tls://", security=security, dashboard_address=None) as cluster:
+                      protocol="tls://", security=security, dashboard_address="127.0.0.1:0",
+                      scheduler_kwargs={"dashboard": False}) as cluster:
         assert cluster.scheduler_address.startswith("tls://")
         out = tmp_path / "o.txt"
         report = run_tasks([Task("a", "a", write_text, (str(out), "x"), (out,))],
@@ -228,6 +229,22 @@ def test_the_dashboard_is_served_on_loopback_only_when_asked_and_its_address_sai
         logger.removeHandler(handler)
     said = [m for m in said if "dashboard" in m]
     assert len(said) == 1 and "http://127.0.0.1:" in said[0], said
+    assert set(json.loads(out.read_text())) <= LOOPBACK
+
+
+@pytest.mark.slow  # a 2-worker cluster: ~10 s
+@pytest.mark.timeout(300)
+def test_a_run_starts_while_another_holds_dask_s_default_port(tmp_path):
+    # before, the scheduler's health-check server took 127.0.0.1:8787, so a second run at the
+    # same time met "Port 8787 is already in use" (an error here, where warnings are errors)
+    out = tmp_path / "listening.json"
+    with socket.socket() as other:
+        try:
+            other.bind(("127.0.0.1", 8787))
+            other.listen()
+        except OSError:   # somebody holds it already: the same situation
+            pass
+        run_tasks([Task("l", "l", record_listening, (str(out), os.getpid()), (out,))], workers=2)
     assert set(json.loads(out.read_text())) <= LOOPBACK
 
 

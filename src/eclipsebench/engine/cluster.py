@@ -233,7 +233,10 @@ def _start_local(workers: int, options: ClusterOptions):
     with dask_config.set(_local_config(options.dashboard)):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                host="127.0.0.1", security=True,
-                               dashboard_address="127.0.0.1:0" if options.dashboard else None,
+                               # a free port even with no dashboard: the health check's
+                               # server took 8787 otherwise, and a second run at once failed
+                               dashboard_address="127.0.0.1:0",
+                               scheduler_kwargs={"dashboard": options.dashboard},
                                silence_logs=logging.CRITICAL + 1, env=_worker_env())
         client = Client(cluster)
     if options.dashboard:
