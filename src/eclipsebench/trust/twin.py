@@ -171,10 +171,10 @@ class ExposureMotion:
     real frames' times, less each frame's Fowler-weighted mean, which the
     measured centroid already holds. Where the segments and blocks begin
     among the frames is drawn (uniform over one block): the simulator counts
-    them from its epoch's start, which a real table does not give. The peak scaling makes the motion's rms
-    change from block to block (for ``sub_2s`` frames its variance by about
-    6 % rms), and with it the flux through the curvature of the gain, as in
-    the simulator.
+    them from its epoch's start, which a real table does not give. The peak
+    scaling makes the motion's rms change from block to block (for
+    ``sub_2s`` frames its variance by about 6 % rms), and with it the flux
+    through the curvature of the gain, as in the simulator.
 
     Parameters
     ----------
@@ -183,9 +183,9 @@ class ExposureMotion:
     peak_px : float
         ``A_fbm``.
     stream : numpy.random.Generator
-        The motion's randomness (one seed is drawn from it; blocks derive
-        their own streams, so a frame's motion does not depend on which
-        frames are asked for with it).
+        The motion's randomness (the grid's start and one seed are drawn
+        from it; blocks derive their own streams, so a frame's motion does
+        not depend on which frames are asked for with it).
 
     Examples
     --------
