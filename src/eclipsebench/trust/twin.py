@@ -228,8 +228,16 @@ class ExposureMotion:
         n_grid = self.model.grid_samples_per_frame
         dx, dy = np.zeros((rows.size, n_grid)), np.zeros((rows.size, n_grid))
         if self.peak_px > 0:
-            for i, start in enumerate(self.start_index[rows]):
-                dx[i], dy[i] = self._pointing.fbm_samples(int(start), n_grid)
+            starts = self.start_index[rows]
+            block = starts // (FBM_SEGMENT * FBM_BLOCK_SEGMENTS)
+            # the frames starting in one block: one span of at most a block and a frame,
+            # cut into windows as simulate_aor does
+            for b in np.unique(block):
+                sel = np.flatnonzero(block == b)
+                first = int(starts[sel].min())
+                span = self._pointing.fbm_samples(first, int(starts[sel].max()) - first + n_grid)
+                window = (starts[sel] - first)[:, None] + np.arange(n_grid)[None, :]
+                dx[sel], dy[sel] = span[0][window], span[1][window]
         mx, my, _ = tick_moments(dx, dy, self.model)
         return dx - mx[:, None], dy - my[:, None]
 
