@@ -325,8 +325,9 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         The content of ``trust.json`` (a dict; ``to_table()`` and a notebook
         summary; :func:`eclipsebench.trust.result.read_trust` reads it back): ``methods`` (per method ``bias_ppm``,
         ``sd_ppm``, ``rmse_ppm``, ``mean_err_ppm``, ``z_rms``, coverage,
-        ``depth_ppm``, ``honest_err_ppm``), ``skipped``, ``recommended``,
-        ``n_twins``, ``twin_depth_ppm``.
+        ``depth_ppm``, ``honest_err_ppm``, ``mse_excess_sigma``), ``skipped``,
+        ``recommended``, ``near_equals`` (the methods the twins cannot tell from
+        it), ``n_twins``, ``twin_depth_ppm``.
     """
     from .io.paths import check_output_path
     from .trust.run import make_settings, run_trust

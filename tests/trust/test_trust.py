@@ -130,6 +130,8 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     assert set(summary["skipped"]) == {"kr-pmap"} and summary["skipped"]["kr-pmap"]
     assert summary["recommended"] in (None, "poly2")
     s = summary["methods"]["poly2"]
+    assert summary["near_equals"] == []            # one method: nothing to tell it from
+    assert s.get("mse_excess_sigma") == (0.0 if summary["recommended"] else None)
     assert s["honest_err_ppm"] >= s["depth_err_ppm"] and 0 <= s["coverage_1sigma"] <= 1
     # the real residuals' red noise against the twins': a fraction, flagged at 0.95
     assert 0 <= s["beta_red_twins_below"] <= 1 and s["beta_red_real"] > 0
@@ -271,3 +273,25 @@ def test_the_real_residuals_are_flagged_redder_than_the_twins_only_above_95_perc
     assert inside["beta_red_twins_median"] == pytest.approx(0.895)
     unknown = red_noise_check(float("nan"), twins)
     assert np.isnan(unknown["beta_red_twins_below"]) and not unknown["redder_than_twins"]
+
+
+def test_the_paired_test_finds_near_equals_at_its_stated_rate_and_a_worse_method_most_times():
+    from eclipsebench.trust.score import DISTINGUISHABLE_AT, mse_excess_sigma
+
+    rng = np.random.default_rng(11)
+    n_twins, trials = 30, 2000
+    equal, worse = [], []
+    for _ in range(trials):
+        shared = rng.normal(0.0, 100.0, n_twins)       # the track's errors all methods share
+        a = shared + rng.normal(0.0, 40.0, n_twins)
+        b = shared + rng.normal(0.0, 40.0, n_twins)     # same law as a
+        c = 1.5 * shared + rng.normal(0.0, 40.0, n_twins)
+        ref = dict(enumerate(a))
+        equal.append(mse_excess_sigma(dict(enumerate(b)), ref) >= DISTINGUISHABLE_AT)
+        worse.append(mse_excess_sigma(dict(enumerate(c)), ref) >= DISTINGUISHABLE_AT)
+    # one-sided 2-sigma: 2.3 % for a Gaussian mean; the squared differences are skewed
+    assert 0.005 < np.mean(equal) < 0.05
+    assert np.mean(worse) > 0.9
+    assert mse_excess_sigma({1: 5.0, 2: 6.0}, {1: 5.0, 2: 6.0}) != mse_excess_sigma(
+        {1: 5.0, 2: 6.0}, {1: 5.0, 2: 6.0})             # NaN: too few common twins
+    assert mse_excess_sigma({1: 1.0, 2: 2.0, 3: 3.0}, {1: 1.0, 2: 2.0, 3: 3.0}) == 0.0

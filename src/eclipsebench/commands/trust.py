@@ -123,6 +123,12 @@ def format_text(result: dict) -> str:
                      f"{s['mean_err_ppm']:6.1f} {s['z_rms']:5.2f} {s['coverage_1sigma']:5.2f} "
                      f"{s['coverage_2sigma']:5.2f}")
     lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
+    if result.get("near_equals"):
+        from ..trust.score import DISTINGUISHABLE_AT
+
+        lines.append(f"near equals   {', '.join(result['near_equals'])}: mean squared error "
+                     f"within {DISTINGUISHABLE_AT:g} paired standard errors of the recommended "
+                     "method's (the twins cannot tell them apart)")
     for m, s in result["methods"].items():
         if s.get("redder_than_twins"):
             lines.append(f"caution       {m}: the real residuals are redder than "

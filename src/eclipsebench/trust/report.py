@@ -22,7 +22,10 @@ from ..photometry.binning import bin_indices, bin_values
 from ..photometry.table import read_table
 from .layout import TrustLayout
 from .score import (
+    DISTINGUISHABLE_AT,
     REDDER_THAN,
+    mse_excess_sigma,
+    near_equals,
     observation_statistics,
     recommend,
     red_noise_check,
@@ -43,8 +46,8 @@ def _load(path: Path) -> dict[str, Any]:
 
 def collect(root: Path, methods: Sequence[str], n_twins: int
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
-    """Real results, twin ``(depths, errors, beta_red)`` per method, skipped methods, failed
-    twins."""
+    """Real results, twin ``(depths, errors, beta_red, twin numbers)`` per method, skipped
+    methods, failed twins."""
     layout = TrustLayout(Path(root))
     real: dict = {}
     twins: dict = {}
@@ -56,7 +59,7 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
             skipped[m] = data["error"]
             continue
         real[m] = data
-        d, e, b = [], [], []
+        d, e, b, n = [], [], [], []
         for i in range(1, n_twins + 1):
             res = _load(layout.twin_result(m, i))
             if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
@@ -65,11 +68,12 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
             d.append(res["depth_ppm"])
             e.append(res["depth_err_ppm"])
             b.append(np.nan if res.get("beta_red") is None else res["beta_red"])
+            n.append(i)
         if len(d) < 2:
             skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
             del real[m]
             continue
-        twins[m] = (d, e, b)
+        twins[m] = (d, e, b, n)
     return real, twins, skipped, failed
 
 
@@ -86,8 +90,15 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
         if m in scores:
             scores[m]["n_twins_failed"] = n
     best, why = recommend(scores)
+    resid = {m: dict(zip(t[3], np.asarray(t[0], float) - truth, strict=True))
+             for m, t in twins.items()}
+    if best is not None:
+        for m, s in scores.items():
+            s["mse_excess_sigma"] = (0.0 if m == best
+                                     else mse_excess_sigma(resid[m], resid[best]))
     return {"methods": scores, "skipped": dict(skipped), "recommended": best,
-            "recommended_because": why, "n_twins": int(settings["n_twins"]),
+            "recommended_because": why, "near_equals": near_equals(scores, resid, best),
+            "n_twins": int(settings["n_twins"]),
             "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],
             "seed": settings["seed"], "profile": settings["reduce"]["profile"],
             "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
@@ -194,6 +205,15 @@ def _figure_twin(real_table, twin_table, path: Path) -> None:
     plt.close(fig)
 
 
+def _near_equals_text(summary: Mapping[str, Any]) -> str:
+    """The sentence naming the methods the twins cannot tell from the recommended one."""
+    near = summary.get("near_equals") or []
+    if not near:
+        return ""
+    return (f" The twins cannot tell {', '.join(near)} from it (mean squared error within "
+            f"{DISTINGUISHABLE_AT:g} paired standard errors): any of these.")
+
+
 def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
     esc = html.escape
     head = ["method", "depth (ppm)", "honest error (ppm)", "bias (ppm)", "SD (ppm)",
@@ -228,7 +248,8 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
             f"{summary['twin_depth_ppm']:.1f} ppm {esc(str(tw['event']))} (the real depth of "
             f"{esc(str(tw['from_method']))}), reduced like the real table ({esc(summary['profile'])}"
             f" profile, sampler {esc(summary['sampler'])}). Recommended: <b>"
-            f"{esc(str(summary['recommended']))}</b> ({esc(summary['recommended_because'])}).</p>"
+            f"{esc(str(summary['recommended']))}</b> ({esc(summary['recommended_because'])})."
+            f"{esc(_near_equals_text(summary))}</p>"
             f"{table}<p>Honest error: the reported error times max(1, z_rms). Twins: motion "
             f"within an exposure {tw['motion_rms_px']:.3f} px rms, the simulator's jitter with "
             f"a peak of {tw['motion_peak_px']:.3f} px per 131-s block (median noise pixels "

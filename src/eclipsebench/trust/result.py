@@ -38,6 +38,7 @@ class TrustResult(dict):
         best = self.get("recommended")
         row = self.get("methods", {}).get(best, {}) if best else {}
         return {"method": f"{best} (recommended)" if best else "none recommended",
+                "near_equals": ", ".join(self.get("near_equals") or []) or "none",
                 "system": self.get("system"), "profile": self.get("profile"),
                 "depth_ppm": row.get("depth_ppm"), "depth_err_ppm": row.get("honest_err_ppm"),
                 "twins": f"{self.get('n_twins')} at {self.get('twin_depth_ppm', float('nan')):.1f}"

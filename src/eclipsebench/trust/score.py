@@ -15,7 +15,12 @@ give (``docs/trust.md``):
   ``max(1, z_rms)``.
 
 The recommended method has the lowest RMSE among those whose 1-sigma
-coverage interval contains 68.3 %.
+coverage interval contains 68.3 %. Whether another such method is
+distinguishable from it is a paired test over the twins both reduced
+(:func:`mse_excess_sigma`, the loss-differential test of Diebold & Mariano
+1995 with squared error as the loss): the mean of ``r_i^2 - r_best,i^2`` in
+units of its standard error. Below :data:`DISTINGUISHABLE_AT` the twins
+cannot tell the two apart (:func:`near_equals`).
 
 :func:`red_noise_check` compares the real fit's ``beta_red`` (the
 time-averaging factor of its residuals) with the twins': where the real
@@ -35,11 +40,16 @@ from ..photometry.binning import bin_indices, bin_values
 from ..stats.ensemble import GAUSS_1SIGMA, coverage
 
 __all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "REDDER_THAN",
-           "observation_statistics"]
+           "observation_statistics", "mse_excess_sigma", "near_equals", "DISTINGUISHABLE_AT"]
 
 #: The real residuals are flagged redder than the twins' when their ``beta_red`` exceeds
 #: this fraction of the twins' (a one-sided test at 5 %).
 REDDER_THAN = 0.95
+
+#: Another method ranks below the recommended one only when its mean squared twin error
+#: exceeds the recommended one's by at least this many paired standard errors (about 2.5 %
+#: one-sided for a Gaussian mean).
+DISTINGUISHABLE_AT = 2.0
 
 
 def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_ppm: float
@@ -83,6 +93,68 @@ def recommend(scores: Mapping[str, Mapping[str, Any]]) -> tuple[str | None, str]
     best = min(honest, key=lambda m: (honest[m]["rmse_ppm"], m))
     return best, (f"lowest RMSE ({honest[best]['rmse_ppm']:.1f} ppm) of the {len(honest)} "
                   "method(s) whose 1-sigma coverage is consistent with 68%")
+
+
+def mse_excess_sigma(resid_ppm: Mapping[int, float], reference_ppm: Mapping[int, float]
+                     ) -> float:
+    """How many paired standard errors one method's mean squared twin error exceeds another's.
+
+    Parameters
+    ----------
+    resid_ppm, reference_ppm : mapping
+        ``{twin: depth - truth}`` of the method and of the reference; only the
+        twins both reduced count.
+
+    Returns
+    -------
+    float
+        ``mean(d) / (sd(d) / sqrt(n))`` with ``d_i = r_i^2 - ref_i^2``; NaN
+        with fewer than 3 common twins, 0 when the two agree on every twin.
+
+    Examples
+    --------
+    >>> round(mse_excess_sigma({1: 3.0, 2: -2.0, 3: 2.5, 4: -3.0},
+    ...                        {1: 1.0, 2: -1.0, 3: 0.5, 4: -1.5}), 2)
+    5.59
+    """
+    common = sorted(set(resid_ppm) & set(reference_ppm))
+    if len(common) < 3:
+        return float("nan")
+    d = (np.array([resid_ppm[i] for i in common], float) ** 2
+         - np.array([reference_ppm[i] for i in common], float) ** 2)
+    se = float(d.std(ddof=1) / np.sqrt(d.size))
+    if se == 0.0:
+        return 0.0 if float(d.mean()) == 0.0 else float(np.sign(d.mean()) * np.inf)
+    return float(d.mean()) / se
+
+
+def near_equals(scores: Mapping[str, Mapping[str, Any]],
+                resid_ppm: Mapping[str, Mapping[int, float]], best: str | None) -> list[str]:
+    """The other coverage-consistent methods the twins cannot tell from the recommended one.
+
+    Those whose :func:`mse_excess_sigma` against ``best`` is below
+    :data:`DISTINGUISHABLE_AT` (or undefined), in the order of their RMSE.
+
+    Examples
+    --------
+    >>> scores = {m: {"rmse_ppm": r, "coverage_1sigma_interval": [0.6, 0.8]}
+    ...           for m, r in (("a", 1.0), ("b", 1.1), ("c", 3.0))}
+    >>> resid = {"a": {1: 1.0, 2: -1.0, 3: 1.2, 4: -0.8}, "b": {1: 1.1, 2: -0.9, 3: 1.3, 4: -1.0},
+    ...          "c": {1: 3.0, 2: -3.1, 3: 2.9, 4: -3.0}}
+    >>> near_equals(scores, resid, "a")
+    ['b']
+    """
+    if best is None:
+        return []
+    out = []
+    for m, s in sorted(scores.items(), key=lambda kv: (kv[1]["rmse_ppm"], kv[0])):
+        lo, hi = s["coverage_1sigma_interval"]
+        if m == best or not lo <= GAUSS_1SIGMA <= hi:
+            continue
+        excess = mse_excess_sigma(resid_ppm[m], resid_ppm[best])
+        if not excess >= DISTINGUISHABLE_AT:
+            out.append(m)
+    return out
 
 
 def score_methods(twin_depths: Mapping[str, tuple[Sequence[float], Sequence[float]]],
