@@ -143,6 +143,7 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
     ratios: dict[str, list[float]] = {m: [] for m in PREDICT_METHODS}
     redder: dict[str, list[bool]] = {m: [] for m in PREDICT_METHODS}
     rec_err, med_err = [], []
+    n_near = 0
     for e in range(1, n_epochs + 1):
         table = phot / f"epoch_{e:02d}.fits"
         settings = make_settings(table, reduce=rcfg.reduce, system_section=rcfg.system,
@@ -156,10 +157,13 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
         if summary["recommended"] in errors:
             rec_err.append(errors[summary["recommended"]])
             med_err.append(float(np.median(list(errors.values()))))
+            n_near += bool(summary.get("near_equals"))
         print(f"epoch {e:2d}: truth {depth[e]:.0f}; " + ", ".join(
             f"{m} {summary['methods'][m]['depth_ppm'] - depth[e]:+.0f} (RMSE "
             f"{summary['methods'][m]['rmse_ppm']:.0f})" for m in summary["methods"])
-            + f"; recommended {summary['recommended']}", flush=True)
+            + f"; recommended {summary['recommended']}"
+            + (f" (near equals {', '.join(summary['near_equals'])})"
+               if summary.get("near_equals") else ""), flush=True)
     # With n twins the predicted RMSE is itself estimated: if a method's twin errors are
     # N(0, s^2), n RMSE^2 / s^2 is chi^2 with n degrees of freedom, so even a perfect
     # prediction gives E[(error / RMSE)^2] = n / (n - 2) (1.25 for 10 twins).
@@ -180,8 +184,12 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
                           f"{int(sel.sum())} {name}" for sel, name in
                           ((flagged, "flagged"), (~flagged, "others")) if sel.any()))
     if rec_err:
+        diff = np.asarray(rec_err) - np.asarray(med_err)
+        se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("nan")
         print(f"recommended method's mean |error| {np.mean(rec_err):.1f} ppm against the "
-              f"median method's {np.mean(med_err):.1f} ppm over {len(rec_err)} epochs")
+              f"median method's {np.mean(med_err):.1f} ppm over {len(rec_err)} epochs; the "
+              f"twins could not tell it from another method (near_equals) on {n_near}; "
+              f"difference {diff.mean():+.1f} +- {se:.1f} ppm (standard error over the epochs)")
 
 
 def main(argv: list[str]) -> int:
