@@ -62,22 +62,7 @@ def load_config(path: str | os.PathLike | None = None, overrides: Sequence[str] 
     >>> cfg.challenge.epochs, cfg.challenge.seed
     (2, 7)
     """
-    extra = [f"{section}.{key}={_toml_literal(value)}"
-             for section, table in sections.items() for key, value in dict(table).items()]
-    return _load_config(path, list(overrides) + extra)
-
-
-def _toml_literal(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_literal(v) for v in value) + "]"
-    if isinstance(value, Mapping):  # an inline table, e.g. system={"planet": {...}}
-        return "{" + ", ".join(f"{_toml_literal(str(k))} = {_toml_literal(v)}"
-                               for k, v in value.items() if v is not None) + "}"
-    return repr(value)
+    return _load_config(path, list(overrides), sections)
 
 
 def _config(config: Config | str | os.PathLike | None) -> Config:

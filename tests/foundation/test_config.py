@@ -65,3 +65,22 @@ def test_dump_roundtrip(tmp_path):
     path.write_text(dump_toml(to_mapping(cfg)))
     assert load_config(path) == cfg
     assert isinstance(load_config(path), Config)
+
+
+def test_sections_take_python_and_numpy_values_and_name_a_wrong_key():
+    import numpy as np
+
+    import eclipsebench as eb
+
+    cfg = eb.load_config(challenge={"epochs": np.int64(3), "seed": 7},
+                         simulation={"aperture_radius_px": np.float64(2.5)},
+                         overrides=["challenge.seed=9"])          # text overrides come last
+    assert (cfg.challenge.epochs, cfg.challenge.seed) == (3, 9)
+    r = cfg.simulation.aperture_radius_px
+    assert r == 2.5 and type(r) is float
+    with pytest.raises(ConfigError, match=r"challenge\.epoch.*unknown key"):
+        eb.load_config(challenge={"epoch": 3})
+    with pytest.raises(ConfigError, match="challenge.*expected a table"):
+        eb.load_config(challenge=3)
+    with pytest.raises(ConfigError, match="challenge.epochs.*integer"):
+        eb.load_config(challenge={"epochs": 2.5})

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
@@ -21,6 +22,7 @@ from ..astro.catalogue import system_for
 from ..errors import ConfigError, InputError
 from .base import (
     apply_overrides,
+    apply_sections,
     check,
     dump_toml,
     from_mapping,
@@ -105,11 +107,15 @@ def resolve_config(path: str | os.PathLike[str]) -> tuple[str, str | None]:
                      f"(built-in: {', '.join(names)})")
 
 
-def load_config(path: str | os.PathLike[str] | None = None, overrides: list[str] | None = None) -> Config:
-    """Read ``path`` (or the defaults), apply ``--set`` overrides, validate.
+def load_config(path: str | os.PathLike[str] | None = None, overrides: list[str] | None = None,
+                sections: Mapping[str, Mapping[str, Any]] | None = None) -> Config:
+    """Read ``path`` (or the defaults), set ``sections``, apply ``--set`` overrides, validate.
 
     ``path`` is a TOML file or the name of a built-in configuration
-    (:func:`resolve_config`; a file of that name wins).
+    (:func:`resolve_config`; a file of that name wins). ``sections`` holds
+    Python values by section (``{"challenge": {"epochs": 2}}``,
+    :func:`~eclipsebench.config.base.apply_sections`); the text overrides
+    come last.
 
     Raises
     ------
@@ -132,9 +138,11 @@ def load_config(path: str | os.PathLike[str] | None = None, overrides: list[str]
             except tomllib.TOMLDecodeError as exc:  # a packaging error, named all the same
                 raise InputError(f"{label}: not valid TOML ({exc})") from None
             path = label
-    mapping = apply_overrides(mapping, list(overrides or []))
+    mapping = apply_overrides(apply_sections(mapping, sections or {}), list(overrides or []))
     config = from_mapping(Config, mapping)
-    _check_system(config, path, list(overrides or []))
+    by_caller = list(overrides or []) + (["system.name="] if "name" in (sections or {}).get(
+        "system", {}) else [])
+    _check_system(config, path, by_caller)
     return config
 
 

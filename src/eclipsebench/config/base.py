@@ -213,6 +213,48 @@ def apply_overrides(mapping: Mapping[str, Any], overrides: list[str]) -> dict[st
     return result
 
 
+def _plain(value: Any) -> Any:
+    """A Python value as TOML would give it: numpy scalars as Python numbers, tuples and
+    arrays as lists, mappings as dicts (recursively)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items() if v is not None}
+    if isinstance(value, (list, tuple)) or (hasattr(value, "tolist") and getattr(
+            value, "ndim", 0) > 0):
+        return [_plain(v) for v in list(value)]
+    item = getattr(value, "item", None)   # a numpy scalar (np.int64, np.float64, np.bool_)
+    if callable(item) and getattr(value, "ndim", None) == 0:
+        return item()
+    return value
+
+
+def apply_sections(mapping: Mapping[str, Any], sections: Mapping[str, Any]) -> dict[str, Any]:
+    """Return a deep copy of ``mapping`` with whole sections' keys set from Python values.
+
+    ``sections`` is ``{"challenge": {"epochs": 2}, ...}``: each key of a
+    section replaces the one in ``mapping`` (a nested table such as
+    ``system.planet`` as a whole). Values are taken as they are (numpy scalars
+    as Python numbers), not through TOML text; :func:`from_mapping` validates
+    them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> apply_sections({"challenge": {"seed": 1}}, {"challenge": {"epochs": np.int64(2)}})
+    {'challenge': {'seed': 1, 'epochs': 2}}
+    """
+    result = copy.deepcopy(dict(mapping))
+    for section, table in sections.items():
+        if not isinstance(table, Mapping):
+            raise ConfigError(str(section), f"expected a table (a dict of keys), got "
+                                            f"{type(table).__name__}")
+        node = result.setdefault(str(section), {})
+        if not isinstance(node, dict):
+            raise ConfigError(str(section), "is not a table")
+        for key, value in table.items():
+            node[str(key)] = _plain(value)
+    return result
+
+
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a TOML file, turning any failure into one line naming the file."""
     p = Path(path)
