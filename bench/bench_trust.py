@@ -23,7 +23,7 @@ Three parts (``--part``):
 
 Command (what BENCHMARKS.md quotes): ``python bench/bench_trust.py --part
 resemble --twins 4``, ``--part speed``, ``--part predict --epochs 20
---twins 30``.
+--twins 50``.
 """
 
 from __future__ import annotations
