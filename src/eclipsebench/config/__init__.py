@@ -140,20 +140,21 @@ def load_config(path: str | os.PathLike[str] | None = None, overrides: list[str]
             path = label
     mapping = apply_overrides(apply_sections(mapping, sections or {}), list(overrides or []))
     config = from_mapping(Config, mapping)
-    by_caller = list(overrides or []) + (["system.name="] if "name" in (sections or {}).get(
-        "system", {}) else [])
-    _check_system(config, path, by_caller)
+    named_by_caller = ("name" in (sections or {}).get("system", {})
+                       or any(o.split("=", 1)[0].strip() == "system.name"
+                              for o in overrides or []))
+    _check_system(config, None if named_by_caller else path)
     return config
 
 
-def _check_system(config: Config, path: str | os.PathLike[str] | None, overrides: list[str]) -> None:
+def _check_system(config: Config, path: str | os.PathLike[str] | None) -> None:
     """The planet must be in a catalogue (or given by value, ``[system.planet]``): one line
-    naming ``system.name``, the catalogues searched and where the name was set."""
+    naming ``system.name``, the catalogues searched and the file that set the name (``path``;
+    None when the caller set it)."""
     try:
         system_for(config.system)
     except InputError as exc:
-        by_override = any(o.split("=", 1)[0].strip() == "system.name" for o in overrides)
         error = ConfigError("system.name", str(exc))
-        if path is not None and not by_override:
+        if path is not None:
             raise InputError(f"{path}: {error}") from None
         raise error from None

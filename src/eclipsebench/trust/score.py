@@ -47,7 +47,7 @@ __all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "RED
 REDDER_THAN = 0.95
 
 #: Another method ranks below the recommended one only when its mean squared twin error
-#: exceeds the recommended one's by at least this many paired standard errors (about 2.5 %
+#: exceeds the recommended one's by at least this many paired standard errors (2.3 %
 #: one-sided for a Gaussian mean).
 DISTINGUISHABLE_AT = 2.0
 
