@@ -49,7 +49,7 @@ from eclipsebench.errors import InputError
 from ..detector.constants import PIXEL_SCALE_ARCSEC
 
 __all__ = ["PointingParams", "ParamRange", "PointingRanges", "draw_pointing_params",
-           "PointingModel", "fbm_series", "skewed_sine"]
+           "PointingModel", "fbm_series", "skewed_sine", "frame_windows"]
 
 FBM_SEGMENT = 2048
 FBM_BLOCK_SEGMENTS = 64
@@ -414,3 +414,35 @@ class PointingModel:
         lx, ly = self.long_term_drift(t)
         fbm = self.fbm_samples(start_index, n)
         return (np.interp(t, tc, sx) + lx + fbm[0], np.interp(t, tc, sy) + ly + fbm[1])
+
+
+def frame_windows(samples, starts: np.ndarray, n_grid: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each frame's ``n_grid`` model samples, cut from one span that covers them all.
+
+    Parameters
+    ----------
+    samples : callable
+        ``samples(start, n)`` gives the x and y offsets at model samples
+        ``start .. start + n - 1`` (:meth:`PointingModel.offsets_grid`,
+        :meth:`PointingModel.fbm_samples`).
+    starts : array of int
+        Each frame's first model sample.
+    n_grid : int
+        Samples per frame.
+
+    Returns
+    -------
+    dx, dy : ndarray, shape (len(starts), n_grid)
+
+    Examples
+    --------
+    >>> ramp = lambda start, n: (np.arange(start, start + n) * 1.0, -np.arange(start, start + n))
+    >>> dx, dy = frame_windows(ramp, np.array([10, 13]), 3)
+    >>> dx.tolist(), dy[1].tolist()
+    ([[10.0, 11.0, 12.0], [13.0, 14.0, 15.0]], [-13, -14, -15])
+    """
+    starts = np.asarray(starts, np.int64)
+    first = int(starts.min())
+    gx, gy = samples(first, int(starts.max()) - first + n_grid)
+    win = (starts - first)[:, None] + np.arange(n_grid)[None, :]
+    return gx[win], gy[win]

@@ -57,6 +57,7 @@ from ..instrument.pointing import (
     PointingParams,
     PointingRanges,
     draw_pointing_params,
+    frame_windows,
 )
 from ..io.atomic import atomic_path, write_json, write_text
 from ..io.bcd_write import AorWriter, bcd_path, bmjd_to_utc, bunc_path
@@ -244,11 +245,7 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
         starts = frame_starts[c]
         nf = starts.size
         if pointing is not None:
-            first = _grid_index(starts[0], dt_s)
-            offs = _grid_index(starts, dt_s) - first
-            gx, gy = pointing.offsets_grid(int(first), int(offs[-1] + n_grid))
-            win = offs[:, None] + np.arange(n_grid)[None, :]
-            dx, dy = gx[win], gy[win]
+            dx, dy = frame_windows(pointing.offsets_grid, _grid_index(starts, dt_s), n_grid)
         else:
             dx = dy = np.zeros((nf, n_grid))
         x_off, y_off, moments = tick_moments(dx, dy, model)

@@ -33,7 +33,13 @@ from astropy.table import Table
 
 from ..config.photometry import PhotometrySection
 from ..instrument.gain_fit import fit_true_phase_gain
-from ..instrument.pointing import FBM_BLOCK_SEGMENTS, FBM_SEGMENT, PointingModel, PointingParams
+from ..instrument.pointing import (
+    FBM_BLOCK_SEGMENTS,
+    FBM_SEGMENT,
+    PointingModel,
+    PointingParams,
+    frame_windows,
+)
 from ..instrument.prf import BuiltinPRF, GainPolynomial, load_gainmap_coefficients
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack
@@ -230,14 +236,10 @@ class ExposureMotion:
         if self.peak_px > 0:
             starts = self.start_index[rows]
             block = starts // (FBM_SEGMENT * FBM_BLOCK_SEGMENTS)
-            # the frames starting in one block: one span of at most a block and a frame,
-            # cut into windows as simulate_aor does
+            # the frames starting in one block: one span of at most a block and a frame
             for b in np.unique(block):
                 sel = np.flatnonzero(block == b)
-                first = int(starts[sel].min())
-                span = self._pointing.fbm_samples(first, int(starts[sel].max()) - first + n_grid)
-                window = (starts[sel] - first)[:, None] + np.arange(n_grid)[None, :]
-                dx[sel], dy[sel] = span[0][window], span[1][window]
+                dx[sel], dy[sel] = frame_windows(self._pointing.fbm_samples, starts[sel], n_grid)
         mx, my, _ = tick_moments(dx, dy, self.model)
         return dx - mx[:, None], dy - my[:, None]
 
