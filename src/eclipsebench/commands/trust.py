@@ -23,7 +23,8 @@ NAME = "trust"
 HELP = ("Simulate digital twins of a real observation (its times, pointing track, flux, "
         "background and readout, with a known eclipse), reduce each like the real table with "
         "every chosen method, and report each method's bias, scatter, error calibration and "
-        "honest error on the real depth; resumable.")
+        "honest error on the real depth, with a recommended method and the methods the twins "
+        "cannot tell from it; resumable.")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
