@@ -28,7 +28,18 @@ constant                       limit           what it bounds (default)
                                                (2,000)
 ``MAX_WORKERS``                256             ``run.workers``, ``--workers``: local
                                                processes (2)
+``MAX_TEXT_FILE_BYTES``        16 MiB          a configuration or catalogue file
+                                               (a few KiB)
+``MAX_PMAP_FILE_BYTES``        2 GiB           one pixel-map file (``--pmap``: an SSC
+                                               map file is 2 MB)
+``MAX_TABLE_HEADER_BYTES``     1 MiB           the metadata (YAML header) of an ECSV
+                                               table (a few KiB)
 =============================  ==============  ======================================
+
+A table's rows are counted before it is read whole (FITS ``NAXIS2``; CSV
+and ECSV lines, streamed) and refused above ``MAX_FRAMES_PER_EPOCH``.
+Configurations, catalogues and pixel maps must be regular files (not a
+device such as ``/dev/zero``, not a FIFO) within their size limit.
 """
 
 from __future__ import annotations
@@ -37,7 +48,8 @@ from .errors import ConfigError, InputError
 
 __all__ = ["MAX_EPOCHS", "MAX_TWINS", "MAX_CUBES_PER_AOR", "MAX_FRAMES_PER_CUBE",
            "MAX_FRAMES_PER_EPOCH", "MAX_CALIBRATION_FRAMES", "MAX_MCMC_WALKERS",
-           "MAX_MCMC_WALKER_STEPS", "MAX_BOOTSTRAP", "MAX_WORKERS", "size_problem", "check_size"]
+           "MAX_MCMC_WALKER_STEPS", "MAX_BOOTSTRAP", "MAX_WORKERS", "MAX_TEXT_FILE_BYTES",
+           "MAX_PMAP_FILE_BYTES", "MAX_TABLE_HEADER_BYTES", "size_problem", "check_size"]
 
 #: Epochs of one challenge (``challenge.epochs``): each is about 140 MB of cubes.
 MAX_EPOCHS = 1_000
@@ -59,6 +71,13 @@ MAX_MCMC_WALKER_STEPS = 10_000_000
 MAX_BOOTSTRAP = 1_000_000
 #: Worker processes of a local Dask cluster (each imports the package: ~300 MB).
 MAX_WORKERS = 256
+#: Bytes of one configuration or catalogue file (TOML text, read whole).
+MAX_TEXT_FILE_BYTES = 16 * 2**20
+#: Bytes of one pixel-map file (read whole): the KR/Pmap calibration set at
+#: ``MAX_CALIBRATION_FRAMES`` rows of its columns is under 2 GiB.
+MAX_PMAP_FILE_BYTES = 2 * 2**30
+#: Bytes of an ECSV table's header (its YAML metadata and column list, parsed whole).
+MAX_TABLE_HEADER_BYTES = 2**20
 
 
 def size_problem(value: int | float, limit: int, what: str = "") -> str:

@@ -35,6 +35,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
+from ..io.inputs import read_input_bytes
+from ..limits import MAX_TEXT_FILE_BYTES
 from .times import BMJD_OFFSET
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -211,12 +213,13 @@ def load_catalogue(catalogue: str | Path | None = None) -> dict[str, dict[str, A
     else:
         path = Path(catalogue)
         source = str(path)
+        # a regular file within the stated size: not a device (/dev/zero) nor a FIFO
+        data = read_input_bytes(path, "catalogue file", MAX_TEXT_FILE_BYTES)
         try:
-            text = path.read_text("utf-8")
-        except FileNotFoundError:
-            raise InputError(f"{path}: no such catalogue file") from None
-        except OSError as exc:
-            raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset "
+                             f"{exc.start}); expected a UTF-8 TOML catalogue") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -326,7 +326,10 @@ def _check_pmap(args: argparse.Namespace, table, table_path: Path) -> None:
     option is the error reported, as for any other method.
     """
     from ..decorrelate import get_method
+    from ..io.pmap_files import check_pmap_path
 
+    if args.pmap is not None:   # a device or a FIFO is refused before the fit
+        check_pmap_path(args.pmap)
     cls = get_method(args.method)
     if "pmap" not in cls.resources or args.pmap is not None:
         return

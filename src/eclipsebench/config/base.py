@@ -25,6 +25,8 @@ from pathlib import Path
 from typing import Any, Literal, get_args, get_origin, get_type_hints
 
 from ..errors import ConfigError, InputError
+from ..io.inputs import read_input_bytes
+from ..limits import MAX_TEXT_FILE_BYTES
 
 __all__ = ["from_mapping", "to_mapping", "check", "coerce", "parse_override", "apply_overrides",
            "load_toml", "dump_toml"]
@@ -256,16 +258,14 @@ def apply_sections(mapping: Mapping[str, Any], sections: Mapping[str, Any]) -> d
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """Read a TOML file, turning any failure into one line naming the file."""
+    """Read a TOML file, turning any failure into one line naming the file.
+
+    Only a regular file of at most ``MAX_TEXT_FILE_BYTES`` is read
+    (:func:`eclipsebench.io.inputs.read_input_bytes`).
+    """
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{p}: no such configuration file") from None
-    except IsADirectoryError:
-        raise InputError(f"{p}: is a folder; expected a configuration file (TOML)") from None
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read ({exc.strerror})") from None
+    # a regular file within the stated size: not a device (/dev/zero) nor a FIFO
+    data = read_input_bytes(p, "configuration file (TOML)", MAX_TEXT_FILE_BYTES)
     for bom, encoding in ((b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16"),
                           (b"\xef\xbb\xbf", "UTF-8 with a byte-order mark")):
         if data.startswith(bom):

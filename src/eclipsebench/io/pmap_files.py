@@ -52,10 +52,12 @@ from astropy.io import fits
 from astropy.utils.exceptions import AstropyUserWarning
 
 from ..errors import DataError, InputError
+from ..limits import MAX_PMAP_FILE_BYTES
+from .inputs import check_input_file
 
 __all__ = ["CalibrationSet", "GriddedPmap", "load_calibration_table", "load_gridded_pmap",
            "load_pmap", "find_pmap_path", "CALIBRATION_RELPATH", "pmap_versions",
-           "pick_pmap_version"]
+           "pick_pmap_version", "check_pmap_path"]
 
 #: Where a simulated challenge keeps its calibration-star table, relative to SIMDIR.
 CALIBRATION_RELPATH = Path("calibration") / "pmap_calibration.fits"
@@ -125,6 +127,8 @@ def _read_fits_quietly(path: Path):
     suppressed, and only here.
     """
 
+    # a regular file within the stated size: not a device (/dev/zero) nor a FIFO
+    check_input_file(path, "pixel-map FITS file", MAX_PMAP_FILE_BYTES)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", AstropyUserWarning)
@@ -229,6 +233,26 @@ def load_gridded_pmap(path: str | os.PathLike) -> GriddedPmap:
                        source=str(files["pmap"]))
 
 
+def check_pmap_path(path: str | os.PathLike) -> Path:
+    """``path`` if it is a folder or a regular file within ``MAX_PMAP_FILE_BYTES``.
+
+    The check of ``--pmap`` before any work: a missing path, a device
+    (``/dev/zero``) or a FIFO is one line naming it. Files in a folder are
+    checked the same way when they are read.
+
+    Raises
+    ------
+    InputError
+        One line naming the path.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"pmap {p}: no such file or folder")
+    if not p.is_dir():
+        check_input_file(p, "pixel-map FITS file", MAX_PMAP_FILE_BYTES)
+    return p
+
+
 def load_pmap(path: str | os.PathLike) -> CalibrationSet | GriddedPmap:
     """Load either kind of pixel map from ``path``, recognised by its content.
 
@@ -237,9 +261,7 @@ def load_pmap(path: str | os.PathLike) -> CalibrationSet | GriddedPmap:
     file whose primary HDU is a 2-D image and whose name starts with
     ``pmap_`` as the gridded map.
     """
-    p = Path(path)
-    if not p.exists():
-        raise InputError(f"pmap {p}: no such file or folder")
+    p = check_pmap_path(path)
     if p.is_dir():
         return load_gridded_pmap(p)
     hdus = _read_fits_quietly(p)

@@ -35,6 +35,7 @@ from ..errors import InputError
 from ..fit import reduce as fit_reduce
 from ..io.atomic import atomic_path, write_json, write_text
 from ..io.paths import check_links_inside
+from ..io.pmap_files import check_pmap_path
 from ..limits import MAX_TWINS
 from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
@@ -307,6 +308,8 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
             raise InputError(f"method {m!r}: unknown (known: {', '.join(known)})")
     if len(set(chosen)) != len(chosen):
         raise InputError("methods: a method is named twice")
+    if pmap is not None and str(pmap) != "":   # a device or a FIFO: refused before the table
+        check_pmap_path(pmap)
     path = Path(table)
     if not path.is_file():
         raise InputError(f"{path}: no such photometry table")
