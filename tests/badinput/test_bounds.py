@@ -57,3 +57,151 @@ def test_a_configuration_above_its_size_limit_is_one_line(tmp_path, cli, bad, mo
     monkeypatch.setattr(base, "MAX_TEXT_FILE_BYTES", 1000)   # the real limit is 16 MiB
     code, _, err = cli("config", path)
     bad.assert_one_line(code, err, str(path), "above the limit of 1000")
+
+
+# ----------------------------------------------------------------------------- tables
+def _sparse_fits(path, n_rows: int):
+    """A FITS table whose header says ``n_rows`` rows of 16 bytes: a sparse file (no data
+    written), so a reader that trusts NAXIS2 before reading allocates nothing."""
+    import numpy as np
+    from astropy.io import fits
+
+    hdu = fits.BinTableHDU.from_columns([fits.Column("time_bmjd", "D", array=np.zeros(1)),
+                                         fits.Column("flux", "D", array=np.ones(1))])
+    hdu.name = "PHOTOMETRY"
+    hdu.header["NAXIS2"] = n_rows
+    head = fits.PrimaryHDU().header.tostring().encode() + hdu.header.tostring().encode()
+    size = len(head) + -(-16 * n_rows // 2880) * 2880
+    with open(path, "wb") as fh:
+        fh.write(head)
+        fh.truncate(size)
+    return path
+
+
+def _long_csv(path, n_rows: int):
+    with open(path, "wb") as fh:
+        fh.write(b"time_bmjd,flux\n")
+        fh.write(b"1,1\n" * n_rows)
+    return path
+
+
+@pytest.mark.parametrize("kind,command", [("fits", "reduce"), ("fits", "trust"),
+                                          ("csv", "reduce"), ("csv", "trust"), ("csv", "stats")])
+def test_a_table_over_the_row_limit_is_refused_before_it_is_read(kind, command, tmp_path, cli,
+                                                                 bad):
+    """The real limit, on cheap files: a sparse FITS (160 MB said, nothing written) and a
+    40 MB CSV; refused in well under 5 CPU-seconds, nothing made in --out."""
+    import time
+
+    from eclipsebench.limits import MAX_FRAMES_PER_EPOCH
+
+    n = MAX_FRAMES_PER_EPOCH + 1
+    path = (_sparse_fits(tmp_path / "big.fits", n) if kind == "fits"
+            else _long_csv(tmp_path / "big.csv", n))
+    out = tmp_path / "out"
+    argv = {"reduce": ["reduce", path, "--method", "pld", "--out", out / "r.json"],
+            "trust": ["trust", path, "--out", out],
+            "stats": ["stats", path]}[command]
+    start = time.process_time()
+    code, _, err = cli(*argv, "--quiet")
+    cpu_s = time.process_time() - start
+    bad.assert_one_line(code, err, str(path), f"{n} rows", str(MAX_FRAMES_PER_EPOCH))
+    assert cpu_s < 5.0
+    assert not out.exists()
+
+
+def test_a_table_at_the_row_limit_is_counted_exactly(tmp_path):
+    from eclipsebench.photometry.table import count_text_rows
+
+    path = tmp_path / "t.csv"
+    path.write_bytes(b"# c\n#c2\ntime_bmjd,flux\n1,2\n\n3,4\r\n\r\n5,6")
+    assert count_text_rows(path) == 3
+    path.write_bytes(b"time_bmjd,flux\n" + b"1,1\n" * 5)
+    assert count_text_rows(path) == 5
+
+
+# ----------------------------------------------------------------------------- YAML aliases
+#: What trust needs in the metadata of a table ('eclipsebench photometry' records the readout).
+READOUT = {"CHANNEL": 2, "READMODE": "SUB", "AFOWLNUM": 8, "AWAITPER": 184, "SAMPTIME": 0.01,
+           "FRAMTIME": 2.0, "RONOISE": 9.4}
+
+
+def _alias_bomb(levels: int = 9) -> str:
+    """A YAML flow sequence of ``levels`` anchored lists, each nine aliases of the one before:
+    9**levels strings once expanded (1.1 KB of text for 9 levels; 2.7 GB of JSON)."""
+    items = ["&a0 [" + ", ".join(["lol"] * 9) + "]"]
+    items += [f"&a{k} [" + ", ".join([f"*a{k - 1}"] * 9) + "]" for k in range(1, levels)]
+    return "[" + ", ".join(items) + "]"
+
+
+def _bomb_ecsv(path, bad, levels: int = 9):
+    """The flat XO-3b table as ECSV, with the readout and a YAML alias bomb in its metadata."""
+    from astropy.table import Table
+
+    plain = bad.xo3_table(path.with_suffix(".fits"))
+    table = Table.read(plain)
+    table.meta.update(READOUT)
+    table.meta["BOMB"] = "PLACEHOLDER"
+    table.write(path, format="ascii.ecsv")
+    text = path.read_text()
+    assert text.count("PLACEHOLDER") == 1
+    path.write_text(text.replace("PLACEHOLDER", _alias_bomb(levels)))
+    plain.unlink()
+    return path
+
+
+def test_ecsv_metadata_with_yaml_aliases_is_refused_naming_the_file(tmp_path, bad):
+    from eclipsebench.errors import DataError
+    from eclipsebench.photometry.table import read_table
+
+    path = _bomb_ecsv(tmp_path / "bomb.ecsv", bad)
+    assert len(_alias_bomb()) < 2000   # 1.1 KB of YAML
+    with pytest.raises(DataError, match="YAML anchor or alias") as caught:
+        read_table(path)
+    assert str(path) in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_metadata_are_never_serialised_into_a_header_past_the_limit(tmp_path):
+    """Shared references (as a YAML reader builds them) are not expanded past the limit."""
+    import yaml
+    from astropy.table import Table
+
+    from eclipsebench.errors import InputError
+    from eclipsebench.limits import MAX_TABLE_HEADER_BYTES
+    from eclipsebench.photometry.table import write_photometry
+
+    bomb = yaml.safe_load(_alias_bomb(7))   # 4.8 M strings once expanded: 34 MB of JSON
+    table = Table({"time_bmjd": [1.0, 2.0]}, meta={"BOMB": bomb})
+    with pytest.raises(InputError, match=f"BOMB.*{MAX_TABLE_HEADER_BYTES}"):
+        write_photometry(table, tmp_path / "t.fits")
+    assert not (tmp_path / "t.fits").exists()
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("command", ["trust", "reduce"])
+def test_an_alias_bomb_table_stays_under_1_gb(command, tmp_path, bad):
+    """The whole command in a fresh process: one line, exit 2, peak memory (ru_maxrss) under
+    1 GB. Its address space is capped at 4 GB so that a reader that expands the bomb (7 GB per
+    twin before issue 37) fails here instead of exhausting the machine."""
+    import subprocess
+    import sys
+
+    path = _bomb_ecsv(tmp_path / "bomb.ecsv", bad)
+    out = tmp_path / "out"
+    argv = {"trust": ["trust", str(path), "--out", str(out), "--methods", "poly2",
+                      "--sampler", "leastsq", "--twins", "10", "--depth", "2000",
+                      "--workers", "1", "--system", "XO-3b"],
+            "reduce": ["reduce", str(path), "--method", "poly2", "--sampler", "leastsq",
+                       "--out", str(out / "r.json"), "--system", "XO-3b"]}[command]
+    script = ("import resource, sys\n"
+              "resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))\n"
+              "from eclipsebench.cli import main\n"
+              f"code = main({argv + ['--quiet']!r})\n"
+              "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n"
+              "sys.exit(code)\n")
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         timeout=280)
+    err = run.stderr.splitlines()
+    bad.assert_one_line(run.returncode, err, str(path), "YAML anchor or alias")
+    assert int(run.stdout.split()[-1]) < 2**20   # KiB: under 1 GiB
+    assert not out.exists()

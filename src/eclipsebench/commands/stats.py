@@ -73,8 +73,12 @@ def _check_methods(path: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..photometry.table import check_text_table
+
     path = Path(args.depths)
     _check_text(path)
+    if path.is_file():   # rows counted and ECSV metadata checked before any read
+        check_text_table(path, "ecsv" if path.suffix.lower() == ".ecsv" else "csv")
     _check_methods(path)
     from ..stats.depth_table import read_depth_table
     from ..stats.summary import summarize

@@ -35,19 +35,24 @@ from __future__ import annotations
 import json
 import os
 import re
+import textwrap
+import warnings
 from pathlib import Path
 
 import astropy.units as u
 import numpy as np
+import yaml
 from astropy.io import fits
 from astropy.table import Table
 
 from .. import __version__
-from ..errors import DataError
+from ..errors import DataError, InputError
 from ..io.atomic import atomic_path
+from ..limits import MAX_FRAMES_PER_EPOCH, MAX_TABLE_HEADER_BYTES, size_problem
 
 __all__ = ["REQUIRED_COLUMNS", "COLUMN_UNITS", "JSON_KEYS", "make_table", "write_photometry",
-           "read_photometry", "read_table", "table_format", "column_description", "fits_unit"]
+           "read_photometry", "read_table", "table_format", "column_description", "fits_unit",
+           "count_text_rows", "check_text_table"]
 
 REQUIRED_COLUMNS = ("time_bmjd", "aorkey", "expid", "frame", "x", "y", "x_gauss", "y_gauss",
                     "noise_pixels", "width_x", "width_y", "background", "flux", "flux_err",
@@ -201,7 +206,7 @@ def _header_cards(meta: dict) -> list[tuple[str, object]]:
         if key == ESCAPED_KEY:
             continue
         if key in JSON_KEYS or isinstance(value, (list, tuple, dict)):
-            value = json.dumps(value, sort_keys=True, default=str)  # ASCII: non-ASCII escaped
+            value = _bounded_json(key, value)  # ASCII: non-ASCII escaped
         elif isinstance(value, np.generic):
             value = value.item()
         elif value is None:
@@ -213,6 +218,24 @@ def _header_cards(meta: dict) -> list[tuple[str, object]]:
     if escaped:
         cards.append((f"HIERARCH {ESCAPED_KEY}", json.dumps(escaped)))
     return cards
+
+
+def _bounded_json(key: str, value: object) -> str:
+    """``value`` as JSON, refused in one line once it passes ``MAX_TABLE_HEADER_BYTES``.
+
+    Encoded piece by piece, so metadata that share references (a YAML alias
+    bomb read by another reader) are never expanded in memory past the limit.
+    """
+    encoder = json.JSONEncoder(sort_keys=True, default=str)
+    parts, size = [], 0
+    for part in encoder.iterencode(value):
+        size += len(part)
+        if size > MAX_TABLE_HEADER_BYTES:
+            raise InputError(f"metadata {key}: its JSON is above the limit of "
+                             f"{MAX_TABLE_HEADER_BYTES} characters of a table header "
+                             "(eclipsebench.limits)")
+        parts.append(part)
+    return "".join(parts)
 
 
 def _relative_paths(meta: dict, folder: Path) -> tuple[dict, list[str]]:
@@ -326,10 +349,17 @@ def read_table(path: str | os.PathLike) -> Table:
     them, :func:`eclipsebench.fit.data.standardise_table`). A FITS table is
     the ``PHOTOMETRY`` extension, else the first extension.
 
+    Rows are counted before the table is read whole (FITS: ``NAXIS2``; CSV
+    and ECSV: lines, streamed, :func:`count_text_rows`) and a table of more
+    than ``MAX_FRAMES_PER_EPOCH`` rows is refused; an ECSV header is checked
+    by :func:`check_text_table` (size, no YAML aliases) before it is parsed.
+
     Raises
     ------
     DataError
-        Naming the file if it does not exist, cannot be read, or has no rows.
+        Naming the file if it does not exist, cannot be read (a truncated FITS
+        file included), has no rows or too many, or its ECSV metadata holds
+        YAML aliases or is too large.
 
     Examples
     --------
@@ -347,6 +377,7 @@ def read_table(path: str | os.PathLike) -> Table:
     if kind == "fits":
         table = _read_fits(path)
     else:
+        check_text_table(path, kind)   # rows counted, ECSV metadata checked: before reading
         try:
             table = Table.read(path, format=f"ascii.{kind}")
         except Exception as exc:
@@ -358,34 +389,145 @@ def read_table(path: str | os.PathLike) -> Table:
     return table
 
 
-def _read_fits(path: Path) -> Table:
-    """The FITS table of ``path`` with units and decoded metadata (no column checks)."""
+def _rows_problem(n_rows: int) -> str:
+    return f"{size_problem(n_rows, MAX_FRAMES_PER_EPOCH, 'rows')}; nothing was read"
+
+
+def count_text_rows(path: str | os.PathLike) -> int:
+    r"""The data rows of a CSV or ECSV file, counted by streaming it (never read whole).
+
+    Lines that are blank or comments (``#``, the ECSV header) are not rows,
+    nor is the first other line (the column names).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> path = os.path.join(tempfile.mkdtemp(), "lc.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("# a comment\ntime_bmjd,flux\n57000.0,1.0\n\n57000.1,1.1")
+    >>> count_text_rows(path)
+    2
+    """
+    lines = skipped = 0
+    last = b"\n"
+    with open(path, "rb") as fh:
+        while chunk := fh.read(1 << 22):
+            joined = last + chunk   # a comment or blank line that starts at the chunk's edge
+            lines += chunk.count(b"\n")
+            skipped += (joined.count(b"\n#") + joined.count(b"\n\n")
+                        + joined.count(b"\n\r\n"))
+            last = chunk[-1:]
+    if last != b"\n":
+        lines += 1   # the last line has no newline
+    return max(lines - skipped - 1, 0)
+
+
+def check_text_table(path: str | os.PathLike, kind: str) -> None:
+    """Refuse a CSV or ECSV table before it is parsed: too many rows, a header too large or
+    holding YAML aliases.
+
+    ECSV metadata is YAML; an alias (``*name``) repeats an anchored node by
+    reference, so a kilobyte of aliases can stand for gigabytes once written
+    out (a "billion laughs"). The header is read up to ``MAX_TABLE_HEADER_BYTES``
+    and its tokens scanned (nothing is built); any anchor or alias is refused.
+
+    Parameters
+    ----------
+    path : path
+        The table.
+    kind : {"csv", "ecsv"}
+        How it will be read (:func:`table_format`).
+
+    Raises
+    ------
+    DataError
+        One line naming the file.
+    """
+    path = Path(path)
+    n_rows = count_text_rows(path)
+    if n_rows > MAX_FRAMES_PER_EPOCH:
+        raise DataError(path, _rows_problem(n_rows))
+    if kind != "ecsv":
+        return
+    header, size = [], 0
+    with open(path, "rb") as fh:
+        for raw in fh:
+            line = raw.strip()
+            if line and not line.startswith(b"#"):
+                break
+            size += len(raw)
+            if size > MAX_TABLE_HEADER_BYTES:
+                raise DataError(path, f"the ECSV header is above the limit of "
+                                f"{MAX_TABLE_HEADER_BYTES} bytes (eclipsebench.limits)")
+            text = line[1:].decode("utf-8", errors="replace")
+            header.append(text[1:] if text.startswith(" ") else text)
+    _refuse_yaml_aliases(path, [h for h in header if not h.startswith("%ECSV")])
+
+
+def _refuse_yaml_aliases(path: Path, lines: list[str]) -> None:
+    """A :class:`DataError` if the YAML ``lines`` hold an anchor or an alias (tokens only)."""
     try:
-        with fits.open(path, memmap=False) as hdul:
-            hdu = hdul["PHOTOMETRY"] if "PHOTOMETRY" in hdul else hdul[1]
-            if not isinstance(hdu, (fits.BinTableHDU, fits.TableHDU)):
-                raise TypeError(f"extension {hdu.name or 1} is not a table")
-            header = hdu.header
-            counts_are = header.get("CTUNIT")
-            # a plain structured array: units and descriptions are set from the header below
-            table = Table(np.array(hdu.data))
-            for k in range(1, int(header.get("TFIELDS", 0)) + 1):
-                name = header.get(f"TTYPE{k}")
-                if name not in table.colnames:
-                    continue
-                if f"TUNIT{k}" in header:
-                    table[name].unit = _unit_from_fits(str(header[f"TUNIT{k}"]), counts_are)
-                if f"TCOMM{k}" in header:
-                    table[name].description = str(header[f"TCOMM{k}"])
-            for key, value in header.items():
-                if not _STRUCTURAL.match(key):
-                    table.meta[key] = value
-            relative = header.get("PATHREL")
+        for token in yaml.scan(textwrap.dedent("\n".join(lines)), Loader=yaml.SafeLoader):
+            if isinstance(token, (yaml.AliasToken, yaml.AnchorToken)):
+                raise DataError(path, "the ECSV metadata holds a YAML anchor or alias "
+                                f"({'*' if isinstance(token, yaml.AliasToken) else '&'}"
+                                f"{token.value}, line {token.start_mark.line + 1} of the "
+                                "header): refused, as it can expand without bound")
+    except yaml.YAMLError:
+        return   # not YAML: astropy's reader says what is wrong
+
+
+def _read_fits(path: Path) -> Table:
+    """The FITS table of ``path`` with units and decoded metadata (no column checks).
+
+    The rows (``NAXIS2``) are checked from the header before the data are
+    read; astropy's warnings on a broken file (a truncated one) become part of
+    the one-line error.
+    """
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            table, relative = _read_fits_table(path)
+    except DataError:
+        raise
     except Exception as exc:
-        raise DataError(path, f"not a readable photometry table ({type(exc).__name__}: {exc})") \
-            from None
+        said = "; ".join(dict.fromkeys(str(w.message).splitlines()[0] for w in caught))
+        raise DataError(path, f"not a readable photometry table ({type(exc).__name__}: {exc}"
+                        + (f"; {said}" if said else "") + ")") from None
+    broken = [w for w in caught if "truncated" in str(w.message)]
+    if broken:
+        raise DataError(path, "not a readable photometry table (" + str(broken[0].message)
+                        .splitlines()[0] + ")")
+    for w in caught:   # anything else astropy said, said as before
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     _decode_meta(table, path, relative)
     return table
+
+
+def _read_fits_table(path: Path) -> tuple[Table, str | None]:
+    with fits.open(path, memmap=False) as hdul:
+        hdu = hdul["PHOTOMETRY"] if "PHOTOMETRY" in hdul else hdul[1]
+        if not isinstance(hdu, (fits.BinTableHDU, fits.TableHDU)):
+            raise TypeError(f"extension {hdu.name or 1} is not a table")
+        header = hdu.header
+        n_rows = header.get("NAXIS2", 0)
+        if isinstance(n_rows, int) and n_rows > MAX_FRAMES_PER_EPOCH:   # before any data
+            raise DataError(path, _rows_problem(n_rows))
+        counts_are = header.get("CTUNIT")
+        # a plain structured array: units and descriptions are set from the header below
+        table = Table(np.array(hdu.data))
+        for k in range(1, int(header.get("TFIELDS", 0)) + 1):
+            name = header.get(f"TTYPE{k}")
+            if name not in table.colnames:
+                continue
+            if f"TUNIT{k}" in header:
+                table[name].unit = _unit_from_fits(str(header[f"TUNIT{k}"]), counts_are)
+            if f"TCOMM{k}" in header:
+                table[name].description = str(header[f"TCOMM{k}"])
+        for key, value in header.items():
+            if not _STRUCTURAL.match(key):
+                table.meta[key] = value
+        return table, header.get("PATHREL")
 
 
 def _decode_meta(table: Table, path: Path, relative: str | None) -> None:

@@ -9,6 +9,7 @@ import numpy as np
 from astropy.table import Table
 
 from ..errors import DataError
+from ..photometry.table import check_text_table
 
 __all__ = ["REQUIRED_COLUMNS", "read_depth_table", "check_depth_table"]
 
@@ -71,6 +72,7 @@ def read_depth_table(path: str | os.PathLike[str]) -> Table:
     if not p.is_file():
         raise DataError(p, "no such file (expected a CSV or ECSV depth table)")
     fmt = "ascii.ecsv" if p.suffix.lower() == ".ecsv" else "ascii.csv"
+    check_text_table(p, fmt[6:])   # rows counted and ECSV metadata checked before reading
     try:
         table = Table.read(p, format=fmt)
     except Exception as exc:  # astropy raises many types for malformed text
