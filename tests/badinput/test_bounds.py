@@ -205,3 +205,94 @@ def test_an_alias_bomb_table_stays_under_1_gb(command, tmp_path, bad):
     bad.assert_one_line(run.returncode, err, str(path), "YAML anchor or alias")
     assert int(run.stdout.split()[-1]) < 2**20   # KiB: under 1 GiB
     assert not out.exists()
+
+
+# ----------------------------------------------------------------------------- trust inputs
+FAST = ["--methods", "poly2", "--sampler", "leastsq", "--twins", "10", "--workers", "1",
+        "--quiet"]
+
+
+def _trust_table(path, bad, change=None):
+    """The flat XO-3b table with the readout trust needs, ``change(table)`` applied, as
+    'eclipsebench photometry' writes it."""
+    from eclipsebench.photometry.table import read_table, write_photometry
+
+    table = read_table(bad.xo3_table(path.with_name("base.fits")))
+    table.meta.update(READOUT)
+    if change is not None:
+        change(table)
+    write_photometry(table, path)
+    return path
+
+
+def _swap(table):
+    table["time_bmjd"][[10, 11]] = table["time_bmjd"][[11, 10]]
+
+
+def _repeat(table):
+    table["time_bmjd"][300] = table["time_bmjd"][12]
+
+
+def _nan(table):
+    table["time_bmjd"][5] = float("nan")
+
+
+def _negate(table):
+    table["flux"] = -table["flux"]
+
+
+@pytest.mark.parametrize("change,names", [
+    (_swap, ["time_bmjd", "not in time order", "row 12"]),
+    (_repeat, ["time_bmjd", "repeat", "rows 13 and 301"]),
+    (_nan, ["time_bmjd", "no finite time", "row 6"]),
+    (_negate, ["column flux", "positive"]),
+])
+def test_malformed_trust_tables_are_one_line_before_any_work(change, names, tmp_path, cli, bad):
+    """Before: out of order, all the work then an internal error; repeated or NaN times, two
+    lines after the work; a negated flux, 11 lines naming pointing.a_fbm_px."""
+    path = _trust_table(tmp_path / "t.fits", bad, change)
+    out = tmp_path / "out"
+    code, _, err = cli("trust", path, "--out", out, "--depth", "2000", *FAST)
+    bad.assert_one_line(code, err, str(path), *names)
+    assert "pointing" not in err[0]
+    assert not out.exists()
+
+
+@pytest.mark.filterwarnings("always")   # as on the command line: not made errors by pytest
+def test_a_truncated_fits_table_is_one_line_even_quiet(tmp_path, cli, bad):
+    """Before: astropy's "File may have been truncated" twice (its log and ours), then the
+    error about reshaping an array."""
+    path = _trust_table(tmp_path / "t.fits", bad)
+    data = path.read_bytes()
+    path.write_bytes(data[:len(data) // 2])
+    out = tmp_path / "out"
+    for argv in (["trust", path, "--out", out, *FAST],
+                 ["reduce", path, "--method", "poly2", "--out", out / "r.json", "--quiet"]):
+        code, _, err = cli(*argv)
+        bad.assert_one_line(code, err, str(path), "truncated", "smaller than the expected size")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("depth", ["300000", "100000", "1e308"])
+def test_a_depth_beyond_what_a_fit_returns_is_one_line(depth, tmp_path, cli, bad):
+    """Before: --depth 300000 gave exit 0 with a bias of -200000 ppm and an SD of 0 (every twin's
+    fit stopped on the bound), 1e308 eleven lines naming pointing.a_fbm_px."""
+    path = _trust_table(tmp_path / "t.fits", bad)
+    out = tmp_path / "out"
+    code, _, err = cli("trust", path, "--out", out, "--depth", depth, *FAST)
+    bad.assert_one_line(code, err, "--depth", "100000 ppm")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("event", ["eclipse", "phase-curve", "transit"])
+def test_the_depth_limit_is_the_fit_s_bound(event):
+    import numpy as np
+
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.fit.astro_model import AstroModel, depth_limit_ppm
+
+    phase = "harmonic1" if event == "phase-curve" else "flat"
+    model = AstroModel(57000.0 + np.arange(200) / 500.0, get_system("XO-3b"), phase=phase,
+                       event=event)
+    size_limit = model.bounds[1][model.names.index("rp_rs" if event == "transit" else "depth")]
+    assert model.depth_ppm(size_limit) == pytest.approx(depth_limit_ppm(event), rel=1e-12)

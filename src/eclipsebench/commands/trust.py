@@ -105,7 +105,8 @@ def run(args: argparse.Namespace) -> dict:
                              system=system_for(cfg.system) if explicit else None,
                              system_section=cfg.system, methods=args.methods,
                              n_twins=args.twins, depth_ppm=args.depth, seed=args.seed,
-                             method_options=_method_options(args.method_options), pmap=args.pmap)
+                             method_options=_method_options(args.method_options), pmap=args.pmap,
+                             depth_name="--depth")
     summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers)
     return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
                                 "skipped": len(report.skipped), "wall_s": report.wall_s,

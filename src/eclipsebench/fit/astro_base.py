@@ -29,7 +29,14 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..errors import InputError
-from .astro_parts import PHASE_TERMS, RAMPS, SCALES, VisibleFraction, known_period
+from .astro_parts import (
+    DEPTH_BOUNDS,
+    PHASE_TERMS,
+    RAMPS,
+    SCALES,
+    VisibleFraction,
+    known_period,
+)
 from .names import ECLIPSE_SHAPES, EVENTS, PHASE_MODELS, RAMP_MODELS
 
 __all__ = ["AstroModel", "EventSettings"]
@@ -271,7 +278,7 @@ class AstroModel(ABC):
         """
         lo = np.full(len(self.names), -np.inf)
         hi = np.full(len(self.names), np.inf)
-        lo[0], hi[0] = -0.1, 0.1
+        lo[0], hi[0] = DEPTH_BOUNDS
         lo[1], hi[1] = self.t_start_bmjd, self.t_stop_bmjd
         self._bound_event(lo, hi)
         self.ramp_term.bound(lo, hi, self._ramp_at, self.exposure_d,

@@ -51,6 +51,8 @@ from __future__ import annotations
 from .astro_base import AstroModel
 from .astro_eclipse import EclipseModel
 from .astro_parts import (
+    DEPTH_BOUNDS,
+    TRANSIT_BOUNDS,
     TRANSIT_FREE,
     aor_order,
     box_visible_fraction,
@@ -66,4 +68,22 @@ from .names import ECLIPSE_SHAPES, EVENTS, PHASE_CURVE_MODELS, PHASE_MODELS, RAM
 __all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES",
            "EVENTS", "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u",
            "u_from_q", "integration_offsets_d", "aor_order", "EclipseModel", "TransitModel",
-           "PhaseCurveModel"]
+           "PhaseCurveModel", "depth_limit_ppm"]
+
+
+def depth_limit_ppm(event: str) -> float:
+    """The deepest event (ppm) a fit can return: the upper bound of its size parameter.
+
+    An eclipse's or a phase curve's depth lies below ``DEPTH_BOUNDS[1]`` (0.1 of
+    the star's flux: 100,000 ppm); a transit's Rp/R* below
+    ``TRANSIT_BOUNDS["rp_rs"][1]`` (0.5: a geometric depth of 250,000 ppm). A
+    depth at or above it cannot be measured: the fit stops on the bound.
+
+    Examples
+    --------
+    >>> depth_limit_ppm("eclipse"), depth_limit_ppm("transit")
+    (100000.0, 250000.0)
+    """
+    if event == "transit":
+        return float(TRANSIT_BOUNDS["rp_rs"][1] ** 2 * 1e6)
+    return float(DEPTH_BOUNDS[1] * 1e6)

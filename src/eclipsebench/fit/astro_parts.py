@@ -57,6 +57,9 @@ SCALES = {"depth": 1e-4, "t_ecl_bmjd": 1e-3, "c1_per_day": 1e-3, "c2_per_day2": 
           "ramp_tau_days": 1e-2, "rp_rs": 1e-3, "t_transit_bmjd": 1e-3, "a_rs": 1e-2,
           "b": 1e-2, "q1": 1e-2, "q2": 1e-2, "phase_a1": 1e-4, "phase_b1": 1e-4,
           "phase_a2": 1e-4, "phase_b2": 1e-4, "aor_offset": 1e-4}
+#: Bounds of an eclipse's (and a phase curve's) depth, as a fraction of the star's flux:
+#: the fit returns no depth outside them (also the MCMC's uniform prior).
+DEPTH_BOUNDS = (-0.1, 0.1)
 #: Bounds of the transit's parameters (also the MCMC's uniform prior): q1, q2 in
 #: [0, 1] is Kipping's (2013) physically allowed triangle.
 TRANSIT_BOUNDS = {"rp_rs": (0.0, 0.5), "a_rs": (1.5, 200.0), "b": (0.0, 1.5),

@@ -491,9 +491,9 @@ def _read_fits(path: Path) -> Table:
     except DataError:
         raise
     except Exception as exc:
-        said = "; ".join(dict.fromkeys(str(w.message).splitlines()[0] for w in caught))
-        raise DataError(path, f"not a readable photometry table ({type(exc).__name__}: {exc}"
-                        + (f"; {said}" if said else "") + ")") from None
+        said = [str(w.message).splitlines()[0] for w in caught]
+        why = [s for s in said if "truncated" in s] or [f"{type(exc).__name__}: {exc}", *said]
+        raise DataError(path, f"not a readable photometry table ({'; '.join(why)})") from None
     broken = [w for w in caught if "truncated" in str(w.message)]
     if broken:
         raise DataError(path, "not a readable photometry table (" + str(broken[0].message)

@@ -113,14 +113,40 @@ def _meta_number(meta: Mapping[str, Any], key: str, source: str, kind=float):
     return out
 
 
+def _check_times(time_bmjd: np.ndarray, source: str) -> None:
+    """One line naming the table unless every time is finite, distinct and in order.
+
+    A twin copies the real frames one for one, and the real table is reduced
+    as it is: rows out of order, repeated or without a time are refused before
+    any work (``eclipsebench photometry`` writes one row per frame, in time order).
+    """
+    bad = np.flatnonzero(~np.isfinite(time_bmjd))
+    if bad.size:
+        raise InputError(f"{source}: column time_bmjd: {bad.size} rows have no finite time "
+                         f"(first: row {bad[0] + 1}); expected a finite time for every frame")
+    ordered = np.sort(time_bmjd)
+    same = np.flatnonzero(np.diff(ordered) == 0)
+    if same.size:
+        rows = np.flatnonzero(time_bmjd == ordered[same[0]])[:2] + 1
+        raise InputError(f"{source}: column time_bmjd: {same.size} rows repeat another's time "
+                         f"(first: rows {rows[0]} and {rows[1]}, BMJD {ordered[same[0]]!r}); "
+                         "expected one row per frame")
+    back = np.flatnonzero(np.diff(time_bmjd) < 0)
+    if back.size:
+        raise InputError(f"{source}: column time_bmjd: the rows are not in time order ({back.size} "
+                         f"steps back, first at row {back[0] + 2}); sort the table by time_bmjd")
+
+
 def observation_from_table(table, source: str = "the photometry table") -> Observation:
     """The :class:`Observation` of a photometry table (``eclipsebench photometry``'s).
 
     Raises
     ------
     InputError
-        One line naming the table and the missing column or metadata key, or
-        saying that fewer than :data:`MIN_GOOD_FRAMES` frames are good.
+        One line naming the table and the missing column or metadata key;
+        times that are not finite, repeated or out of order; a flux whose
+        median over the good frames is not positive; or fewer than
+        :data:`MIN_GOOD_FRAMES` good frames.
     """
     missing = [c for c in _COLUMNS if c not in table.colnames]
     if missing:
@@ -141,8 +167,7 @@ def observation_from_table(table, source: str = "the photometry table") -> Obser
         raise InputError(f"{source}: READMODE {meta['READMODE']!r}: twins are simulated for "
                          "subarray observations (READMODE SUB)")
     cols = {c: np.asarray(table[c]) for c in _COLUMNS}
-    order = np.argsort(cols["time_bmjd"], kind="stable")
-    cols = {c: v[order] for c, v in cols.items()}
+    _check_times(np.asarray(cols["time_bmjd"], dtype=float), source)
     obs = Observation(
         time_bmjd=cols["time_bmjd"].astype(float), aorkey=cols["aorkey"].astype(np.int64),
         expid=cols["expid"].astype(np.int64), frame=cols["frame"].astype(np.int64),
@@ -155,6 +180,10 @@ def observation_from_table(table, source: str = "the photometry table") -> Obser
     if n_good < MIN_GOOD_FRAMES:
         raise InputError(f"{source}: {n_good} good frames: expected at least {MIN_GOOD_FRAMES} "
                          "to simulate twins of the observation")
+    star_e = float(np.median(obs.flux_e[obs.good]))
+    if not star_e > 0:
+        raise InputError(f"{source}: column flux: the median of the good frames is {star_e:.6g} "
+                         "electrons; expected the star's aperture flux in electrons (positive)")
     if obs.channel not in (1, 2):
         raise InputError(f"{source}: CHANNEL = {obs.channel}: expected 1 or 2 (the warm "
                          "mission's channels)")

@@ -274,7 +274,8 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
                   system_section: Any = None, methods: Sequence[str] | None = None,
                   n_twins: int = 50, depth_ppm: float | None = None, seed: int = 0,
                   method_options: Mapping[str, Mapping[str, Any]] | None = None,
-                  pmap: str | None = None, hint: str = "--system NAME") -> TrustSettings:
+                  pmap: str | None = None, hint: str = "--system NAME",
+                  depth_name: str = "depth_ppm") -> TrustSettings:
     """Check every input of a trust run before any work; the settings it will run with.
 
     Raises
@@ -282,11 +283,14 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     InputError
         One line naming the argument: a missing or unreadable table, one that
         cannot be twinned (another pipeline's, fewer than 100 good frames), a
-        twin count outside 10-10,000, a depth that is not finite and positive,
+        twin count outside 10-10,000, a depth that is not finite and positive or
+        not below what a fit can return (named ``depth_name``,
+        :func:`~eclipsebench.fit.astro_model.depth_limit_ppm`),
         an unknown method, a whole phase curve, a table naming no planet, or a
         ``pmap`` that holds no readable map.
     """
     from ..decorrelate import available_methods
+    from ..fit.astro_model import depth_limit_ppm
     from ..fit.target import system_of_table
     from .observation import observation_from_table
     from .recipe import EVENTS, twin_map
@@ -297,10 +301,15 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
                          f"{n_twins!r}")
     if depth_ppm is not None and not (isinstance(depth_ppm, (int, float))
                                       and np.isfinite(depth_ppm) and depth_ppm > 0):
-        raise InputError(f"depth: expected a finite depth > 0 in ppm, got {depth_ppm!r}")
+        raise InputError(f"{depth_name}: expected a finite depth > 0 in ppm, got {depth_ppm!r}")
     if reduce.event not in EVENTS:
         raise InputError(f"event {reduce.event!r}: twins are made of one eclipse or transit "
                          f"observation ({', '.join(EVENTS)})")
+    deepest = depth_limit_ppm(reduce.event)
+    if depth_ppm is not None and depth_ppm >= deepest:
+        raise InputError(f"{depth_name}: {depth_ppm:g} ppm is beyond what a fit can return (a "
+                         f"{reduce.event}'s depth is below {deepest:g} ppm, the bound of the "
+                         "fit's parameter); expected a depth below it")
     known = available_methods()
     chosen = tuple(methods) if methods else known
     for m in chosen:
