@@ -260,3 +260,57 @@ def test_the_scheduler_can_come_from_the_environment(tmp_path, capsys, monkeypat
     err = capsys.readouterr().err.splitlines()
     assert code == 2 and len(err) == 1 and address in err[0] and "cannot connect" in err[0], err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("case,option", [("ca-not-pem", "--tls-ca-file"),
+                                         ("no-key", "--tls-cert"),
+                                         ("garbage-key", "--tls-key"),
+                                         ("other-key", "--tls-key"),
+                                         ("cert-not-pem", "--tls-cert"),
+                                         ("key-is-fifo", "--tls-key")])
+def test_bad_tls_files_are_one_line_naming_the_option_and_leave_no_folder(case, option,
+                                                                         tmp_path, capsys):
+    """Issue 37. Before: exit 1 ("internal error: SSLError: PEM lib") after run_config.toml was
+    written into a new folder."""
+    pem = _pem_files(tmp_path)
+    garbage = tmp_path / "garbage.pem"
+    garbage.write_text("this is not PEM\n")
+    files = {"ca": pem["ca"], "cert": pem["cert"], "key": pem["key"]}
+    if case == "ca-not-pem":
+        files["ca"] = str(garbage)
+    elif case == "no-key":
+        del files["key"]
+    elif case == "garbage-key":
+        files["key"] = str(garbage)
+    elif case == "other-key":
+        (tmp_path / "other").mkdir()
+        files["key"] = _pem_files(tmp_path / "other")["key"]   # another certificate's key
+    elif case == "cert-not-pem":
+        files["cert"] = str(garbage)
+    elif case == "key-is-fifo":
+        files["key"] = str(tmp_path / "fifo.pem")
+        os.mkfifo(files["key"])
+    out = tmp_path / "r"
+    args = ["run", "--out", str(out), "--quiet", "--scheduler", "tls://127.0.0.1:1",
+            "--tls-ca-file", files["ca"], "--tls-cert", files["cert"]]
+    if "key" in files:
+        args += ["--tls-key", files["key"]]
+    for item in TINY:
+        args += ["--set", item]
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code = main(args)
+    err = capsys.readouterr().err.splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert option in err[0] and "internal error" not in err[0], err
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_good_tls_files_pass_the_check(tmp_path):
+    from eclipsebench.engine.cluster import check_tls_files
+
+    pem = _pem_files(tmp_path)
+    check_tls_files(pem["ca"], pem["cert"], pem["key"])
+    both = tmp_path / "both.pem"
+    both.write_text(Path(pem["cert"]).read_text() + Path(pem["key"]).read_text())
+    check_tls_files(pem["ca"], str(both), None)   # the key appended to the certificate

@@ -36,7 +36,7 @@ from ..errors import InputError
 from ..progress import get_logger
 
 __all__ = ["ClusterOptions", "SchedulerUnreachable", "SCHEDULER_ENV", "TLS_ENV", "external_security",
-           "scheduler_from_environment", "open_client", "route_dask_logging"]
+           "check_tls_files", "scheduler_from_environment", "open_client", "route_dask_logging"]
 
 #: The environment variable that names an existing scheduler (as ``--scheduler``).
 SCHEDULER_ENV = "ECLIPSEBENCH_SCHEDULER"
@@ -101,7 +101,12 @@ def _tls_setting(options: ClusterOptions, name: str) -> str | None:
 
 
 def external_security(address: str, options: ClusterOptions):
-    """The ``distributed.Security`` of an existing scheduler (None for ``tcp://``)."""
+    """The ``distributed.Security`` of an existing scheduler (None for ``tcp://``).
+
+    Its files are loaded here (:func:`check_tls_files`): callers call this
+    before they make or write any folder, so a missing or bad file is one line
+    naming its option and leaves nothing behind.
+    """
     if not address.startswith("tls://"):
         return None
     from distributed import Security  # heavy, optional: only with a cluster
@@ -117,7 +122,63 @@ def external_security(address: str, options: ClusterOptions):
         raise InputError(f"--scheduler {address}: a tls:// scheduler needs --tls-ca-file and "
                          "--tls-cert (and --tls-key unless the key is in the certificate file), "
                          f"or {TLS_ENV['tls_ca_file']} and {TLS_ENV['tls_cert']}")
+    check_tls_files(security.tls_ca_file, security.tls_client_cert,
+                    getattr(security, "tls_client_key", None))
     return security
+
+
+def _ssl_reason(exc: Exception) -> str:
+    return " ".join(str(getattr(exc, "reason", None) or exc).split()) or type(exc).__name__
+
+
+def check_tls_files(ca_file: str, cert: str, key: str | None) -> None:
+    """Load the TLS files as the connection will, so that a bad one is one line before any work.
+
+    The certificate authority with :meth:`ssl.SSLContext.load_verify_locations`,
+    the certificate and its key with :meth:`ssl.SSLContext.load_cert_chain`;
+    each must be a regular file (not a device or a FIFO).
+
+    Raises
+    ------
+    InputError
+        One line naming the option (``--tls-ca-file``, ``--tls-cert``,
+        ``--tls-key``) and its file: not PEM, no key, or a key that is not the
+        certificate's.
+    """
+    import ssl
+
+    from ..io.inputs import check_input_file
+    from ..limits import MAX_TEXT_FILE_BYTES
+
+    names = (("--tls-ca-file", ca_file), ("--tls-cert", cert), ("--tls-key", key))
+    for option, path in names:
+        if path is not None:
+            try:
+                check_input_file(path, "PEM file", MAX_TEXT_FILE_BYTES)
+            except InputError as exc:
+                raise InputError(f"{option} {exc}") from None
+    context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+    try:
+        context.load_verify_locations(cafile=ca_file)
+    except (ssl.SSLError, OSError, ValueError) as exc:
+        raise InputError(f"--tls-ca-file {ca_file}: not a PEM certificate authority "
+                         f"({_ssl_reason(exc)})") from None
+    try:
+        with open(cert, encoding="ascii", errors="replace") as fh:
+            text = fh.read()
+        start = text.index(ssl.PEM_HEADER)
+        end = text.index(ssl.PEM_FOOTER, start) + len(ssl.PEM_FOOTER)
+        ssl.PEM_cert_to_DER_cert(text[start:end])   # the first certificate decodes
+    except ValueError:
+        raise InputError(f"--tls-cert {cert}: not a PEM certificate (no '-----BEGIN "
+                         "CERTIFICATE-----' block)") from None
+    try:
+        context.load_cert_chain(cert, key)
+    except (ssl.SSLError, OSError, ValueError) as exc:
+        where = (f"--tls-key {key}: not the PEM private key of --tls-cert {cert}" if key
+                 else f"--tls-cert {cert}: holds no private key of its certificate (give "
+                      "--tls-key)")
+        raise InputError(f"{where} ({_ssl_reason(exc)})") from None
 
 
 async def _handshake(address: str, connection_args: dict[str, Any], timeout_s: float) -> None:

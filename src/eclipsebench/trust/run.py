@@ -29,6 +29,7 @@ from ..config.base import to_mapping
 from ..config.reduce import ReduceSection
 from ..decorrelate import get_method
 from ..decorrelate.base import MethodOptions, parse_method_options
+from ..engine.cluster import ClusterOptions, external_security
 from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import InputError
@@ -255,6 +256,8 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
     if layout.root.is_dir():   # no output through a symbolic link out of the folder
         check_links_inside(layout.root)
         check_outputs_inside(plan_real(settings, layout), layout.root)
+    if scheduler:   # a tls:// scheduler's files loaded before the folder is made
+        external_security(scheduler, ClusterOptions())
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
         _guard(settings, layout)
