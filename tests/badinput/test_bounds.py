@@ -296,3 +296,33 @@ def test_the_depth_limit_is_the_fit_s_bound(event):
                        event=event)
     size_limit = model.bounds[1][model.names.index("rp_rs" if event == "transit" else "depth")]
     assert model.depth_ppm(size_limit) == pytest.approx(depth_limit_ppm(event), rel=1e-12)
+
+
+# ----------------------------------------------------------------------------- list options
+@pytest.mark.parametrize("override,key", [
+    ("reduce.beta_bin_minutes=[1.0, inf]", "reduce.beta_bin_minutes"),
+    ("reduce.beta_bin_minutes=[nan, 30.0]", "reduce.beta_bin_minutes"),
+    ("photometry.variable_apertures=[[1.0, inf]]", "photometry.variable_apertures[0]"),
+    ("photometry.variable_apertures=[[1.0, nan]]", "photometry.variable_apertures[0]"),
+])
+def test_a_list_option_with_an_infinite_or_nan_item_is_one_line(override, key, tmp_path, cli,
+                                                                  bad):
+    """Before: beta_bin_minutes = [1.0, inf] was accepted, with two warnings and another
+    beta_red; a variable aperture's b of inf or nan reached the photometry."""
+    code, _, err = cli("config", "--set", override)
+    bad.assert_one_line(code, err, key, "finite")
+    out = tmp_path / "run"
+    code, _, err = cli("run", "--set", override, "--out", out, "--quiet")
+    bad.assert_one_line(code, err, key, "finite")
+    assert not out.exists()
+
+
+def test_a_method_option_list_with_nan_is_refused():
+    from eclipsebench.decorrelate import get_method
+    from eclipsebench.decorrelate.base import parse_method_options
+    from eclipsebench.errors import InputError
+
+    with pytest.raises(InputError, match="hyperparameters.*item 4 is nan.*finite"):
+        parse_method_options(get_method("gp"), {"hyperparameters": [1, 2, 3, 4, float("nan")]})
+    with pytest.raises(InputError, match="segment_fractions.*finite"):
+        parse_method_options(get_method("segpoly"), {"segment_fractions": [0.5, float("inf")]})

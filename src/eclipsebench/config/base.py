@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 import os
 import tomllib
 import types
@@ -60,14 +61,17 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
         args = get_args(tp)
         if value is None and type(None) in args:
             return None
+        said = None
         for arg in args:
             if arg is type(None):
                 continue
             try:
                 return _coerce(value, arg, key)
-            except ConfigError:
+            except ConfigError as exc:   # a list's own problem (an infinite item) is said
+                if get_origin(arg) in (list, tuple) and isinstance(value, (list, tuple)):
+                    said = said or exc
                 continue
-        raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
+        raise said or ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
     if origin is Literal:
         if value not in get_args(tp):
             raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
@@ -82,7 +86,11 @@ def _coerce(value: Any, tp: Any, key: str) -> Any:
             raise ConfigError(key, f"expected {_type_name(tp)}, got {value!r}")
         args = get_args(tp)
         inner = args[0] if args else Any
-        return tuple(_coerce(v, inner, f"{key}[{i}]") for i, v in enumerate(value))
+        items = tuple(_coerce(v, inner, f"{key}[{i}]") for i, v in enumerate(value))
+        for i, item in enumerate(items):   # a list's numbers are finite: no inf, no nan
+            if isinstance(item, float) and not math.isfinite(item):
+                raise ConfigError(key, f"item {i} is {item!r}: expected finite numbers")
+        return items
     if isinstance(tp, type) and dataclasses.is_dataclass(tp):
         if not isinstance(value, Mapping):
             raise ConfigError(key, f"expected a table, got {value!r}")
@@ -112,7 +120,8 @@ def coerce(value: Any, tp: Any, key: str) -> Any:
     """``value`` as the annotated type ``tp``, as :func:`from_mapping` takes each value.
 
     A list becomes a tuple, an integer a float where a number is declared;
-    anything else of the wrong type is a :class:`ConfigError` naming ``key``.
+    anything else of the wrong type, and a list holding an infinite or NaN
+    number, is a :class:`ConfigError` naming ``key``.
 
     Examples
     --------
