@@ -326,3 +326,32 @@ def test_a_method_option_list_with_nan_is_refused():
         parse_method_options(get_method("gp"), {"hyperparameters": [1, 2, 3, 4, float("nan")]})
     with pytest.raises(InputError, match="segment_fractions.*finite"):
         parse_method_options(get_method("segpoly"), {"segment_fractions": [0.5, float("inf")]})
+
+
+# ----------------------------------------------------------------------------- drawn names
+def test_a_planet_name_with_a_dollar_is_drawn_literally(tmp_path, cli):
+    """Before: lightcurve --plot for a planet named XO$-3_$b crashed in matplotlib's math text
+    (exit 1: "ParseSyntaxException")."""
+    planet = {"name": "XO$-3_$b", "period_days": 3.1915239, "t_transit_bjd": 2454449.86816,
+              "ecc": 0.2769, "omega_deg": 347.2, "inc_deg": 84.2, "a_rs": 7.07, "rp_rs": 0.0905,
+              "teff_star_k": 6781.0, "r_star_rsun": 1.377}
+    args = [a for k, v in planet.items() for a in ("--planet", f"{k}={v}")]
+    plot = tmp_path / "lc.png"
+    code, out, err = cli("lightcurve", *args, "--hours", "2", "--plot", plot, "--json")
+    assert code == 0, err
+    assert plot.stat().st_size > 0 and "XO$-3_$b" in out
+
+
+def test_literal_text_draws_the_dollar():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.cbook import is_math_text
+    from matplotlib.figure import Figure
+
+    from eclipsebench.fit.plot import literal_text
+
+    for name in ("XO-3$b$", "X$O\\x$b", "a $x$ and $y$"):
+        assert is_math_text(name) and not is_math_text(literal_text(name))
+        fig = Figure()
+        FigureCanvasAgg(fig)
+        fig.add_subplot(1, 1, 1).set_title(literal_text(name))
+        fig.canvas.draw()   # math text would raise on X$O\x$b

@@ -256,6 +256,8 @@ def _plot(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from ..fit.plot import literal_text
+
     fig = Figure(figsize=(7, 3.5))
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(1, 1, 1)
@@ -263,7 +265,7 @@ def _plot(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
     ax.plot(hours, (flux - 1.0) * 1e6, lw=1.0)
     ax.set_xlabel(f"hours since BMJD {time[0]:.4f}")
     ax.set_ylabel("L(t) - 1 (ppm)")
-    ax.set_title(f"{lc.system.name}: depth {lc.depth_ppm:.0f} ppm "
+    ax.set_title(f"{literal_text(lc.system.name)}: depth {lc.depth_ppm:.0f} ppm "
                  f"(A={lc.options['albedo']:g}, tau_rad={lc.options['tau_rad_days']:g} d, "
                  f"Omega_rot={lc.options['omega_rot']:g})", fontsize=9)
     fig.tight_layout()

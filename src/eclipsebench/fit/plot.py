@@ -18,7 +18,22 @@ import numpy as np
 from ..io.atomic import atomic_path
 
 __all__ = ["bin_series", "lightcurve_figure", "corner_figure", "plot_reduced_lightcurve",
-           "plot_corner", "save_png"]
+           "plot_corner", "save_png", "literal_text"]
+
+
+def literal_text(text: object) -> str:
+    r"""``text`` as matplotlib draws it literally: every ``$`` escaped (no math text).
+
+    Names from the user (a planet's, ``--planet name=XO-3$b``) are drawn with
+    this wherever a figure shows them: an unescaped ``$`` starts matplotlib's
+    math text, which fails on most names.
+
+    Examples
+    --------
+    >>> literal_text("XO-3$b")
+    'XO-3\\$b'
+    """
+    return str(text).replace("$", r"\$")
 
 
 def bin_series(time: np.ndarray, values: np.ndarray, width_d: float):
