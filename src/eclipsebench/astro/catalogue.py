@@ -214,11 +214,11 @@ def load_catalogue(catalogue: str | Path | None = None) -> dict[str, dict[str, A
         path = Path(catalogue)
         source = str(path)
         # a regular file within the stated size: not a device (/dev/zero) nor a FIFO
-        data = read_input_bytes(path, "catalogue file", MAX_TEXT_FILE_BYTES)
+        raw = read_input_bytes(path, "catalogue file", MAX_TEXT_FILE_BYTES)
         try:
-            text = data.decode("utf-8")
+            text = raw.decode("utf-8")
         except UnicodeDecodeError as exc:
-            raise InputError(f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset "
+            raise InputError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
                              f"{exc.start}); expected a UTF-8 TOML catalogue") from None
     try:
         data = tomllib.loads(text)

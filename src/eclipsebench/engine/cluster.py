@@ -117,13 +117,13 @@ def external_security(address: str, options: ClusterOptions):
     security = Security(require_encryption=True,
                         **{k: v for k, v in given.items() if v is not None})
     # read back: Dask's configuration may have given what the options did not
-    if not getattr(security, "tls_ca_file", None) or not getattr(security, "tls_client_cert",
-                                                                  None):
+    ca_file = getattr(security, "tls_ca_file", None)
+    cert = getattr(security, "tls_client_cert", None)
+    if not ca_file or not cert:
         raise InputError(f"--scheduler {address}: a tls:// scheduler needs --tls-ca-file and "
                          "--tls-cert (and --tls-key unless the key is in the certificate file), "
                          f"or {TLS_ENV['tls_ca_file']} and {TLS_ENV['tls_cert']}")
-    check_tls_files(security.tls_ca_file, security.tls_client_cert,
-                    getattr(security, "tls_client_key", None))
+    check_tls_files(ca_file, cert, getattr(security, "tls_client_key", None))
     return security
 
 
