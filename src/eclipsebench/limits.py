@@ -33,7 +33,9 @@ constant                       limit           what it bounds (default)
 ``MAX_PMAP_FILE_BYTES``        2 GiB           one pixel-map file (``--pmap``: an SSC
                                                map file is 2 MB)
 ``MAX_TABLE_HEADER_BYTES``     1 MiB           the metadata (YAML header) of an ECSV
-                                               table (a few KiB)
+                                               table, also with its aliases
+                                               expanded, and each metadata value
+                                               written to a FITS header (a few KiB)
 =============================  ==============  ======================================
 
 A table's rows are counted before it is read whole (FITS ``NAXIS2``; CSV
@@ -76,7 +78,8 @@ MAX_TEXT_FILE_BYTES = 16 * 2**20
 #: Bytes of one pixel-map file (read whole): the KR/Pmap calibration set at
 #: ``MAX_CALIBRATION_FRAMES`` rows of its columns is under 2 GiB.
 MAX_PMAP_FILE_BYTES = 2 * 2**30
-#: Bytes of an ECSV table's header (its YAML metadata and column list, parsed whole).
+#: Bytes of an ECSV table's header (its YAML metadata and column list, parsed whole), also
+#: once its YAML aliases are expanded; characters of one metadata value written as JSON.
 MAX_TABLE_HEADER_BYTES = 2**20
 
 

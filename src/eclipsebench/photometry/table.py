@@ -352,14 +352,15 @@ def read_table(path: str | os.PathLike) -> Table:
     Rows are counted before the table is read whole (FITS: ``NAXIS2``; CSV
     and ECSV: lines, streamed, :func:`count_text_rows`) and a table of more
     than ``MAX_FRAMES_PER_EPOCH`` rows is refused; an ECSV header is checked
-    by :func:`check_text_table` (size, no YAML aliases) before it is parsed.
+    by :func:`check_text_table` (its size, its YAML aliases expanded) before
+    it is parsed.
 
     Raises
     ------
     DataError
         Naming the file if it does not exist, cannot be read (a truncated FITS
-        file included), has no rows or too many, or its ECSV metadata holds
-        YAML aliases or is too large.
+        file included), has no rows or too many, or its ECSV metadata are
+        too large, or would be through their YAML aliases.
 
     Examples
     --------
@@ -423,13 +424,14 @@ def count_text_rows(path: str | os.PathLike) -> int:
 
 
 def check_text_table(path: str | os.PathLike, kind: str) -> None:
-    """Refuse a CSV or ECSV table before it is parsed: too many rows, a header too large or
-    holding YAML aliases.
+    """Refuse a CSV or ECSV table before it is parsed: too many rows, a header too large
+    or that YAML aliases would make too large.
 
     ECSV metadata is YAML; an alias (``*name``) repeats an anchored node by
     reference, so a kilobyte of aliases can stand for gigabytes once written
     out (a "billion laughs"). The header is read up to ``MAX_TABLE_HEADER_BYTES``
-    and its tokens scanned (nothing is built); any anchor or alias is refused.
+    and, when it holds aliases, composed without building any value; a header
+    whose expansion passes the same limit is refused.
 
     Parameters
     ----------
@@ -451,7 +453,7 @@ def check_text_table(path: str | os.PathLike, kind: str) -> None:
         return
     header, size = [], 0
     with open(path, "rb") as fh:
-        for raw in fh:
+        while raw := fh.readline(MAX_TABLE_HEADER_BYTES + 1 - size):   # a bounded read
             line = raw.strip()
             if line and not line.startswith(b"#"):
                 break
@@ -461,20 +463,54 @@ def check_text_table(path: str | os.PathLike, kind: str) -> None:
                                 f"{MAX_TABLE_HEADER_BYTES} bytes (eclipsebench.limits)")
             text = line[1:].decode("utf-8", errors="replace")
             header.append(text[1:] if text.startswith(" ") else text)
-    _refuse_yaml_aliases(path, [h for h in header if not h.startswith("%ECSV")])
+    _check_yaml_expansion(path, [h for h in header if not h.startswith("%ECSV")])
 
 
-def _refuse_yaml_aliases(path: Path, lines: list[str]) -> None:
-    """A :class:`DataError` if the YAML ``lines`` hold an anchor or an alias (tokens only)."""
+def _expanded_chars(node, memo: dict[int, int], active: set[int]) -> int:
+    """Characters of a composed YAML node once every alias in it is expanded (memoised: the
+    cost is the number of distinct nodes, not the expansion)."""
+    key = id(node)
+    if key in memo:
+        return memo[key]
+    if key in active:
+        raise ValueError("an alias refers to a node that holds it")
+    active.add(key)
+    if isinstance(node, yaml.ScalarNode):
+        n = len(node.value) + 2
+    elif isinstance(node, yaml.SequenceNode):
+        n = 2 + sum(_expanded_chars(c, memo, active) for c in node.value)
+    else:
+        n = 2 + sum(_expanded_chars(k, memo, active) + _expanded_chars(v, memo, active)
+                    for k, v in node.value)
+    active.discard(key)
+    memo[key] = n
+    return n
+
+
+def _check_yaml_expansion(path: Path, lines: list[str]) -> None:
+    """A :class:`DataError` if the YAML ``lines`` would expand, through their aliases, past
+    ``MAX_TABLE_HEADER_BYTES`` (or refer to themselves).
+
+    The header is composed (a graph of nodes, an alias the node it names:
+    nothing is copied) and its expanded size counted node by node. An alias
+    as astropy writes one (the same list under two keys) passes.
+    """
+    text = textwrap.dedent("\n".join(lines))
+    if "*" not in text:
+        return   # no alias: the header's size is its expansion
     try:
-        for token in yaml.scan(textwrap.dedent("\n".join(lines)), Loader=yaml.SafeLoader):
-            if isinstance(token, (yaml.AliasToken, yaml.AnchorToken)):
-                raise DataError(path, "the ECSV metadata holds a YAML anchor or alias "
-                                f"({'*' if isinstance(token, yaml.AliasToken) else '&'}"
-                                f"{token.value}, line {token.start_mark.line + 1} of the "
-                                "header): refused, as it can expand without bound")
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        chars = 0 if root is None else _expanded_chars(root, {}, set())
     except yaml.YAMLError:
         return   # not YAML: astropy's reader says what is wrong
+    except (ValueError, RecursionError) as exc:
+        why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise DataError(path, f"the ECSV metadata cannot be expanded ({why}): refused") \
+            from None
+    if chars > MAX_TABLE_HEADER_BYTES:
+        raise DataError(path, f"the ECSV metadata expand through YAML aliases to {chars} "
+                        f"characters, above the limit of {MAX_TABLE_HEADER_BYTES} "
+                        "(eclipsebench.limits): refused before reading")
 
 
 def _read_fits(path: Path) -> Table:
