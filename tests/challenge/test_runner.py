@@ -277,3 +277,92 @@ def test_one_epoch_is_refused_before_any_work(tmp_path, capsys, option):
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert "challenge.epochs" in err and "at least 2 epochs" in err
     assert not out.exists()
+
+
+def _listing(root):
+    return {str(p.relative_to(root)): p.stat().st_mtime_ns for p in sorted(root.rglob("*"))}
+
+
+def test_trust_into_a_run_folder_is_refused_before_any_write(tiny_run, capsys):
+    """Issue 37: trust --out into a finished run folder overwrote its report."""
+    _, root, _, _ = tiny_run
+    before = _listing(root)
+    table = root / "photometry" / "epoch_01.fits"
+    assert main(["trust", str(table), "--out", str(root), "--methods", "pld", "--twins", "10",
+                 "--sampler", "leastsq", "--workers", "1", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'eclipsebench run'" in err and "another --out" in err, err
+    assert _listing(root) == before
+
+
+def test_a_run_folder_from_before_the_marker_resumes_with_the_built_in_catalogue(tiny_run,
+                                                                                 tmp_path):
+    cfg, root, _, _ = tiny_run
+    lay = _copy_run(root, tmp_path / "run")
+    lay.marker.unlink()                     # as an earlier version left it
+    _, report = run_challenge(cfg, lay.root, workers=1)
+    assert report.ran == [] and json.loads(lay.marker.read_text())["kind"] == "run"
+
+
+def _toml(items):
+    sections = {}
+    for item in items:
+        key, _, value = item.partition("=")
+        section, _, name = key.partition(".")
+        sections.setdefault(section, []).append(f"{name} = {value}")
+    return "\n".join(f"[{s}]\n" + "\n".join(lines) for s, lines in sections.items()) + "\n"
+
+
+def _catalogue(path, ecc):
+    path.write_text(f'["my-b"]\nperiod_days = 3.1915239\nt_transit_bjd = 2454449.86816\n'
+                    f'ecc = {ecc}\nomega_deg = 346.0\ninc_deg = 84.20\na_rs = 7.07\n'
+                    'rp_rs = 0.0906\nteff_star_k = 6429.0\nr_star_rsun = 1.377\n')
+
+
+def test_a_configuration_and_its_catalogue_edited_in_place_are_refused(tmp_path, monkeypatch,
+                                                                       capsys):
+    """Issue 37: run_config.toml recorded the catalogue's path only ("0 tasks run", the old
+    summary); the planet is now recorded by its elements, the catalogue's path aside."""
+    import eclipsebench.challenge.runner as runner
+
+    cat, config, out = tmp_path / "cat.toml", tmp_path / "run.toml", tmp_path / "run"
+    _catalogue(cat, 0.2884)
+    items = TINY + ['system.name="my-b"', f'system.catalogue="{cat}"', "challenge.seed=1"]
+    config.write_text(_toml(items))
+    argv = ["run", str(config), "--out", str(out), "--workers", "1", "--quiet"]
+    calls = []
+
+    def stop(*args, **kwargs):   # the work starts: this folder now holds a run of these inputs
+        calls.append(1)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "run_tasks", stop)
+    assert main(argv) == 130
+    capsys.readouterr()
+    _catalogue(cat, 0.25)                                  # the planet edited in place
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the elements of planet 'my-b' changed" in err, err
+    _catalogue(cat, 0.2884)
+    config.write_text(_toml(items[:-1] + ["challenge.seed=2"]))   # the configuration edited
+    assert main(argv) == 2
+    assert "different configuration" in capsys.readouterr().err
+    # the same planet from a catalogue at another path is the same run
+    moved = tmp_path / "moved.toml"
+    shutil.copyfile(cat, moved)
+    config.write_text(_toml(TINY + ['system.name="my-b"', f'system.catalogue="{moved}"',
+                                    "challenge.seed=1"]))
+    assert main(argv) == 130 and len(calls) == 2
+
+
+def test_a_run_that_would_not_fit_the_free_space_is_refused_before_any_write(tmp_path,
+                                                                            monkeypatch, capsys):
+    from collections import namedtuple
+
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10**9, 10**9 - 10**6, 10**6))
+    out = tmp_path / "run"
+    assert main(_cli(out)) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "simulated cubes" in err and "free" in err, err
+    assert not out.exists()

@@ -190,3 +190,60 @@ def test_a_check_refusing_the_outputs_redoes_the_task(tmp_path):
     refusing = Task("a", "x", make_numbers, (str(out), 1, 1), (out,), check=lambda p: False)
     assert run_tasks([refusing], workers=1).ran == ["a"]
     assert run_tasks([task], workers=1).ran == []
+
+
+def link_away(path: str, folder: str, elsewhere: str) -> None:
+    """Replaces ``folder`` (inside the run) by a link to ``elsewhere`` while the run works."""
+    import os
+    import shutil
+
+    shutil.rmtree(folder)
+    os.symlink(elsewhere, folder)
+    write_json(path, {"linked": True})
+
+
+@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.slow)])
+def test_a_link_made_during_the_run_does_not_redirect_an_output(tmp_path, workers):
+    """Issue 37: the links were checked before the work only; a link made inside the run
+    folder meanwhile sent later outputs out of it (checked in whichever process writes)."""
+    root, elsewhere = tmp_path / "run", tmp_path / "elsewhere"
+    (root / "report").mkdir(parents=True)
+    elsewhere.mkdir()
+    tasks = [Task("link", "x", link_away, (str(root / "a.json"), str(root / "report"),
+                                           str(elsewhere)), (root / "a.json",)),
+             Task("page", "x", make_numbers, (str(root / "report" / "index.json"), 1, 1),
+                  (root / "report" / "index.json",), ("link",))]
+    with pytest.raises(InputError, match="outside the run folder"):
+        run_tasks(tasks, workers=workers, root=root)
+    assert list(elsewhere.iterdir()) == []
+
+
+def test_a_task_made_from_another_version_of_an_external_input_is_redone(tmp_path):
+    """A task's ``sources`` (content digests of a user's file it reads) count in its stamp."""
+    out = tmp_path / "a.json"
+    made = Task("a", "x", make_numbers, (str(out), 1, 1), (out,), sources=("sha-of-table-1",))
+    assert run_tasks([made], workers=1).ran == ["a"]
+    assert run_tasks([made], workers=1).ran == []
+    other = Task("a", "x", make_numbers, (str(out), 1, 1), (out,), sources=("sha-of-table-2",))
+    assert run_tasks([other], workers=1).ran == ["a"]
+
+
+def record_scratch(path: str) -> None:
+    import os
+
+    from distributed import get_worker
+
+    folder = get_worker().local_directory   # <private>/dask-scratch-space/worker-...
+    private = os.path.dirname(os.path.dirname(folder))
+    write_json(path, {"folder": folder, "private": os.path.basename(private),
+                      "mode": os.stat(private).st_mode & 0o777})
+
+
+@pytest.mark.slow
+def test_dask_workers_keep_their_scratch_in_a_private_folder(tmp_path):
+    """Issue 37: the workers used the shared /tmp/dask-scratch-space."""
+    out = tmp_path / "scratch.json"
+    run_tasks([Task("s", "s", record_scratch, (str(out),), (out,))], workers=2)
+    seen = json.loads(out.read_text())
+    assert seen["private"].startswith("eclipsebench-dask-") and seen["mode"] == 0o700, seen
+    assert not seen["folder"].startswith("/tmp/dask-scratch-space")

@@ -87,3 +87,22 @@ def test_a_legacy_lock_file_of_a_live_process_is_respected(tmp_path):
     with run_lock(lock):
         pass
     assert not lock.exists()
+
+
+def test_a_hard_link_at_the_lock_s_name_does_not_change_the_linked_file(tmp_path):
+    """Issue 37: a hard link named run.lock had its target rewritten by the run."""
+    precious = tmp_path / "precious.txt"
+    precious.write_text("keep me\n")
+    lock = tmp_path / "run" / "run.lock"
+    lock.parent.mkdir()
+    os.link(precious, lock)
+    with pytest.raises(InputError, match="2 links"):
+        with run_lock(lock):
+            pass
+    assert precious.read_text() == "keep me\n"
+    lock.unlink()
+    lock.symlink_to(precious)                # a symbolic link is not followed either
+    with pytest.raises(InputError, match="symbolic link"):
+        with run_lock(lock):
+            pass
+    assert precious.read_text() == "keep me\n"

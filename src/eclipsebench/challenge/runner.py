@@ -26,6 +26,7 @@ A lock file (``run.lock``) keeps a second run out of the folder.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from dataclasses import replace
@@ -34,9 +35,11 @@ from pathlib import Path
 import numpy as np
 from astropy.table import Table
 
+from ..astro.catalogue import system_for
 from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
 from ..engine.cluster import ClusterOptions, SchedulerUnreachable, external_security
+from ..engine.folder import check_free_space, check_kind, claim, planet_input
 from ..engine.layout import Layout
 from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
@@ -44,7 +47,7 @@ from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
 from ..io.paths import check_links_inside, check_output_path
 from ..report.challenge import plan_report_tasks
-from ..simulation.challenge import challenge_plans, plan_simulate_tasks
+from ..simulation.challenge import challenge_plans, plan_simulate_tasks, simulated_bytes
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
 from .photometry_stage import photometry_key, plan_photometry_tasks
 from .reduce_stage import plan_reduce_tasks, reduce_key
@@ -138,6 +141,18 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
     return tasks
 
 
+def external_system(cfg: Config) -> bool:
+    """Whether the planet comes from outside the package (a user catalogue or its values)."""
+    return bool(cfg.system.catalogue or cfg.system.planet)
+
+
+def _guarded(mapping: dict) -> dict:
+    """A run's configuration as the guard compares it: the catalogue's path left out (the
+    planet's elements, by content, are in the folder's marker)."""
+    return {**mapping, "system": {k: v for k, v in mapping["system"].items()
+                                  if k != "catalogue"}}
+
+
 def _guard(cfg: Config, layout: Layout) -> None:
     """Refuse to resume into a folder that holds a run of another configuration.
 
@@ -147,10 +162,10 @@ def _guard(cfg: Config, layout: Layout) -> None:
     text = dump_toml(summary_config(cfg))
     if layout.run_config.is_file():
         try:
-            stored = summary_config(from_mapping(Config, load_toml(layout.run_config)))
+            stored = _guarded(summary_config(from_mapping(Config, load_toml(layout.run_config))))
         except InputError:
             stored = None
-        if stored != summary_config(cfg):
+        if stored != _guarded(summary_config(cfg)):
             raise InputError(f"{layout.root}: holds a run with a different configuration "
                              f"(see {layout.run_config.name}); use another --out or remove it")
         if layout.run_config.read_text() == text:
@@ -186,24 +201,51 @@ def run_challenge(cfg: Config, root: str | os.PathLike[str], *, workers: int | N
     """
     layout = Layout(check_output_path(root, "root", "folder"))
     tasks = build_tasks(cfg, layout.root)  # every configuration error before any work
+    planet = planet_input(system_for(cfg.system))
+    if external_system(cfg):   # the stamps of every task record the planet by content
+        tasks = [replace(t, sources=(planet.sha256,)) for t in tasks]
+    check_kind(layout.root, "run")
     check_links_inside(layout.root)
     check_outputs_inside(tasks, layout.root)
     if scheduler:
         external_security(scheduler, cluster or ClusterOptions())  # TLS files named, readable
+    needed, what = estimated_bytes(cfg, layout)
+    check_free_space(layout.root, needed, what)
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
         fresh = not layout.run_config.exists()
+        claim(layout.root, "run", {"system": planet}, legacy_ok=not external_system(cfg))
         _guard(cfg, layout)
         try:
             report = run_tasks(tasks, workers=cfg.run.workers if workers is None else workers,
-                               scheduler=scheduler or None, cluster=cluster)
+                               scheduler=scheduler or None, cluster=cluster, root=layout.root)
         except SchedulerUnreachable:
             if fresh:  # nothing ran: leave the folder as it was
                 layout.run_config.unlink(missing_ok=True)
+                layout.marker.unlink(missing_ok=True)
             raise
         if report.timeline:
             write_timings(report, layout.timings)
         return json.loads(layout.summary.read_text()), report
+
+
+def _bytes_under(folder: Path) -> int:
+    """Bytes of the files under ``folder`` (links not followed), 0 when it does not exist."""
+    total = 0
+    for dirpath, _, names in os.walk(folder):
+        for name in names:
+            with contextlib.suppress(OSError):
+                total += os.lstat(os.path.join(dirpath, name)).st_size
+    return total
+
+
+def estimated_bytes(cfg: Config, layout: Layout) -> tuple[int, str]:
+    """What a run will write, less what its simulations already hold: the simulated cubes
+    (and their no-motion twins'), the bulk of a run; ``(bytes, what it counts)``."""
+    cubes = simulated_bytes(cfg) * (2 if cfg.run.empirical_photon_limit else 1)
+    held = _bytes_under(layout.sim(False)) + _bytes_under(layout.sim(True))
+    twins = " and their no-motion twins'" if cfg.run.empirical_photon_limit else ""
+    return max(0, cubes - held), f"the simulated cubes{twins}"
 
 
 def write_timings(report: RunReport, path: Path) -> None:

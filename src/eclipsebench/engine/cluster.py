@@ -28,7 +28,10 @@ import asyncio
 import contextlib
 import logging
 import os
+import shutil
 import sys
+import tempfile
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -291,15 +294,25 @@ def _start_local(workers: int, options: ClusterOptions):
     # array above 128 KiB becomes a fresh mmap whose pages fault in zeroed: our tasks,
     # which allocate large temporary arrays, then ran 1.8x slower (BENCHMARKS.md).
     # The statistical profiler takes the GIL from the task every 10 ms; nobody reads it.
-    with dask_config.set(_local_config(options.dashboard)):
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               host="127.0.0.1", security=True,
-                               # a free port even with no dashboard: the health check's
-                               # server took 8787 otherwise, and a second run at once failed
-                               dashboard_address="127.0.0.1:0",
-                               scheduler_kwargs={"dashboard": options.dashboard},
-                               silence_logs=logging.CRITICAL + 1, env=_worker_env())
-        client = Client(cluster)
+    # The workers' scratch space (spilled data, their lock files) in a folder of this
+    # run's own, mode 0700 (mkdtemp's), removed with the cluster: Dask's default,
+    # /tmp/dask-scratch-space, is shared by every user of the machine.
+    scratch = tempfile.mkdtemp(prefix="eclipsebench-dask-")
+    try:
+        with dask_config.set(_local_config(options.dashboard)):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   host="127.0.0.1", security=True, local_directory=scratch,
+                                   # a free port even with no dashboard: the health check's
+                                   # server took 8787 otherwise, and a second run at once
+                                   # failed
+                                   dashboard_address="127.0.0.1:0",
+                                   scheduler_kwargs={"dashboard": options.dashboard},
+                                   silence_logs=logging.CRITICAL + 1, env=_worker_env())
+            client = Client(cluster)
+    except BaseException:
+        shutil.rmtree(scratch, ignore_errors=True)
+        raise
+    weakref.finalize(cluster, shutil.rmtree, scratch, ignore_errors=True)
     if options.dashboard:
         log.warning("Dask dashboard (this machine only): %s", cluster.dashboard_link)
     return client, cluster

@@ -3,6 +3,7 @@
 ::
 
     DIR/run_config.toml                    the configuration of the run (guards resume)
+    DIR/eclipsebench.json                  the folder's kind and its inputs by content (.folder)
     DIR/run.lock                           held (pid) while a run works in DIR
     DIR/simulation/                        the simulated challenge (docs/contracts.md)
     DIR/simulation_flat/                   its systematics-free twin (empirical photon limit)
@@ -27,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..io.paths import check_name
+from .folder import LOCK, MARKER
 
 __all__ = ["Layout"]
 
@@ -91,4 +93,8 @@ class Layout:
 
     @property
     def lock(self) -> Path:
-        return self.root / "run.lock"
+        return self.root / LOCK
+
+    @property
+    def marker(self) -> Path:
+        return self.root / MARKER

@@ -10,14 +10,21 @@ folder is refused with one line naming the lock file and the holder's pid.
 A lock file without the ``flock`` mark was written by a version that did
 not hold a kernel lock: its pid decides, as it did then (a live process on
 this host, or any process on another host, holds it).
+
+The lock file is opened without following a symbolic link (``O_NOFOLLOW``)
+and must be a regular file with one link: a link planted at its name (a
+symbolic link, or a hard link to a file of the user's) is refused in one
+line, never written through.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import fcntl
 import os
 import socket
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -75,10 +82,29 @@ def _refusal(path: Path, words: list[str]) -> InputError:
                       "finish or use another --out")
 
 
+def _open(path: Path) -> int:
+    """``path`` opened for the lock, never through a link; InputError for a planted link."""
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o644)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise InputError(f"{path}: the lock file is a symbolic link; remove it (a run never "
+                             "writes through a link)") from None
+        raise
+    info = os.fstat(fd)
+    if not stat.S_ISREG(info.st_mode) or info.st_nlink != 1:
+        os.close(fd)
+        what = ("not a regular file" if not stat.S_ISREG(info.st_mode)
+                else f"a file with {info.st_nlink} links (a hard link to another file?)")
+        raise InputError(f"{path}: the lock file is {what}; remove it (a run never writes "
+                         "into a file linked elsewhere)")
+    return fd
+
+
 def _acquire(path: Path) -> int:
     """A descriptor of ``path`` holding its kernel lock; InputError when another run holds it."""
     for _ in range(_ATTEMPTS):
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        fd = _open(path)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

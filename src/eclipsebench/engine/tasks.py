@@ -7,7 +7,8 @@ where or in which order tasks ran.
 
 Resuming. When a task finishes, the engine writes its *stamp* beside its
 last output (``.<name>.task.json``): the SHA-256 of each output's bytes and
-of the inputs it was made from (the bytes of its dependencies' outputs). A
+of the inputs it was made from (the bytes of its dependencies' outputs, and
+the content digests of the external inputs it reads, ``Task.sources``). A
 task is done, and is not run again, only when
 
 * every output exists and its bytes match the stamp (a truncated or edited
@@ -52,7 +53,8 @@ import numba
 from threadpoolctl import threadpool_limits
 
 from ..errors import EnvironmentFailure, InputError
-from ..io.atomic import write_json
+from ..io.atomic import confined_to, write_json
+from ..io.digest import file_sha256
 from ..io.paths import check_inside
 from ..progress import ProgressLines, get_logger, lines_enabled, progress
 from .cluster import ClusterOptions, open_client
@@ -90,6 +92,12 @@ class Task:
         ``check(*outputs) -> bool``, run in the calling process on resume:
         whether the outputs are whole and of the expected schema (beyond the
         stamp's byte hashes). ``None``: the stamp alone decides.
+    sources : tuple of str
+        Digests of the external inputs the task reads (a user's table, pixel
+        map or planet: :mod:`eclipsebench.io.digest`), computed once by the
+        planner; they count among the inputs of its stamp, so a task made
+        from another version of them is not done. Empty for a task that
+        reads only its dependencies' outputs.
     """
 
     key: str
@@ -99,6 +107,7 @@ class Task:
     outputs: tuple[Path, ...] = ()
     deps: tuple[str, ...] = ()
     check: Callable[..., bool] | None = None
+    sources: tuple[str, ...] = ()
 
 
 def stamp_path(task: Task) -> Path:
@@ -117,11 +126,7 @@ class _Hashes:
         path = Path(path)
         digest = self._memo.get(path)
         if digest is None:
-            h = hashlib.sha256()
-            with open(path, "rb") as fh:
-                for block in iter(lambda: fh.read(1 << 20), b""):
-                    h.update(block)
-            digest = self._memo[path] = h.hexdigest()
+            digest = self._memo[path] = file_sha256(path)
         return digest
 
     def forget(self, paths: Iterable[Path]) -> None:
@@ -130,11 +135,14 @@ class _Hashes:
 
 
 def _inputs_digest(task: Task, by_key: dict[str, Task], hashes: _Hashes) -> str:
-    """SHA-256 over the bytes of every output of every dependency, in order."""
+    """SHA-256 over the bytes of every output of every dependency, in order, and the
+    digests of the task's external inputs (``sources``) when it has any."""
     h = hashlib.sha256()
     for d in task.deps:
         for p in by_key[d].outputs:
             h.update(hashes.of(p).encode())
+    for source in task.sources:
+        h.update(f"source:{source}".encode())
     return h.hexdigest()
 
 
@@ -287,7 +295,8 @@ def _order(by_key: dict[str, Task]) -> list[str]:
     return out
 
 
-def _call_pickled(func_bytes: bytes, args: tuple) -> tuple[float, float, str]:
+def _call_pickled(func_bytes: bytes, args: tuple, root: str | None = None
+                  ) -> tuple[float, float, str]:
     """:func:`_call` of a function shipped as cloudpickle bytes.
 
     Dask pickles a callable by reference whenever the standard pickle can, so
@@ -296,17 +305,19 @@ def _call_pickled(func_bytes: bytes, args: tuple) -> tuple[float, float, str]:
     resolve, and the task would wait forever; cloudpickle honours the
     registration.
     """
-    return _call(cloudpickle.loads(func_bytes), args)
+    return _call(cloudpickle.loads(func_bytes), args, root)
 
 
-def _call(func: Callable[..., object], args: tuple) -> tuple[float, float, str]:
+def _call(func: Callable[..., object], args: tuple, root: str | None = None
+          ) -> tuple[float, float, str]:
     # Every task runs single-threaded wherever it runs (in this process, a local
     # worker or a remote scheduler's): multi-threaded BLAS splits sums differently,
     # and the same seed must give the same bytes with any number of workers.
+    # Its writes stay in the run folder ``root`` (checked at write time).
     previous = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        with threadpool_limits(limits=1):
+        with threadpool_limits(limits=1), confined_to(root):
             start_unix = time.time()
             t0 = time.perf_counter()
             func(*args)
@@ -339,7 +350,8 @@ class _Bars:
 
 
 def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None = None,
-              keep_going: bool = True, cluster: ClusterOptions | None = None) -> RunReport:
+              keep_going: bool = True, cluster: ClusterOptions | None = None,
+              root: str | os.PathLike | None = None) -> RunReport:
     """Run every task that is not done, respecting dependencies.
 
     Parameters
@@ -356,6 +368,10 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
         (never after an environment failure: every other task would meet it).
     cluster : ClusterOptions, optional
         Dashboard, connection timeout and TLS files of the Dask cluster.
+    root : path, optional
+        The run folder: every file a task or the engine writes is checked, at
+        write time, to resolve inside it (:func:`eclipsebench.io.atomic.confined_to`),
+        so a symbolic link made during the run cannot redirect an output.
 
     Returns
     -------
@@ -379,6 +395,13 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
     outputs were all written while the run was stopping gets its stamp, so
     that a rerun does not redo it.
     """
+    with confined_to(root):
+        return _run_tasks(tasks, workers=workers, scheduler=scheduler, keep_going=keep_going,
+                          cluster=cluster, root=None if root is None else os.path.abspath(root))
+
+
+def _run_tasks(tasks: Sequence[Task], *, workers: int, scheduler: str | None, keep_going: bool,
+               cluster: ClusterOptions | None, root: str | None) -> RunReport:
     by_key = _check_graph(tasks)
     order = _order(by_key)
     report = RunReport(started_unix=time.time())
@@ -394,7 +417,7 @@ def run_tasks(tasks: Sequence[Task], *, workers: int = 1, scheduler: str | None 
         report.executor = "none (all outputs exist)"
         return report
     bars = _Bars(by_key[k] for k in todo)
-    run = _Run(by_key, done, bars, report, hashes, keep_going)
+    run = _Run(by_key, done, bars, report, hashes, keep_going, root)
     try:
         if scheduler is None and workers <= 1:
             report.executor = "in-process (synchronous)"
@@ -460,6 +483,7 @@ class _Run:
     report: RunReport
     hashes: _Hashes
     keep_going: bool
+    root: str | None = None
     failures: dict[str, BaseException] = field(default_factory=dict)
     #: key -> time.time_ns() at submission, for the tasks not settled yet
     in_flight: dict[str, int] = field(default_factory=dict)
@@ -515,7 +539,7 @@ def _run_sync(run: _Run, todo: list[str]) -> None:
         if _blocked(task, set(run.failures)) or not all(d in run.done for d in task.deps):
             continue  # a dependency failed: not run
         run.in_flight[key] = time.time_ns()
-        run.settle(key, functools.partial(_call, task.func, task.args))
+        run.settle(key, functools.partial(_call, task.func, task.args, run.root))
         if run.stopped:
             break
 
@@ -542,7 +566,7 @@ def _run_dask(run: _Run, todo: list[str], *, workers: int, scheduler: str | None
                     # worker died is rescheduled by Dask itself (allowed-failures)
                     run.in_flight[key] = time.time_ns()
                     fut = client.submit(_call_pickled, cloudpickle.dumps(task.func), task.args,
-                                        key=f"{key}#{time.time_ns()}",
+                                        run.root, key=f"{key}#{time.time_ns()}",
                                         pure=False)
                     futures[fut.key] = key
                     ac.add(fut)

@@ -8,6 +8,13 @@ that became unwritable) is an :class:`~eclipsebench.errors.EnvironmentFailure`
 naming the destination, its folder and the bytes needed when known; any other
 failed write is a :class:`~eclipsebench.errors.DataError` naming the
 destination. Either way the temporary file is removed.
+
+Within :func:`confined_to` (the engine holds it around every task of a run,
+in whichever process runs it) each write checks, when it starts and again
+just before the rename, that its folder's real path lies inside the run
+folder: a symbolic link made inside the run folder while the run works
+cannot send an output elsewhere (the checks of :mod:`.paths` run before the
+work only).
 """
 
 from __future__ import annotations
@@ -21,8 +28,45 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import ENVIRONMENT_ERRNOS, DataError, EnvironmentFailure
+from .paths import check_inside
 
-__all__ = ["atomic_path", "write_bytes", "write_text", "write_json"]
+__all__ = ["atomic_path", "write_bytes", "write_text", "write_json", "confined_to"]
+
+#: The run folders writes are confined to in this process (innermost last).
+_ROOTS: list[Path] = []
+
+
+@contextlib.contextmanager
+def confined_to(root: str | os.PathLike | None) -> Iterator[None]:
+    """Within the block, refuse any atomic write whose folder resolves outside ``root``.
+
+    ``None`` confines nothing (a write outside a run).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> with confined_to(d / "run"):
+    ...     _ = write_text(d / "run" / "a.txt", "in")
+    ...     try:
+    ...         _ = write_text(d / "b.txt", "out")
+    ...     except Exception as exc:
+    ...         print(type(exc).__name__)
+    InputError
+    """
+    if root is None:
+        yield
+        return
+    _ROOTS.append(Path(os.path.realpath(root)))
+    try:
+        yield
+    finally:
+        _ROOTS.pop()
+
+
+def _check_confined(dest: Path) -> None:
+    if _ROOTS:
+        check_inside(dest.parent, _ROOTS[-1])
 
 
 @contextlib.contextmanager
@@ -46,6 +90,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None, *,
     'hello'
     """
     dest = Path(path)
+    _check_confined(dest)   # before any folder is made through a link
     try:
         dest.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp_name = tempfile.mkstemp(
@@ -58,6 +103,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None, *,
     tmp.unlink()  # writers such as astropy refuse to overwrite an existing file
     try:
         yield tmp
+        _check_confined(dest)   # a link made while the file was written
         os.replace(tmp, dest)
     except BaseException as exc:
         with contextlib.suppress(OSError):

@@ -57,7 +57,7 @@ from .inputs import check_input_file
 
 __all__ = ["CalibrationSet", "GriddedPmap", "load_calibration_table", "load_gridded_pmap",
            "load_pmap", "find_pmap_path", "CALIBRATION_RELPATH", "pmap_versions",
-           "pick_pmap_version", "check_pmap_path"]
+           "pick_pmap_version", "check_pmap_path", "pmap_files"]
 
 #: Where a simulated challenge keeps its calibration-star table, relative to SIMDIR.
 CALIBRATION_RELPATH = Path("calibration") / "pmap_calibration.fits"
@@ -190,6 +190,21 @@ def _grid_files(path: Path) -> dict[str, Path]:
     if missing:
         raise DataError(path, f"gridded pmap companion file(s) missing: {', '.join(missing)}")
     return files
+
+
+def pmap_files(path: str | os.PathLike) -> list[Path]:
+    """The files a map at ``path`` is read from: a gridded map's five, else the file itself.
+
+    ``path`` is what :func:`find_pmap_path` returned (a map version already
+    picked); the run folder records their content (:mod:`eclipsebench.io.digest`).
+    """
+    p = Path(path)
+    try:
+        return sorted(_grid_files(p).values())
+    except DataError:
+        if p.is_dir():
+            raise
+        return [p]   # a calibration-star table (or a file load_pmap will refuse)
 
 
 def load_gridded_pmap(path: str | os.PathLike) -> GriddedPmap:

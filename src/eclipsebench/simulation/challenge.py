@@ -73,7 +73,7 @@ from .star import StarImager, make_star_imager, prf_label
 __all__ = ["simulate_challenge", "ChallengeResult", "pointing_ranges_from_config",
            "readout_from_config", "system_of", "frame_model_from_config", "STATE_DIR", "light_curve_of",
            "challenge_plans", "plan_simulate_tasks", "simulate_aor", "aor_state_path",
-           "epoch_marker_path", "phase_curve_truth"]
+           "epoch_marker_path", "phase_curve_truth", "simulated_bytes"]
 
 STATE_DIR = ".simstate"
 TRUTH_COLUMNS = ("epoch", "aorkey_pre", "aorkey_main", "start_bmjd", "t_ecl_bmjd", "depth_ppm",
@@ -520,6 +520,25 @@ def _truth_ok(config: Path, truth: Path) -> bool:
     return all(c in table.colnames for c in TRUTH_COLUMNS)
 
 
+#: A simulated cube's FITS header: three 2880-byte blocks (measured on ``AorWriter``'s).
+CUBE_HEADER_BYTES = 3 * 2880
+
+
+def simulated_bytes(cfg: Config) -> int:
+    """Bytes of the BCD and BUNC cubes a simulation of ``cfg`` writes (the calibration set,
+    light curves and truth, a few MB, aside): each cube's float32 frames padded to FITS
+    blocks, and its header."""
+    ny, nx = readout_from_config(cfg).shape
+    system = system_for(cfg.system)
+    total = 0
+    for plan in plan_challenge(cfg.observation, cfg.challenge.epochs, system.period_days,
+                               cfg.challenge.seed, system=system):  # challenge_plans, unwarned
+        for aor in plan.aors:
+            data = aor.frames_per_cube * ny * nx * 4
+            total += 2 * aor.n_cubes * (data + (-data) % 2880 + CUBE_HEADER_BYTES)
+    return total
+
+
 def challenge_plans(cfg: Config) -> list[EpochPlan]:
     """The observing plans of every epoch (:func:`.plan.plan_challenge`).
 
@@ -668,7 +687,7 @@ def simulate_challenge(cfg: Config, out_dir: str | os.PathLike[str], *, workers:
             raise InputError(f"--out {out}: holds a challenge simulated with a different "
                              "configuration (see its config.toml); choose another folder")
     write_text(existing, config_text)
-    report = run_tasks(tasks, workers=workers)
+    report = run_tasks(tasks, workers=workers, root=out)
     plans = challenge_plans(cfg)
     aor_keys = {f"simulate/r{a.aorkey}" for p in plans for a in p.aors}
     truth_rows = [json.loads(epoch_marker_path(out, p.epoch).read_text()) for p in plans]

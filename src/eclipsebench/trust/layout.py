@@ -3,7 +3,9 @@
 The folder of a trust run::
 
     DIR/trust_config.json              the settings (guards resume)
-    DIR/trust.lock                     held while a run works in DIR
+    DIR/eclipsebench.json              the folder's kind and its inputs by content
+                                       (``eclipsebench.engine.folder``)
+    DIR/run.lock                       held while a run works in DIR (every runner's lock)
     DIR/real/<method>.json (+.lc.ecsv) the real table reduced by each method (or why not)
     DIR/recipe.npz, DIR/recipe.json    what every twin shares (L(t), sky, motion, flux)
     DIR/twins/twin_NNN.fits            each twin's photometry table
@@ -16,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+
+from ..engine.folder import LOCK, MARKER
 
 __all__ = ["TrustLayout"]
 
@@ -32,7 +36,11 @@ class TrustLayout:
 
     @property
     def lock(self) -> Path:
-        return self.root / "trust.lock"
+        return self.root / LOCK
+
+    @property
+    def marker(self) -> Path:
+        return self.root / MARKER
 
     def real(self, method: str) -> Path:
         return self.root / "real" / f"{method}.json"

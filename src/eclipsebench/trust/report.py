@@ -131,6 +131,12 @@ def _pyplot():
     return plt
 
 
+def _save(fig, path: Path) -> None:
+    """``fig`` as a PNG at ``path``, written atomically (a link made meanwhile is refused)."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
+
+
 def _figure_depths(summary, twins, path: Path) -> None:
     plt = _pyplot()
     methods = list(summary["methods"])
@@ -148,7 +154,7 @@ def _figure_depths(summary, twins, path: Path) -> None:
     ax.set_title(f"{summary['n_twins']} twins per method ({summary['profile']} profile)")
     ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path)
     plt.close(fig)
 
 
@@ -169,7 +175,7 @@ def _figure_z(summary, twins, path: Path) -> None:
     for ax in axes.ravel()[len(methods):]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path)
     plt.close(fig)
 
 
@@ -201,7 +207,7 @@ def _figure_twin(real_table, twin_table, path: Path) -> None:
     axes[-1].set_xlabel("BMJD_TDB")
     axes[0].set_title("the real observation beside one twin")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    _save(fig, path)
     plt.close(fig)
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import shutil
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
@@ -30,11 +31,13 @@ from ..config.reduce import ReduceSection
 from ..decorrelate import get_method
 from ..decorrelate.base import MethodOptions, parse_method_options
 from ..engine.cluster import ClusterOptions, external_security
+from ..engine.folder import Input, check_free_space, check_kind, claim, planet_input
 from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import InputError
 from ..fit import reduce as fit_reduce
 from ..io.atomic import atomic_path, write_json, write_text
+from ..io.digest import file_sha256, files_sha256
 from ..io.paths import check_links_inside
 from ..io.pmap_files import check_pmap_path
 from ..limits import MAX_TWINS
@@ -71,6 +74,16 @@ class TrustSettings:
     #: Each method's options as resolved once by :func:`make_settings` (the
     #: configuration's table, the team's in the paper profile, ``method_options``).
     resolved_options: Mapping[str, MethodOptions] = field(default_factory=dict)
+    #: The external inputs by content (the table, the planet's elements, the pixel map
+    #: KR/Pmap and the twins would read), computed once by :func:`make_settings`.
+    inputs: Mapping[str, Input] = field(default_factory=dict)
+    #: Frames of the table (for the estimate of what the run writes).
+    table_frames: int = 0
+
+    @property
+    def sources(self) -> tuple[str, ...]:
+        """The inputs' digests, for the stamp of every task (they all read them)."""
+        return tuple(self.inputs[k].sha256 for k in sorted(self.inputs))
 
     def describe(self) -> dict[str, Any]:
         """A JSON-able view (the guard and the result both record it)."""
@@ -182,7 +195,8 @@ def _json_ok(method: str, path: Path) -> bool:
 def plan_real(settings: TrustSettings, layout: TrustLayout) -> list[Task]:
     """One task per method on the real table."""
     return [Task(f"real/{m}", "real", real_task, (settings, m, str(layout.real(m))),
-                 (layout.real(m),), check=partial(_json_ok, m)) for m in settings.methods]
+                 (layout.real(m),), check=partial(_json_ok, m), sources=settings.sources)
+            for m in settings.methods]
 
 
 def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[str]
@@ -192,23 +206,26 @@ def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[st
     tasks = [Task("recipe", "recipe", recipe_task,
                   (settings, first, str(layout.real(first)), str(layout.recipe_npz),
                    str(layout.recipe_json)), (layout.recipe_json, layout.recipe_npz),
-                  (f"real/{first}",))]
+                  (f"real/{first}",), sources=settings.sources)]
     results = []
     for i in range(1, settings.n_twins + 1):
         tasks.append(Task(f"twin/{i:03d}", "twin", twin_task,
                           (settings, str(layout.recipe_npz), str(layout.recipe_json), i,
-                           str(layout.twin(i))), (layout.twin(i),), ("recipe",)))
+                           str(layout.twin(i))), (layout.twin(i),), ("recipe",),
+                          sources=settings.sources))
         for m in usable:
             key = f"twin-reduce/{m}/{i:03d}"
             results.append(key)
             tasks.append(Task(key, "reduce", twin_reduce_task,
                               (settings, m, i, str(layout.twin(i)), str(layout.real(m)),
                                str(layout.twin_result(m, i))), (layout.twin_result(m, i),),
-                              (f"twin/{i:03d}", f"real/{m}"), check=partial(_json_ok, m)))
+                              (f"twin/{i:03d}", f"real/{m}"), check=partial(_json_ok, m),
+                              sources=settings.sources))
     tasks.append(Task("score", "score", score_task,
                       (settings.describe(), list(usable), str(layout.root)),
                       (layout.report, layout.table, layout.result),
-                      ("recipe", *results, *(f"real/{m}" for m in settings.methods))))
+                      ("recipe", *results, *(f"real/{m}" for m in settings.methods)),
+                      sources=settings.sources))
     return tasks
 
 
@@ -249,26 +266,91 @@ def usable_methods(settings: TrustSettings, layout: TrustLayout) -> tuple[list[s
     return usable, skipped
 
 
+#: Bytes of a reduction's light curve (``.lc.ecsv``) per frame of the table, a bound:
+#: 103 measured on a 1,312-frame table (the JSON beside it adds a few kB).
+LC_BYTES_PER_FRAME = 120
+#: Bytes of a reduction's JSON result, a bound (2.1 kB measured).
+RESULT_BYTES = 4096
+
+
+def estimated_bytes(settings: TrustSettings, layout: TrustLayout, n_frames: int
+                    ) -> tuple[int, str]:
+    """What this invocation will write: the twins' tables not made yet (each about the real
+    table's size) and their reductions by every method; ``(bytes, what it counts)``."""
+    table_bytes = Path(settings.table).stat().st_size
+    twins = [i for i in range(1, settings.n_twins + 1) if not layout.twin(i).is_file()]
+    reductions = sum(not layout.twin_result(m, i).is_file() for m in settings.methods
+                     for i in range(1, settings.n_twins + 1))
+    total = (len(twins) * table_bytes
+             + reductions * (n_frames * LC_BYTES_PER_FRAME + RESULT_BYTES))
+    return total, (f"{len(twins)} twin tables of about {table_bytes} bytes and {reductions} "
+                   "reductions")
+
+
+def _written_by_trust(layout: TrustLayout) -> list[Path]:
+    """Every path a trust run creates in its folder (the lock aside)."""
+    return [layout.config, layout.marker, layout.real("x").parent, layout.recipe_npz,
+            layout.recipe_json, layout.twin(1).parent, layout.result, layout.table,
+            layout.report.parent]
+
+
+def _undo(made: Sequence[Path]) -> None:
+    """Remove what a refused first run made (``made``: paths that did not exist before it)."""
+    for path in made:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+
+
 def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
               scheduler: str | None = None) -> tuple[TrustResult, RunReport]:
-    """Run (or resume) a trust run in ``root``; return its answer and what ran."""
+    """Run (or resume) a trust run in ``root``; return its answer and what ran.
+
+    A folder is refused in one line, before anything is written, when it holds
+    another kind of run, when an input (the table, the planet's elements, the
+    pixel map) changed since it was made, or when it holds a trust run of other
+    settings (another number of twins is the same run, resumed). A run refused
+    for its input before any twin was made (no method could reduce the table,
+    a depth that cannot be injected) removes what it wrote, so the corrected
+    command goes on in the same folder.
+
+    Raises
+    ------
+    InputError
+        As above; the message names the folder or the input and how to go on.
+    EnvironmentFailure
+        The estimate of what the run will write exceeds the free space.
+    """
     layout = TrustLayout(Path(root))
     if layout.root.is_dir():   # no output through a symbolic link out of the folder
+        check_kind(layout.root, "trust")
         check_links_inside(layout.root)
         check_outputs_inside(plan_real(settings, layout), layout.root)
     if scheduler:   # a tls:// scheduler's files loaded before the folder is made
         external_security(scheduler, ClusterOptions())
+    needed, what = estimated_bytes(settings, layout, settings.table_frames)
+    check_free_space(layout.root, needed, what)
     layout.root.mkdir(parents=True, exist_ok=True)
     with run_lock(layout.lock):
+        ours = _written_by_trust(layout)
+        if not layout.config.is_file():   # a new folder: only what this run makes is ours
+            ours = [p for p in ours if not os.path.lexists(p)]
+        claim(layout.root, "trust", settings.inputs, legacy_ok=False)
         _guard(settings, layout)
-        first = run_tasks(plan_real(settings, layout), workers=1)
-        usable, skipped = usable_methods(settings, layout)
-        if not usable:
-            raise InputError(f"{settings.table}: no method could reduce the real table ("
-                             + "; ".join(f"{m}: {r}" for m, r in skipped.items()) + ")")
-        tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable)
-        check_outputs_inside(tasks, layout.root)
-        report = run_tasks(tasks, workers=workers, scheduler=scheduler)
+        try:
+            first = run_tasks(plan_real(settings, layout), workers=1, root=layout.root)
+            usable, skipped = usable_methods(settings, layout)
+            if not usable:
+                raise InputError(f"{settings.table}: no method could reduce the real table ("
+                                 + "; ".join(f"{m}: {r}" for m, r in skipped.items()) + ")")
+            tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable)
+            check_outputs_inside(tasks, layout.root)
+            report = run_tasks(tasks, workers=workers, scheduler=scheduler, root=layout.root)
+        except InputError:
+            if not any(layout.twin(1).parent.glob("twin_*.fits")):
+                _undo(ours)   # no twin made yet: the corrected command starts afresh
+            raise
         report.ran = first.ran + report.ran
         return read_trust(layout.result), report
 
@@ -295,6 +377,7 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     from ..decorrelate import available_methods
     from ..fit.astro_model import depth_limit_ppm
     from ..fit.target import system_of_table
+    from ..io.pmap_files import find_pmap_path, pmap_files
     from .observation import observation_from_table
     from .recipe import EVENTS, twin_map
 
@@ -326,9 +409,19 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     if not path.is_file():
         raise InputError(f"{path}: no such photometry table")
     data = read_table(path)
-    twin_map(observation_from_table(data, str(path)), pmap)   # a bad --pmap stops here
+    obs = observation_from_table(data, str(path))
+    twin_map(obs, pmap)   # a bad --pmap stops here
     planet = system_of_table(data.meta, system=system, section=system_section,
                              source=str(path), hint=hint)
+    inputs = {"table": Input("table", f"the table {path.resolve()}", file_sha256(path)),
+              "system": planet_input(planet)}
+    try:   # the map KR/Pmap and the twins would read (--pmap, else the table's SIMDIR)
+        map_path = find_pmap_path(pmap, data.meta, float(obs.time_bmjd[0]))
+    except InputError:
+        map_path = None
+    if map_path is not None:
+        inputs["pmap"] = Input("pmap", f"the pixel map {map_path}",
+                               files_sha256(pmap_files(map_path)))
     options = {m: dict(v) for m, v in (method_options or {}).items()}
     for m in options:
         if m not in chosen:
@@ -341,4 +434,5 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     return TrustSettings(table=str(path.resolve()), system=planet, methods=chosen,
                          n_twins=int(n_twins), seed=int(seed), reduce=reduce,
                          depth_ppm=None if depth_ppm is None else float(depth_ppm),
-                         method_options=options, pmap=pmap, resolved_options=resolved)
+                         method_options=options, pmap=pmap, resolved_options=resolved,
+                         inputs=inputs, table_frames=int(obs.n_frames))
