@@ -137,7 +137,9 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
            config: Config | str | os.PathLike | None = None, epoch: int | None = None,
            resources: Mapping[str, Any] | None = None,
            columns: Mapping[str, str] | None = None, time_column: str | None = None,
-           time_format: str | None = None, **reduce_options: Any) -> EpochResult:
+           time_format: str | None = None, time_scale: str | None = None,
+           time_at: str | None = None, observer: Any = None,
+           **reduce_options: Any) -> EpochResult:
     """Fit one epoch with one method and the shared eclipse + phase-curve model.
 
     Parameters
@@ -173,8 +175,18 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     time_column : str, optional
         The table's time column (default ``time_bmjd``).
     time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
-        Its format (default ``"bmjd"``); all are read as BJD_TDB (no time-scale
-        or barycentric conversion is made).
+        Its format (default ``"bmjd"``): ``bjd``/``bmjd`` barycentric, ``jd``/``mjd``
+        at the observer (converted to BMJD_TDB with the planet's ``ra_deg`` and
+        ``dec_deg``: :mod:`eclipsebench.astro.timescales`; the result's
+        ``time_conversion`` says how).
+    time_scale : {"utc", "tt", "tdb"}, optional
+        The times' scale (default: a ``Time`` column's or the table's
+        ``TIMESYS``, else TDB for barycentric times; needed for jd/mjd).
+    time_at : {"start", "mid", "end"}, optional
+        Where in its frame each time stamp lies (default ``"mid"``).
+    observer : "geocentre" or (x_km, y_km, z_km, mjd_utc), optional
+        Where jd/mjd times were taken: for Spitzer ``SPTZR_X, SPTZR_Y,
+        SPTZR_Z, MJD_OBS`` of a BCD header of the observation.
     **reduce_options
         ``[reduce]`` values to change, e.g. ``phase="linear"``, ``sampler="mcmc"``.
 
@@ -193,9 +205,11 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
         system = as_system(system, cfg.system.catalogue or None)
     elif names_a_system(cfg.system):
         system = system_for(cfg.system)
+    times = {k: v for k, v in (("time_scale", time_scale), ("time_at", time_at),
+                                ("observer", observer)) if v is not None}
     return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
                         method_options=options, resources=resources, columns=columns,
-                        time_column=time_column, time_format=time_format)
+                        time_column=time_column, time_format=time_format, time_options=times)
 
 
 def simulate(out: str | os.PathLike, *, config: Config | str | os.PathLike | None = None,
