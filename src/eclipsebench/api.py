@@ -280,7 +280,11 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
           twins: int = 50, methods: Sequence[str] | None = None, depth_ppm: float | None = None,
           seed: int = 0, config: Config | str | os.PathLike | None = None,
           options: Mapping[str, Mapping[str, Any]] | None = None, pmap: str | None = None,
-          workers: int | None = None, **reduce_options: Any) -> TrustResult:
+          workers: int | None = None, columns: Mapping[str, str] | None = None,
+          time_column: str | None = None, time_format: str | None = None,
+          time_scale: str | None = None, time_at: str | None = None, observer: Any = None,
+          readout: str | None = None, channel: int | None = None,
+          **reduce_options: Any) -> TrustResult:
     """How far to trust the depth of one real observation: its digital twins, every method.
 
     Simulates ``twins`` copies of the observation (its times, pointing track,
@@ -292,7 +296,10 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
     Parameters
     ----------
     table : path
-        The real observation's photometry table (made by :func:`measure`).
+        The real observation's photometry table: made by :func:`measure`, or
+        another pipeline's (time, flux in any unit, flux_err, x, y; optionally
+        noise pixels, background, frame numbers), completed by inference and
+        written to ``out/observation.fits`` (``docs/trust.md``, "Any table").
     out : path
         The trust folder (``trust.json``, ``trust.ecsv``, ``report/index.html``).
     system : str, mapping or PlanetSystem, optional
@@ -315,6 +322,12 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         map (or a folder of dated versions), the twins' intra-pixel gain.
     workers : int, optional
         Dask worker processes (default ``run.workers``).
+    columns, time_column, time_format, time_scale, time_at, observer : optional
+        Another pipeline's column names and times, as :func:`reduce`.
+    readout : str, optional
+        Another pipeline's subarray readout (``"sub_2s"``...; default: from the cadence).
+    channel : int, optional
+        Another pipeline's IRAC channel (default: its ``CHANNEL``, else 2).
     **reduce_options
         ``[reduce]`` values to change, e.g. ``sampler="leastsq"``, ``profile="paper"``.
 
@@ -329,7 +342,8 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         it), ``n_twins``, ``twin_depth_ppm``.
     """
     from .io.paths import check_output_path
-    from .trust.run import make_settings, run_trust
+    from .trust.observation import trust_settings
+    from .trust.run import run_trust
 
     cfg = _config(config)
     section = cfg.reduce
@@ -337,9 +351,14 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         section = replace(section, **reduce_options)
         section.validate()
     root = check_output_path(out, "out", "folder")
-    settings = make_settings(table, reduce=section, system=system, system_section=cfg.system,
-                             methods=methods, n_twins=twins, depth_ppm=depth_ppm, seed=seed,
-                             method_options=options, pmap=pmap, hint="system=NAME")
+    times = {k: v for k, v in (("time_scale", time_scale), ("time_at", time_at),
+                                ("observer", observer)) if v is not None}
+    settings = trust_settings(table, root, reduce=section, system=system,
+                              system_section=cfg.system, methods=methods, n_twins=twins,
+                              depth_ppm=depth_ppm, seed=seed, method_options=options, pmap=pmap,
+                              hint="system=NAME", columns=columns, time_column=time_column,
+                              time_format=time_format, time_options=times, readout=readout,
+                              channel=channel)
     summary, _ = run_trust(settings, root,
                            workers=cfg.run.workers if workers is None else workers)
     return summary
