@@ -123,7 +123,8 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
             s.update(timing)
     return {"quote": quote(scores, best), "methods": scores, "skipped": dict(skipped),
             "recommended": best, "recommended_frequency": frequency,
-            "ranking": ranking_resolution(scores, resid, best, int(settings["n_twins"])),
+            "ranking": ranking_resolution(scores, resid, best, int(settings["n_twins"]),
+                                          frequency),
             "recommended_because": why, "near_equals": near_equals(scores, resid, best),
             "n_twins": int(settings["n_twins"]),
             "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],

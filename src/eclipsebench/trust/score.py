@@ -43,11 +43,15 @@ from ..stats.ensemble import GAUSS_1SIGMA, binomial_interval, coverage
 
 __all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "REDDER_THAN",
            "observation_statistics", "mse_excess_sigma", "near_equals", "DISTINGUISHABLE_AT",
-           "recommendation_frequency", "ranking_resolution", "RECOMMEND_DRAWS", "timing_score",
+           "recommendation_frequency", "ranking_resolution", "RECOMMEND_DRAWS", "RESOLVED_AT",
+           "timing_score",
            "quote"]
 
 #: Bootstrap resamples of the twins behind the recommendation frequencies.
 RECOMMEND_DRAWS = 2000
+#: The recommendation is resolved when the bootstrap makes it in at least this fraction of
+#: the resamples (and the paired test separates it: :func:`ranking_resolution`).
+RESOLVED_AT = 0.9
 
 #: The real residuals are flagged redder than the twins' when their ``beta_red`` exceeds
 #: this fraction of the twins' (a one-sided test at 5 %).
@@ -211,55 +215,90 @@ def recommendation_frequency(resid_ppm: Mapping[str, Mapping[int, float]],
     return out
 
 
+def _twins_for(z: float, n: int) -> float:
+    """Twins for a statistic ``z`` at ``n`` twins to reach :data:`DISTINGUISHABLE_AT`, if it
+    grows as the square root of the twins (infinite for ``z <= 0``)."""
+    return n * (DISTINGUISHABLE_AT / z) ** 2 if z > 0 else float("inf")
+
+
+def _coverage_z(p: float, n: int) -> float:
+    """How many binomial standard errors the 1-sigma coverage ``p`` of ``n`` twins lies from
+    68.3 % (the coverage verdict of :func:`recommend`)."""
+    q = min(max(p, 0.5 / n), 1.0 - 0.5 / n)
+    return abs(p - GAUSS_1SIGMA) / np.sqrt(q * (1.0 - q) / n)
+
+
 def ranking_resolution(scores: Mapping[str, Mapping[str, Any]],
                        resid_ppm: Mapping[str, Mapping[int, float]], best: str | None,
-                       n_twins: int) -> dict[str, Any]:
-    """Whether the twins run rank the recommended method ahead of the others, and if not how
-    many twins would.
+                       n_twins: int, frequency: Mapping[str, float] | None = None
+                       ) -> dict[str, Any]:
+    """Whether the twins run settle the recommendation, and if not about how many twins would.
 
-    Resolved when the paired test (:func:`mse_excess_sigma`) puts every other
+    Resolved when the bootstrap recommends ``best`` in at least
+    :data:`RESOLVED_AT` of the resamples (:func:`recommendation_frequency`)
+    and the paired test (:func:`mse_excess_sigma`) puts every other
     coverage-consistent method at least :data:`DISTINGUISHABLE_AT` standard
-    errors behind ``best``. The statistic grows as the square root of the
-    number of twins for a fixed mean and spread of the paired differences, so
-    a method at ``z`` needs about ``n (DISTINGUISHABLE_AT / z)^2`` twins; the
-    largest over the near equals is ``twins_to_resolve`` (None beyond
-    :data:`~eclipsebench.limits.MAX_TWINS` or for ``z <= 0``: equal to the
-    twins' precision). An estimate: the paired mean and spread are themselves
-    measured on ``n`` twins.
+    errors behind it. Otherwise the verdicts that decide between ``best`` and
+    its contenders (the methods recommended in at least 5 % of the
+    resamples, or within the paired test's reach): the paired test against
+    each coverage-consistent contender, and for a contender whose coverage
+    was found inconsistent, how far its 1-sigma coverage lies from 68.3 % in
+    binomial standard errors. Each such statistic ``z`` grows as the square
+    root of the twins, so reaching :data:`DISTINGUISHABLE_AT` takes about
+    ``n (DISTINGUISHABLE_AT / z)^2`` twins; the largest is
+    ``twins_to_resolve`` (None beyond
+    :data:`~eclipsebench.limits.MAX_TWINS`: equal to the twins' precision).
+    An estimate: the statistics are themselves measured on ``n`` twins.
 
     Examples
     --------
-    >>> scores = {m: {"coverage_1sigma_interval": [0.6, 0.8]} for m in "ab"}
+    >>> scores = {m: {"coverage_1sigma_interval": [0.6, 0.8], "coverage_1sigma": 0.7}
+    ...           for m in "ab"}
     >>> resid = {"a": {i: 1.0 + 0.1 * (i % 3) for i in range(10)},
     ...          "b": {i: 1.05 + 0.1 * ((i + 1) % 3) for i in range(10)}}
-    >>> r = ranking_resolution(scores, resid, "a", 10)
+    >>> r = ranking_resolution(scores, resid, "a", 10, {"a": 0.6, "b": 0.4, "none": 0.0})
     >>> r["resolved"], r["twins_to_resolve"], r["text"][:27]
     (False, 24, 'too few twins to rank: run ')
     """
+    frequency = dict(frequency or {})
     if best is None:
         return {"resolved": False, "twins_to_resolve": None, "excess_sigma": {},
                 "text": "no method recommended, so nothing to rank"}
-    others = [m for m, s in scores.items() if m != best
-              and s["coverage_1sigma_interval"][0] <= GAUSS_1SIGMA
-              <= s["coverage_1sigma_interval"][1]]
+
+    def consistent(m):
+        lo, hi = scores[m]["coverage_1sigma_interval"]
+        return lo <= GAUSS_1SIGMA <= hi
+
+    others = [m for m in scores if m != best and consistent(m)]
     excess = {m: mse_excess_sigma(resid_ppm[m], resid_ppm[best]) for m in others}
-    close = {m: z for m, z in excess.items() if not z >= DISTINGUISHABLE_AT}
-    if not close:
-        text = (f"ranking resolved: every other coverage-consistent method is at least "
-                f"{DISTINGUISHABLE_AT:g} paired standard errors behind {best}" if others else
-                f"ranking resolved: {best} is the only coverage-consistent method")
+    share = frequency.get(best, 1.0)
+    if share >= RESOLVED_AT and all(z >= DISTINGUISHABLE_AT for z in excess.values()):
+        text = (f"ranking resolved: {best} in {100 * share:.0f} % of bootstrap resamples, "
+                + (f"every other coverage-consistent method at least {DISTINGUISHABLE_AT:g} "
+                   "paired standard errors behind" if others
+                   else "the only coverage-consistent method"))
         return {"resolved": True, "twins_to_resolve": None, "excess_sigma": excess,
                 "text": text}
-    needed = [n_twins * (DISTINGUISHABLE_AT / z) ** 2 if z > 0 else np.inf
-              for z in close.values()]
-    most = float(np.max(needed))
-    names = ", ".join(sorted(close))
-    if np.isfinite(most) and most <= MAX_TWINS:
+    contenders = [m for m, f in frequency.items() if m not in (best, "none") and f >= 0.05]
+    contenders += [m for m, z in excess.items() if z < DISTINGUISHABLE_AT and m not in contenders]
+    needed = [_twins_for(excess[m], n_twins) for m in contenders if m in excess]
+    coverage_of = [m for m in contenders if m in scores and not consistent(m)]
+    needed += [_twins_for(_coverage_z(scores[m]["coverage_1sigma"], n_twins), n_twins)
+               for m in coverage_of]
+    most = max(needed, default=float("nan"))
+    rivals = ", ".join(sorted(contenders)) or "no method"
+    if np.isfinite(most) and n_twins < most <= MAX_TWINS:
         n = int(np.ceil(most))
-        text = (f"too few twins to rank: run --twins {n} (the paired test cannot yet tell "
-                f"{best} from {names}: its statistic grows as the square root of the twins)")
+        text = (f"too few twins to rank: run --twins {n} ({best} is recommended in "
+                f"{100 * share:.0f} % of bootstrap resamples; against {rivals}, the paired test "
+                "and the coverage verdicts grow as the square root of the twins)")
         return {"resolved": False, "twins_to_resolve": n, "excess_sigma": excess, "text": text}
-    text = (f"the twins cannot rank {best} and {names}: equal to the twins' precision (more "
+    if np.isfinite(most) and most <= n_twins:
+        text = (f"ranking not resolved: {best} is recommended in {100 * share:.0f} % of "
+                f"bootstrap resamples, against {rivals} (each verdict is decided at "
+                f"{n_twins} twins, but the choice between them is not)")
+        return {"resolved": False, "twins_to_resolve": None, "excess_sigma": excess, "text": text}
+    text = (f"the twins cannot rank {best} and {rivals}: equal to the twins' precision (more "
             f"than {MAX_TWINS} twins would be needed)")
     return {"resolved": False, "twins_to_resolve": None, "excess_sigma": excess, "text": text}
 
