@@ -45,3 +45,24 @@ def simulate_eclipse_epoch(root: Path, sets: list[str], lead_d: float) -> Path:
                  "--quiet", "--workers", "1", *args]) == 0
     assert main(["photometry", str(root / "sim"), "--out", str(root / "phot"), "--quiet"]) == 0
     return root / "phot" / "epoch_01.fits"
+
+
+def real_epoch1_jd_utc(table, shared_irac: Path):
+    """The times of a photometry table of real epoch 1 as JD_UTC at the observer (Spitzer),
+    from the archive's own headers: each cube's ``MJD_OBS`` (UTC at Spitzer) less its
+    ``BMJD_OBS`` moved to TDB, added to each frame's BMJD_TDB. Independent of
+    ``astro/timescales.py``; also the observer (first header's ``SPTZR_X/Y/Z, MJD_OBS``)."""
+    import numpy as np
+    from astropy.io import fits
+    from astropy.time import Time
+
+    shift, observer = {}, None
+    for f in sorted((shared_irac / "real_xo3_eclipse1").glob("r*/ch2/bcd/*_bcd.fits")):
+        h = fits.getheader(f)
+        bmjd_tdb = Time(h["BMJD_OBS"], format="mjd", scale="utc").tdb.mjd
+        shift[(int(h["AORKEY"]), int(h["EXPID"]))] = h["MJD_OBS"] - bmjd_tdb
+        if observer is None:
+            observer = f"{h['SPTZR_X']},{h['SPTZR_Y']},{h['SPTZR_Z']},{h['MJD_OBS']}"
+    keys = zip(np.asarray(table["aorkey"]), np.asarray(table["expid"]), strict=True)
+    delta = np.array([shift[(int(a), int(e))] for a, e in keys])
+    return np.asarray(table["time_bmjd"], float) + delta + 2400000.5, observer

@@ -8,6 +8,9 @@
 :class:`eb.Systematics`, :class:`eb.MethodOptions`, :class:`eb.MethodContext`.
 """
 
+import sys
+import types
+
 #: The package version, read by pyproject.toml (``[tool.setuptools.dynamic]``);
 #: CHANGELOG.md lists what each version changed.
 __version__ = "0.2.0"
@@ -25,14 +28,61 @@ _PUBLIC = {
 __all__ = ["__version__", *_PUBLIC]
 
 
+class _SubpackageFunction:
+    """An API function that shares its name with a subpackage (``eb.trust``).
+
+    Calling it calls the API function; its other attributes are the
+    subpackage's, so ``import eclipsebench.trust.result as r`` still works.
+    """
+
+    def __init__(self, function, package: str):
+        self.__wrapped__ = function
+        self.__doc__ = function.__doc__
+        self.__name__ = function.__name__
+        self.__qualname__ = function.__qualname__
+        self._package = package
+
+    def __call__(self, *args, **kwargs):
+        return self.__wrapped__(*args, **kwargs)
+
+    def __getattr__(self, name: str):
+        import importlib
+
+        return getattr(importlib.import_module(self._package), name)
+
+    def __repr__(self) -> str:
+        return f"<function eclipsebench.{self.__name__}>"
+
+
+class _Package(types.ModuleType):
+    """The package module: an API name is never replaced by the subpackage of that name.
+
+    Importing a subpackage binds it on its parent (``import eclipsebench.trust.result``
+    sets ``eclipsebench.trust`` to the subpackage), which hid the function
+    ``eb.trust`` after any call that loaded the trust code. The subpackage stays in
+    ``sys.modules``, where ``import`` finds it; the attribute stays the API's.
+    """
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in _PUBLIC and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
 def __getattr__(name: str):
     # Loaded on first use (PEP 562): the API pulls in numba, scikit-learn and
     # astropy (about 2.5 s), which `eclipsebench --help` should not pay for.
     if name not in _PUBLIC:
         raise AttributeError(f"module 'eclipsebench' has no attribute {name!r}")
     import importlib
+    import importlib.util
 
     value = getattr(importlib.import_module(f".{_PUBLIC[name]}", __name__), name)
+    if importlib.util.find_spec(f"{__name__}.{name}") is not None:   # a subpackage's name
+        value = _SubpackageFunction(value, f"{__name__}.{name}")
     globals()[name] = value
     return value
 

@@ -137,7 +137,9 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
            config: Config | str | os.PathLike | None = None, epoch: int | None = None,
            resources: Mapping[str, Any] | None = None,
            columns: Mapping[str, str] | None = None, time_column: str | None = None,
-           time_format: str | None = None, **reduce_options: Any) -> EpochResult:
+           time_format: str | None = None, time_scale: str | None = None,
+           time_at: str | None = None, observer: Any = None,
+           **reduce_options: Any) -> EpochResult:
     """Fit one epoch with one method and the shared eclipse + phase-curve model.
 
     Parameters
@@ -173,8 +175,18 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     time_column : str, optional
         The table's time column (default ``time_bmjd``).
     time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
-        Its format (default ``"bmjd"``); all are read as BJD_TDB (no time-scale
-        or barycentric conversion is made).
+        Its format (default ``"bmjd"``): ``bjd``/``bmjd`` barycentric, ``jd``/``mjd``
+        at the observer (converted to BMJD_TDB with the planet's ``ra_deg`` and
+        ``dec_deg``: :mod:`eclipsebench.astro.timescales`; the result's
+        ``time_conversion`` says how).
+    time_scale : {"utc", "tt", "tdb"}, optional
+        The times' scale (default: a ``Time`` column's or the table's
+        ``TIMESYS``, else TDB for barycentric times; needed for jd/mjd).
+    time_at : {"start", "mid", "end"}, optional
+        Where in its frame each time stamp lies (default ``"mid"``).
+    observer : "geocentre" or (x_km, y_km, z_km, mjd_utc), optional
+        Where jd/mjd times were taken: for Spitzer ``SPTZR_X, SPTZR_Y,
+        SPTZR_Z, MJD_OBS`` of a BCD header of the observation.
     **reduce_options
         ``[reduce]`` values to change, e.g. ``phase="linear"``, ``sampler="mcmc"``.
 
@@ -193,9 +205,11 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
         system = as_system(system, cfg.system.catalogue or None)
     elif names_a_system(cfg.system):
         system = system_for(cfg.system)
+    times = {k: v for k, v in (("time_scale", time_scale), ("time_at", time_at),
+                                ("observer", observer)) if v is not None}
     return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
                         method_options=options, resources=resources, columns=columns,
-                        time_column=time_column, time_format=time_format)
+                        time_column=time_column, time_format=time_format, time_options=times)
 
 
 def simulate(out: str | os.PathLike, *, config: Config | str | os.PathLike | None = None,
@@ -266,7 +280,11 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
           twins: int = 50, methods: Sequence[str] | None = None, depth_ppm: float | None = None,
           seed: int = 0, config: Config | str | os.PathLike | None = None,
           options: Mapping[str, Mapping[str, Any]] | None = None, pmap: str | None = None,
-          workers: int | None = None, **reduce_options: Any) -> TrustResult:
+          workers: int | None = None, columns: Mapping[str, str] | None = None,
+          time_column: str | None = None, time_format: str | None = None,
+          time_scale: str | None = None, time_at: str | None = None, observer: Any = None,
+          readout: str | None = None, channel: int | None = None,
+          **reduce_options: Any) -> TrustResult:
     """How far to trust the depth of one real observation: its digital twins, every method.
 
     Simulates ``twins`` copies of the observation (its times, pointing track,
@@ -278,7 +296,10 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
     Parameters
     ----------
     table : path
-        The real observation's photometry table (made by :func:`measure`).
+        The real observation's photometry table: made by :func:`measure`, or
+        another pipeline's (time, flux in any unit, flux_err, x, y; optionally
+        noise pixels, background, frame numbers), completed by inference and
+        written to ``out/observation.fits`` (``docs/trust.md``, "Any table").
     out : path
         The trust folder (``trust.json``, ``trust.ecsv``, ``report/index.html``).
     system : str, mapping or PlanetSystem, optional
@@ -301,6 +322,12 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         map (or a folder of dated versions), the twins' intra-pixel gain.
     workers : int, optional
         Dask worker processes (default ``run.workers``).
+    columns, time_column, time_format, time_scale, time_at, observer : optional
+        Another pipeline's column names and times, as :func:`reduce`.
+    readout : str, optional
+        Another pipeline's subarray readout (``"sub_2s"``...; default: from the cadence).
+    channel : int, optional
+        Another pipeline's IRAC channel (default: its ``CHANNEL``, else 2).
     **reduce_options
         ``[reduce]`` values to change, e.g. ``sampler="leastsq"``, ``profile="paper"``.
 
@@ -315,7 +342,8 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         it), ``n_twins``, ``twin_depth_ppm``.
     """
     from .io.paths import check_output_path
-    from .trust.run import make_settings, run_trust
+    from .trust.observation import trust_settings
+    from .trust.run import run_trust
 
     cfg = _config(config)
     section = cfg.reduce
@@ -323,9 +351,14 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         section = replace(section, **reduce_options)
         section.validate()
     root = check_output_path(out, "out", "folder")
-    settings = make_settings(table, reduce=section, system=system, system_section=cfg.system,
-                             methods=methods, n_twins=twins, depth_ppm=depth_ppm, seed=seed,
-                             method_options=options, pmap=pmap, hint="system=NAME")
+    times = {k: v for k, v in (("time_scale", time_scale), ("time_at", time_at),
+                                ("observer", observer)) if v is not None}
+    settings = trust_settings(table, root, reduce=section, system=system,
+                              system_section=cfg.system, methods=methods, n_twins=twins,
+                              depth_ppm=depth_ppm, seed=seed, method_options=options, pmap=pmap,
+                              hint="system=NAME", columns=columns, time_column=time_column,
+                              time_format=time_format, time_options=times, readout=readout,
+                              channel=channel)
     summary, _ = run_trust(settings, root,
                            workers=cfg.run.workers if workers is None else workers)
     return summary

@@ -206,8 +206,8 @@ def test_a_planet_by_value_is_checked_as_a_catalogue_row():
     assert as_system(by_row) is by_row and as_system("XO-3b") == get_system("XO-3b")
     section = SimpleNamespace(name="test-b", catalogue="", planet=dict(XO3B))
     assert system_for(section).a_rs == 7.07
-    assert set(PLANET_KEYS) == {"name"} | set(XO3B) - {"v_mag"} | {"r_star_rsun", "ld_quadratic",
-                                                                  "v_mag"}
+    assert set(PLANET_KEYS) == {"name"} | set(XO3B) - {"v_mag"} | {
+        "r_star_rsun", "ld_quadratic", "v_mag", "ra_deg", "dec_deg"}
 
 
 @pytest.mark.parametrize("call,words", [

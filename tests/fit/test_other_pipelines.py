@@ -134,30 +134,56 @@ def test_columns_and_time_format_on_the_command_line(full, full_depths, tmp_path
     assert usage.value.code == 2 and "--time-format" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("fmt, offset", [("jd", 2400000.5), ("bjd", 2400000.5), ("mjd", 0.0),
-                                         ("bmjd", 0.0)])
-def test_time_formats(full, fmt, offset):
+@pytest.mark.parametrize("fmt, offset", [("bjd", 2400000.5), ("bmjd", 0.0)])
+def test_barycentric_time_formats(full, fmt, offset):
     t = Table({"t": np.asarray(full["time_bmjd"][:5]) + offset})
     s = standardise_table(t, time_column="t", time_format=fmt)
     assert np.allclose(s["time_bmjd"], full["time_bmjd"][:5], rtol=0, atol=1e-9)
-    assert "BJD_TDB assumed" in s.meta["TIMESRC"]
-    wrong = {"jd": "mjd", "bjd": "bmjd", "mjd": "jd", "bmjd": "bjd"}[fmt]
+    assert "BMJD_TDB" in s.meta["TIMESRC"]
+    wrong = {"bjd": "bmjd", "bmjd": "bjd"}[fmt]
     with pytest.raises(InputError, match="time_format"):
         standardise_table(t, time_column="t", time_format=wrong)
 
 
-def test_time_columns_as_astropy_time_must_be_tdb(full):
+@pytest.mark.parametrize("fmt", ["jd", "mjd"])
+def test_times_at_the_observer_need_scale_observer_and_coordinates(full, fmt):
+    """jd/mjd are times at the observer: converted with the target's RA/Dec (astro/timescales)."""
+    offset = 2400000.5 if fmt == "jd" else 0.0
+    t = Table({"t": np.asarray(full["time_bmjd"][:5]) + offset})
+    with pytest.raises(InputError, match="need their scale: give time_scale"):
+        standardise_table(t, time_column="t", time_format=fmt)
+    with pytest.raises(InputError, match="need observer X,Y,Z,MJD"):
+        standardise_table(t, time_column="t", time_format=fmt, time_scale="tdb")
+    with pytest.raises(InputError, match="need the target's RA and Dec"):
+        standardise_table(t, time_column="t", time_format=fmt, time_scale="tdb",
+                          observer="geocentre")
+    s = standardise_table(t, time_column="t", time_format=fmt, time_scale="tdb",
+                          observer="geocentre", target=get_system("XO-3b"))
+    delay_s = (np.asarray(s["time_bmjd"]) - np.asarray(full["time_bmjd"][:5])) * 86400.0
+    assert 0 < abs(delay_s).min() and abs(delay_s).max() < 500.0   # the Roemer delay, < 1 AU / c
+    assert "geocentre" in s.meta["TIMECONV"] and fmt.upper() in s.meta["TIMECONV"]
+    with pytest.raises(InputError, match="unknown time scale 'gps'"):
+        standardise_table(t, time_column="t", time_format=fmt, time_scale="gps",
+                          observer="geocentre", target=get_system("XO-3b"))
+
+
+def test_time_columns_as_astropy_time_keep_their_scale(full):
     bmjd = np.asarray(full["time_bmjd"][:4])
     s = standardise_table(Table({"time_bmjd": Time(bmjd, format="mjd", scale="tdb")}))
     assert np.allclose(s["time_bmjd"], bmjd, rtol=0, atol=1e-9)
-    with pytest.raises(InputError, match="scale 'utc'.*BJD_TDB"):
-        standardise_table(Table({"time_bmjd": Time(bmjd, format="mjd", scale="utc")}))
+    utc = standardise_table(Table({"time_bmjd": Time(bmjd, format="mjd", scale="utc")}))
+    tdb_minus_utc_s = (np.asarray(utc["time_bmjd"]) - bmjd) * 86400.0   # leap seconds + 32.184
+    assert np.all((66.0 < tdb_minus_utc_s) & (tdb_minus_utc_s < 70.0))
+    assert "BMJD_UTC" in utc.meta["TIMECONV"]
+    with pytest.raises(InputError, match="astropy Time in scale 'utc'"):
+        standardise_table(Table({"time_bmjd": Time(bmjd, format="mjd", scale="utc")}),
+                          time_scale="tdb")
 
 
 def test_library_keywords_and_their_errors(full, full_depths):
     res = eb.reduce(_foreign(full), "poly2", system="XO-3b", prayer_bead_shifts=0,
                     columns=dict(p.split("=") for p in FOREIGN_COLUMNS.split(",")),
-                    time_column="BJD_TDB", time_format="jd")
+                    time_column="BJD_TDB", time_format="bjd")
     assert abs(res.depth_ppm - full_depths["poly2"]) < 1.0
     with pytest.raises(InputError, match=r"^columns: flux=NOPE: the table has no column"):
         eb.reduce(_foreign(full), "poly2", system="XO-3b", columns={"flux": "NOPE"})

@@ -77,6 +77,10 @@ class PlanetSystem:
         Quadratic limb-darkening coefficients (u1, u2) at 4.5 um for transits.
     v_mag : float or None
         V magnitude of the star.
+    ra_deg, dec_deg : float or None
+        The star's right ascension and declination (J2000, degrees): the
+        direction of the barycentric correction of times taken at the
+        observer (:mod:`eclipsebench.astro.timescales`).
     references : dict
         Source of each value, ``{field: "citation"}``.
     """
@@ -93,6 +97,8 @@ class PlanetSystem:
     r_star_rsun: float = 1.0
     ld_quadratic: tuple[float, float] = (0.1, 0.1)
     v_mag: float | None = None
+    ra_deg: float | None = None
+    dec_deg: float | None = None
     references: dict[str, str] = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self) -> None:
@@ -131,6 +137,15 @@ class PlanetSystem:
             bad("r_star_rsun", "a positive radius in solar radii")
         if len(self.ld_quadratic) != 2:
             bad("ld_quadratic", "two coefficients [u1, u2]")
+        for key, low, high in (("ra_deg", 0.0, 360.0), ("dec_deg", -90.0, 90.0)):
+            value = getattr(self, key)
+            if value is not None and (not isinstance(value, (int, float))
+                                      or isinstance(value, bool) or not math.isfinite(value)
+                                      or not low <= value <= high):
+                bad(key, f"degrees from {low:g} to {high:g}")
+        if (self.ra_deg is None) != (self.dec_deg is None):
+            bad("ra_deg" if self.ra_deg is None else "dec_deg",
+                "a value with the other coordinate (give both ra_deg and dec_deg)")
 
     # -------------------------------------------------------------- derived values
     @property

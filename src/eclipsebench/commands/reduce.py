@@ -17,7 +17,9 @@ from ..fit.names import (
     PHASE_CURVE_MODELS,
     PHASE_MODELS,
     RAMP_MODELS,
+    TIME_AT,
     TIME_FORMATS,
+    TIME_SCALES,
 )
 from ..fit.target import system_of_table
 from ..io.atomic import atomic_path, write_json
@@ -86,9 +88,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "--columns flux=FLUX,flux_err=FLUX_ERR (repeatable)")
     p.add_argument("--time-column", metavar="NAME", default=None,
                    help="the table's time column (default: time_bmjd)")
-    p.add_argument("--time-format", choices=tuple(TIME_FORMATS), default=None,
-                   help="format of the time column, read as BJD_TDB without conversion of "
-                        "time scale (default: bmjd = BJD_TDB - 2400000.5)")
+    add_time_options(p)
     p.add_argument("--pmap", metavar="PATH", default=None,
                    help="calibration set for kr-pmap (a calibration-star table, the SSC pmap, or "
                         "a folder of SSC map versions: the one in force at the observation's "
@@ -115,6 +115,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "light curve goes to RESULT.lc.ecsv")
     p.add_argument("--plot", metavar="FILE.png", default=None,
                    help="plot the binned decorrelated light curve with the model")
+
+
+def add_time_options(p: argparse.ArgumentParser) -> None:
+    """``--time-format``, ``--time-scale``, ``--time-at``, ``--observer`` (reduce and trust)."""
+    p.add_argument("--time-format", choices=tuple(TIME_FORMATS), default=None,
+                   help="format of the time column: bmjd (default, BJD - 2400000.5) or bjd, "
+                        "barycentric; mjd or jd, at the observer, converted to BMJD_TDB with "
+                        "the planet's ra_deg/dec_deg and --observer (docs/photometry.md)")
+    p.add_argument("--time-scale", choices=TIME_SCALES, default=None,
+                   help="time scale of the time column (default: the table's TIMESYS, else "
+                        "tdb for bmjd/bjd; required for mjd/jd)")
+    p.add_argument("--time-at", choices=TIME_AT, default=None,
+                   help="where in its frame each time stamp lies (default mid; start/end "
+                        "move it by half the frame time, the median cadence)")
+    p.add_argument("--observer", metavar="X,Y,Z,MJD|geocentre", default=None,
+                   help="where mjd/jd times were taken: for Spitzer SPTZR_X,SPTZR_Y,SPTZR_Z,"
+                        "MJD_OBS of a BCD header of the observation (km, UTC MJD); geocentre "
+                        "(for Spitzer wrong by minutes)")
 
 
 def _method_options(items: list[str]) -> dict:
@@ -144,55 +162,11 @@ def _column_map(items: list[str]) -> dict[str, str]:
     return out
 
 
-#: Lower-case column names of other pipelines, by the package's name they likely hold.
-_LIKELY_NAMES = {
-    "time_bmjd": ("bmjd", "bjd", "bjd_tdb", "bmjd_tdb", "time", "mjd", "jd", "t"),
-    "flux": ("flux", "f", "phot", "aper_flux", "flux_aper"),
-    "flux_err": ("flux_err", "fluxerr", "flux_error", "err", "error", "sigma", "eflux"),
-    "x": ("x", "xc", "xcen", "x_cen", "xpos", "x_centroid", "centroid_x"),
-    "y": ("y", "yc", "ycen", "y_cen", "ypos", "y_centroid", "centroid_y"),
-}
-
-
-def check_columns(table, source: str, *, radius_px: float | None = None) -> None:
-    """Refuse a table without the columns a fit needs, saying how to map them.
-
-    Another pipeline's table names its columns its own way: the message names
-    the missing ones, the table's columns, and the ``--columns`` (and
-    ``--time-column``/``--time-format``) options that map them, with the
-    likely candidates filled in.
-
-    Raises
-    ------
-    InputError
-        One line naming the table, the missing columns and the options.
-    """
-    needed = [c for c in ("time_bmjd", "flux", "flux_err", "x", "y")
-              if not (c == "flux" and radius_px is not None)]
-    missing = [c for c in needed if c not in table.colnames]
-    if not missing:
-        return
-    by_lower = {name.lower(): name for name in table.colnames}
-    maps, time_hint = [], ""
-    for name in missing:
-        found = next((by_lower[c] for c in _LIKELY_NAMES[name] if c in by_lower), None)
-        if name == "time_bmjd":
-            fmt = "bjd" if found and "jd" in found.lower() and "mjd" not in found.lower() \
-                else "bmjd"
-            time_hint = (f" and --time-column {found} --time-format {fmt} (one of "
-                         f"{', '.join(TIME_FORMATS)})" if found else
-                         f" and --time-column NAME --time-format {'|'.join(TIME_FORMATS)}")
-        else:
-            maps.append(f"{name}={found or 'NAME'}")
-    how = (f"map them with --columns {','.join(maps)}" if maps else "map it") + time_hint
-    shown = ", ".join(table.colnames[:12]) + (" ..." if len(table.colnames) > 12 else "")
-    raise InputError(f"{source}: missing column(s) {', '.join(missing)} (the table has "
-                     f"{shown}); {how}")
-
-
 #: How errors about the table's names and time format name the options.
 _TABLE_LABELS = {"columns": "--columns", "time_column": "--time-column",
-                 "time_format": "--time-format"}
+                 "time_format": "--time-format", "time_scale": "--time-scale",
+                 "time_at": "--time-at", "observer": "--observer",
+                 "coordinates": "--planet ra_deg=DEG --planet dec_deg=DEG, or --system"}
 
 
 def _options(args: argparse.Namespace):
@@ -225,6 +199,32 @@ def _system(args: argparse.Namespace, section, table, source) -> PlanetSystem:
     explicit = args.system is not None or bool(getattr(args, "planet", None))
     return system_of_table(table.meta, system=system_for(section) if explicit else None,
                            section=section, source=str(source))
+
+
+def time_options(args: argparse.Namespace) -> dict:
+    """``--time-scale``, ``--time-at`` and ``--observer`` as ``standardise_table``'s keywords."""
+    return {k: v for k, v in (("time_scale", args.time_scale), ("time_at", args.time_at),
+                              ("observer", args.observer)) if v is not None}
+
+
+def _standard_table(args: argparse.Namespace, section, path: Path):
+    """The table at ``path`` with the package's names and times (BMJD_TDB), and its planet.
+
+    Times at the observer (``--time-format`` jd or mjd) are converted with the
+    planet's coordinates, so the planet is then found first.
+    """
+    from ..fit.data import check_columns, standardise_table
+    from ..photometry.table import read_table
+
+    table = read_table(path)
+    table.meta.setdefault("FILENAME", str(path))
+    system = (_system(args, section, table, path) if args.time_format in ("jd", "mjd")
+              else None)
+    table = standardise_table(table, columns=_column_map(args.columns),
+                              time_column=args.time_column, time_format=args.time_format,
+                              target=system, labels=_TABLE_LABELS, **time_options(args))
+    check_columns(table, str(path), radius_px=args.radius, labels=_TABLE_LABELS)
+    return table, system if system is not None else _system(args, section, table, path)
 
 
 def _clean(obj):
@@ -273,9 +273,7 @@ def _table_paths(items: list[str]) -> list[Path]:
 
 def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
     """Several epochs with one depth (issue 17 point 4): ``reduce_joint``, one JSON."""
-    from ..fit.data import standardise_table
     from ..fit.reduce import configured_method_options, reduce_joint, resolve_method_options
-    from ..photometry.table import read_table
 
     for flag, value in (("--sampler mcmc", args.sampler == "mcmc"),
                         ("--profile paper", args.profile == "paper"),
@@ -290,14 +288,11 @@ def _run_joint(args: argparse.Namespace, paths: list[Path]) -> dict:
                                             _method_options(args.method_options),
                                             configured=configured_method_options(options))
     tables = []
+    systems = []
     for path in paths:
-        table = read_table(path)
-        table.meta.setdefault("FILENAME", str(path))
-        tables.append(standardise_table(table, columns=_column_map(args.columns),
-                                        time_column=args.time_column,
-                                        time_format=args.time_format, labels=_TABLE_LABELS))
-        check_columns(tables[-1], str(path), radius_px=args.radius)
-    systems = [_system(args, section, t, p) for t, p in zip(tables, paths, strict=True)]
+        table, system = _standard_table(args, section, path)
+        tables.append(table)
+        systems.append(system)
     system = systems[0]
     for other, path in zip(systems[1:], paths[1:], strict=True):
         if other.name != system.name:
@@ -348,14 +343,12 @@ def run(args: argparse.Namespace) -> dict:
     get_method(args.method)  # "unknown method" (listing the known ones) before any path is made
     if len(paths) > 1:
         return _run_joint(args, paths)
-    from ..fit.data import standardise_table
     from ..fit.reduce import (
         configured_method_options,
         reduce_epoch,
         resolve_method_options,
         select_phase_model,
     )
-    from ..photometry.table import read_table
 
     table_path = paths[0]
     out = Path(args.out) if args.out else table_path.with_name(
@@ -373,14 +366,8 @@ def run(args: argparse.Namespace) -> dict:
     given = _method_options(args.method_options)
     method_options = resolve_method_options(args.method, options, given,
                                             profile=options.profile, configured=configured)
-    table = read_table(table_path)
-    table.meta.setdefault("FILENAME", str(table_path))
-    table = standardise_table(table, columns=_column_map(args.columns),
-                              time_column=args.time_column, time_format=args.time_format,
-                              labels=_TABLE_LABELS)
-    check_columns(table, str(table_path), radius_px=args.radius)
+    table, system = _standard_table(args, section, table_path)
     _check_pmap(args, table, table_path)
-    system = _system(args, section, table, table_path)
     result = reduce_epoch(table, args.method, options=options, system=system,
                           seed=args.seed, epoch=args.epoch, pmap=args.pmap,
                           method_options=method_options)
@@ -486,6 +473,8 @@ def format_text(result: dict) -> str:
                         f"+{result['mcmc_depth_err_hi_ppm']:.1f} ppm ({result['mcmc_move']}, "
                         f"{result['mcmc_walkers']} walkers x {result['mcmc_steps']} steps, "
                         f"N/tau {result.get('mcmc_n_over_tau') or float('nan'):.0f})")
+    if result.get("time_conversion"):
+        lines.append(f"times         {result['time_conversion']}")
     wrote = [result["result_file"], result["lightcurve_file"]] + [
         result[k] for k in ("chain_file", "plot_file", "corner_file") if result.get(k)]
     lines.append("wrote         " + ", ".join(wrote))

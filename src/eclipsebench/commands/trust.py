@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..config import load_config
 from ..config.base import parse_override
+from ..detector.constants import READOUT_MODES
 from ..errors import InputError
 from ..limits import MAX_WORKERS
 from .options import (
@@ -18,6 +19,10 @@ from .options import (
     positive_float,
     positive_int,
 )
+from .reduce import _TABLE_LABELS, _column_map, add_time_options, time_options
+
+#: The readouts twins are made for (subarray modes).
+SUBARRAY_READOUTS = tuple(name for name, mode in READOUT_MODES.items() if mode.subarray)
 
 NAME = "trust"
 HELP = ("Simulate digital twins of a real observation (its times, pointing track, flux, "
@@ -29,8 +34,10 @@ HELP = ("Simulate digital twins of a real observation (its times, pointing track
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("table", metavar="TABLE",
-                   help="photometry table of the real observation (made by 'eclipsebench "
-                        "photometry': it records the readout, background and noise pixels)")
+                   help="photometry table of the real observation: made by 'eclipsebench "
+                        "photometry' (it records the readout, background and noise pixels), or "
+                        "another pipeline's (time, flux in any unit, flux_err, x, y), completed "
+                        "by inference into DIR/observation.fits (docs/trust.md, 'Any table')")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="trust folder (rerunning the same command resumes it)")
     p.add_argument("--system", metavar="NAME", default=None,
@@ -57,6 +64,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "gridded SSC map (or a folder of dated versions), the twins' gain")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
                    help="one seed for every twin's noise and every reduction")
+    p.add_argument("--columns", dest="columns", action="append", default=[],
+                   metavar="NEW=OLD,...",
+                   help="map another pipeline's column names to the package's, as reduce "
+                        "--columns (repeatable)")
+    p.add_argument("--time-column", metavar="NAME", default=None,
+                   help="the table's time column (default: time_bmjd)")
+    add_time_options(p)
+    p.add_argument("--readout", choices=SUBARRAY_READOUTS, default=None,
+                   help="another pipeline's subarray readout (default: the mode whose frame "
+                        "time is the table's cadence)")
+    p.add_argument("--channel", type=int, choices=(1, 2), default=None,
+                   help="another pipeline's IRAC channel (default: its CHANNEL, else 2)")
     p.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), default=None, metavar="N",
                    help="Dask worker processes (default: run.workers); 1 runs in this process")
     p.add_argument("--config", metavar="CONFIG", default=None,
@@ -90,7 +109,8 @@ def _method_options(items: list[str]) -> dict[str, dict]:
 
 def run(args: argparse.Namespace) -> dict:
     # the simulator and every method: imported when the command runs, not for --help
-    from ..trust.run import make_settings, run_trust
+    from ..trust.observation import trust_settings
+    from ..trust.run import run_trust
 
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))
@@ -101,12 +121,16 @@ def run(args: argparse.Namespace) -> dict:
     explicit = args.system is not None or bool(args.planet)
     from ..astro.catalogue import system_for
 
-    settings = make_settings(args.table, reduce=section,
-                             system=system_for(cfg.system) if explicit else None,
-                             system_section=cfg.system, methods=args.methods,
-                             n_twins=args.twins, depth_ppm=args.depth, seed=args.seed,
-                             method_options=_method_options(args.method_options), pmap=args.pmap,
-                             depth_name="--depth")
+    settings = trust_settings(args.table, out, reduce=section,
+                              system=system_for(cfg.system) if explicit else None,
+                              system_section=cfg.system, methods=args.methods,
+                              n_twins=args.twins, depth_ppm=args.depth, seed=args.seed,
+                              method_options=_method_options(args.method_options),
+                              pmap=args.pmap, columns=_column_map(args.columns),
+                              time_column=args.time_column, time_format=args.time_format,
+                              time_options=time_options(args), readout=args.readout,
+                              channel=args.channel, labels=_TABLE_LABELS,
+                              depth_name="--depth")
     summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers)
     return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
                                 "skipped": len(report.skipped), "wall_s": report.wall_s,
@@ -114,7 +138,13 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def format_text(result: dict) -> str:
-    lines = [f"{result['system']}: {result['n_twins']} twins with a "
+    from ..trust.report import ranking_text
+
+    lines = []
+    if result.get("quote"):   # the line to quote first
+        lines += [f"quote         {result['quote']['text']}",
+                  f"ranking       {ranking_text(result)}"]
+    lines += [f"{result['system']}: {result['n_twins']} twins with a "
              f"{result['twin_depth_ppm']:.1f} ppm {result['twins']['event']} "
              f"({result['profile']} profile, {result['sampler']})",
              f"{'method':<10} {'depth':>8} {'honest':>7} {'bias':>7} {'SD':>6} {'RMSE':>6} "
@@ -124,6 +154,14 @@ def format_text(result: dict) -> str:
                      f"{s['bias_ppm']:7.1f} {s['sd_ppm']:6.1f} {s['rmse_ppm']:6.1f} "
                      f"{s['mean_err_ppm']:6.1f} {s['z_rms']:5.2f} {s['coverage_1sigma']:5.2f} "
                      f"{s['coverage_2sigma']:5.2f}")
+    timed = {m: s for m, s in result["methods"].items() if "t_rmse_s" in s}
+    if timed:
+        lines.append(f"{'mid-time':<10} {'error':>7} {'honest':>7} {'bias':>7} {'RMSE':>6} "
+                     f"{'z_rms':>5} {'cov1':>5}   (seconds; twins whose fit freed it)")
+        for m, s in timed.items():
+            lines.append(f"{m:<10} {s['t_err_s']:7.1f} {s['t_honest_err_s']:7.1f} "
+                         f"{s['t_bias_s']:7.1f} {s['t_rmse_s']:6.1f} {s['t_z_rms']:5.2f} "
+                         f"{s['t_coverage_1sigma']:5.2f}")
     lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
     if result.get("near_equals"):
         from ..trust.score import DISTINGUISHABLE_AT
@@ -139,6 +177,14 @@ def format_text(result: dict) -> str:
                          f"{s['beta_red_twins_median']:.2f}): its RMSE may under-predict")
     for m, why in result["skipped"].items():
         lines.append(f"skipped       {m}: {why}")
+    if result.get("source_table"):
+        lines.append(f"table         {result['source_table']}, another pipeline's, completed as "
+                     f"{result['table']}")
+        for key, what in (result.get("inferred") or {}).items():
+            if not key.endswith("_per_unit"):
+                lines.append(f"inferred      {key}: {what}")
+    if result.get("time_conversion"):
+        lines.append(f"times         {result['time_conversion']}")
     run = result.get("_run")
     if run:
         lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "

@@ -21,13 +21,15 @@ import numpy as np
 from astropy.table import Table
 from astropy.time import Time
 
+from ..astro.timescales import TimeSpec, to_bmjd_tdb
 from ..decorrelate.base import EpochData
 from ..errors import InputError
 from ..photometry.table import COLUMN_UNITS
 from ..photometry.table import REQUIRED_COLUMNS as CONTRACT_COLUMNS
-from .names import TIME_FORMATS
+from .names import TIME_FORMATS, TIME_SCALES
 
 __all__ = ["epoch_data_from_table", "aperture_column", "standardise_table", "median_cadence_s",
+           "check_columns",
            "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "TIME_FORMATS"]
 
 #: Columns every method needs.
@@ -39,7 +41,9 @@ OPTIONAL_COLUMNS = ("noise_pixels", "flag", "aorkey", "background", "width_x", "
 _JD_THRESHOLD_D = 1.0e6
 _PIXEL_COLUMN = re.compile(r"^p(\d+)$")
 _APERTURE_COLUMN = re.compile(r"^flux(_err)?_r\d+p\d\d$")
-_ARGUMENTS = {"columns": "columns", "time_column": "time_column", "time_format": "time_format"}
+_ARGUMENTS = {"columns": "columns", "time_column": "time_column", "time_format": "time_format",
+              "time_scale": "time_scale", "time_at": "time_at", "observer": "observer",
+              "coordinates": "system=... with ra_deg and dec_deg"}
 
 
 def aperture_column(radius_px: float) -> str:
@@ -85,13 +89,14 @@ def _names_list(table) -> str:
     return ", ".join(names[:25]) + (f", ... ({len(names)} columns)" if len(names) > 25 else "")
 
 
-def _time_values(col, label: str, fmt: str, fmt_label: str) -> np.ndarray:
-    """BMJD (days) from a time column in ``fmt``; an astropy Time must be in TDB."""
+def _time_values(col, label: str, fmt: str, fmt_label: str) -> tuple[np.ndarray, str | None]:
+    """The numbers of a time column in ``fmt`` (days), and an astropy Time column's scale.
+
+    An astropy ``Time`` column gives its MJD (``fmt`` then says only whether it
+    is barycentric: ``bmjd``/``bjd`` or ``mjd``/``jd``) and its scale.
+    """
     if isinstance(col, Time):
-        if col.scale != "tdb":
-            raise InputError(f"{label}: a Time column in scale {col.scale!r}; give BJD_TDB "
-                             "(no time-scale or barycentric conversion is made here)")
-        return np.asarray(col.mjd, dtype=float)
+        return np.asarray(col.mjd, dtype=float) + TIME_FORMATS[fmt][0], str(col.scale)
     try:
         values = np.asarray(getattr(col, "value", col), dtype=float)
     except (TypeError, ValueError):
@@ -106,7 +111,77 @@ def _time_values(col, label: str, fmt: str, fmt_label: str) -> np.ndarray:
         if not is_jd and fmt in ("bjd", "jd"):
             raise InputError(f"{fmt_label} {fmt!r}: the times ({typical:.5f}) are not full "
                              "Julian dates; use 'bmjd' (or 'mjd')")
-    return values - TIME_FORMATS[fmt]
+    return values, None
+
+
+def _table_scale(meta: Mapping[str, Any], scale_label: str) -> str | None:
+    """The time scale a table's metadata name (``TIMESYS``), checked; None when absent."""
+    value = (meta or {}).get("TIMESYS", (meta or {}).get("timesys"))
+    if value is None:
+        return None
+    scale = str(value).strip().lower()
+    if scale not in TIME_SCALES:
+        raise InputError(f"the table's TIMESYS {value!r}: unknown time scale (expected one of "
+                         f"{', '.join(TIME_SCALES)}; give {scale_label})")
+    return scale
+
+
+#: Lower-case column names of other pipelines, by the package's name they likely hold.
+_LIKELY_NAMES = {
+    "time_bmjd": ("bmjd", "bjd", "bjd_tdb", "bmjd_tdb", "time", "mjd", "jd", "t"),
+    "flux": ("flux", "f", "phot", "aper_flux", "flux_aper"),
+    "flux_err": ("flux_err", "fluxerr", "flux_error", "err", "error", "sigma", "eflux"),
+    "x": ("x", "xc", "xcen", "x_cen", "xpos", "x_centroid", "centroid_x"),
+    "y": ("y", "yc", "ycen", "y_cen", "ypos", "y_centroid", "centroid_y"),
+}
+
+
+def check_columns(table, source: str, *, radius_px: float | None = None,
+                  labels: Mapping[str, str] | None = None) -> None:
+    """Refuse a table without the columns a fit needs, saying how to map them.
+
+    Another pipeline's table names its columns its own way: the message names
+    the missing ones, the table's columns, and how to map them (``labels``:
+    the command line's ``--columns``, ``--time-column``, ``--time-format``,
+    the API's keywords by default), with the likely candidates filled in.
+    ``reduce`` and ``trust`` both call it.
+
+    Raises
+    ------
+    InputError
+        One line naming the table, the missing columns and the options.
+
+    Examples
+    --------
+    >>> check_columns(Table({"BJD": [1.0], "F": [1.0], "xc": [1.0], "yc": [1.0]}), "lc.csv")
+    Traceback (most recent call last):
+    ...
+    eclipsebench.errors.InputError: lc.csv: missing column(s) time_bmjd, flux, flux_err, x, y (the table has BJD, F, xc, yc); map them with columns flux=F,flux_err=NAME,x=xc,y=yc and time_column BJD time_format bjd (one of bmjd, bjd, mjd, jd)
+    """
+    labels = {**_ARGUMENTS, **dict(labels or {})}
+    needed = [c for c in ("time_bmjd", "flux", "flux_err", "x", "y")
+              if not (c == "flux" and radius_px is not None)]
+    missing = [c for c in needed if c not in table.colnames]
+    if not missing:
+        return
+    by_lower = {name.lower(): name for name in table.colnames}
+    maps, time_hint = [], ""
+    for name in missing:
+        found = next((by_lower[c] for c in _LIKELY_NAMES[name] if c in by_lower), None)
+        if name == "time_bmjd":
+            fmt = "bjd" if found and "jd" in found.lower() and "mjd" not in found.lower() \
+                else "bmjd"
+            time_hint = (f" and {labels['time_column']} {found} {labels['time_format']} {fmt} "
+                         f"(one of {', '.join(TIME_FORMATS)})" if found else
+                         f" and {labels['time_column']} NAME {labels['time_format']} "
+                         f"{'|'.join(TIME_FORMATS)}")
+        else:
+            maps.append(f"{name}={found or 'NAME'}")
+    how = (f"map them with {labels['columns']} {','.join(maps)}" if maps else "map it") \
+        + time_hint
+    shown = ", ".join(table.colnames[:12]) + (" ..." if len(table.colnames) > 12 else "")
+    raise InputError(f"{source}: missing column(s) {', '.join(missing)} (the table has "
+                     f"{shown}); {how}")
 
 
 def _stamp_from_pixel_columns(table, labels: Mapping[str, str]) -> dict[str, np.ndarray]:
@@ -169,7 +244,9 @@ def _column_mapping(table, columns: Mapping[str, str] | None, time_column: str |
 
 def standardise_table(table, *, columns: Mapping[str, str] | None = None,
                       time_column: str | None = None, time_format: str | None = None,
-                      labels: Mapping[str, str] | None = None) -> Table:
+                      time_scale: str | None = None, time_at: str | None = None,
+                      observer: Any = None, frame_time_s: float | None = None,
+                      target: Any = None, labels: Mapping[str, str] | None = None) -> Table:
     """A table with the package's column names, time in BMJD_TDB and stamps as cubes.
 
     Parameters
@@ -182,20 +259,34 @@ def standardise_table(table, *, columns: Mapping[str, str] | None = None,
     time_column : str, optional
         The table's time column (default ``time_bmjd``, or ``columns["time_bmjd"]``).
     time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
-        The time column's format (default ``"bmjd"``). All four are taken as
-        counts of BJD_TDB: "jd"/"bjd" have 2400000.5 subtracted, "mjd"/"bmjd"
-        are used as they are; no time-scale or light-travel-time conversion is
-        made. Times whose size does not fit the format (a JD given as "bmjd")
-        are refused.
+        The time column's format (default ``"bmjd"``): "bjd"/"bmjd" are
+        barycentric, "jd"/"mjd" taken at the observer (then ``time_scale``,
+        ``observer`` and ``target``'s coordinates are needed). Times whose
+        size does not fit the format (a JD given as "bmjd") are refused.
+    time_scale : {"utc", "tt", "tdb"}, optional
+        The times' scale (default: an astropy Time column's, else the table's
+        ``TIMESYS``, else TDB for barycentric formats).
+    time_at : {"start", "mid", "end"}, optional
+        Where in its frame each stamp lies (default ``"mid"``).
+    observer : "geocentre" or (x_km, y_km, z_km, mjd_utc), optional
+        Where times at the observer were taken
+        (:func:`eclipsebench.astro.timescales.parse_observer`).
+    frame_time_s : float, optional
+        The frame time for ``time_at`` start or end (default: the median cadence).
+    target : PlanetSystem, optional
+        Its ``ra_deg``/``dec_deg`` direct the barycentric correction.
     labels : Mapping, optional
-        How errors name ``columns``, ``time_column`` and ``time_format`` (the
-        command line passes ``--columns`` ...).
+        How errors name ``columns``, ``time_column``, ``time_format``,
+        ``time_scale``, ``time_at`` and ``observer`` (the command line
+        passes ``--columns`` ...).
 
     Returns
     -------
     astropy.table.Table
         A new table (the input is not changed); the default arguments on a
-        table of this package give the same columns.
+        table of this package give the same columns. A conversion of the
+        times is recorded in ``meta["TIMECONV"]`` (one line, for the result)
+        and ``meta["TIMESRC"]``.
 
     Raises
     ------
@@ -226,19 +317,33 @@ def standardise_table(table, *, columns: Mapping[str, str] | None = None,
                 out.replace_column(new, col)
             else:
                 out[new] = col
-    n = len(out)
     if "time_bmjd" in out.colnames:
         source = mapping.get("time_bmjd", "time_bmjd")
         col = out["time_bmjd"]
-        values = _time_values(col, f"time column {source!r}", fmt, labels["time_format"])
-        needs = isinstance(col, Time) or fmt != "bmjd" or col.dtype.kind != "f"
-        if needs:
-            out.replace_column("time_bmjd", values)
-        if needs or source != "time_bmjd":
-            out.meta["TIMESRC"] = f"{source} ({fmt}, BJD_TDB assumed)"
-    elif time_format is not None:
+        values, column_scale = _time_values(col, f"time column {source!r}", fmt,
+                                            labels["time_format"])
+        if time_scale is not None and column_scale not in (None, time_scale):
+            raise InputError(f"{labels['time_scale']} {time_scale}: the time column "
+                             f"{source!r} is an astropy Time in scale {column_scale!r}")
+        scale = time_scale or column_scale or _table_scale(out.meta, labels["time_scale"])
+        spec = TimeSpec(fmt, scale, time_at or "mid", observer, frame_time_s).check(labels)
+        if spec.is_plain():
+            needs = isinstance(col, Time) or col.dtype.kind != "f"
+            if needs:
+                out.replace_column("time_bmjd", values)
+            if needs or source != "time_bmjd":
+                out.meta["TIMESRC"] = f"{source} (BMJD_TDB)"
+        else:
+            ra, dec = getattr(target, "ra_deg", None), getattr(target, "dec_deg", None)
+            converted, how = to_bmjd_tdb(values, spec, ra_deg=ra, dec_deg=dec, label=f"time column {source!r}",
+                                         coords_hint=labels["coordinates"])
+            out.replace_column("time_bmjd", converted)
+            out.meta["TIMESRC"] = f"{source} ({how['text']})"
+            out.meta["TIMECONV"] = f"{source}: {how['text']}"
+    elif any(v is not None for v in (time_format, time_scale, time_at, observer)):
         raise InputError(f"{labels['time_format']}: the table has no time column "
                          f"'time_bmjd' (give {labels['time_column']})")
+    n = len(out)
     for name, size in (("stamp3", 3), ("stamp5", 5)):
         if name in out.colnames:
             out.replace_column(name, _checked_stamp(out[name], name, size, n))

@@ -232,7 +232,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         depth_err_own_ppm={k: ppm(v) for k, v in own.items()}, lightcurve=lightcurve,
         chain=None if mc is None else {"names": np.asarray(mc.names),
                                        "samples": np.asarray(mc.samples)},
-        event_detail=detail)
+        event_detail=detail, time_conversion=(prep.table.meta or {}).get("TIMECONV"))
 
 
 def _wrap_deg(angle):

@@ -123,7 +123,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                  seed: int = 0, epochs=None, method_options=None,
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
-                 time_format: str | None = None) -> JointResult:
+                 time_format: str | None = None,
+                 time_options: Mapping[str, Any] | None = None) -> JointResult:
     """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
 
     Each epoch is first fitted alone (its solution starts the joint fit), then
@@ -150,7 +151,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, seed=seed,
                              method_options=method_options,
                              resources=_resources(resources, pmap), columns=columns,
-                             time_column=time_column, time_format=time_format)
+                             time_column=time_column, time_format=time_format,
+                             time_options=time_options)
         astro_model = prep.astro_model(options)
         theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
         fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,

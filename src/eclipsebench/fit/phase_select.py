@@ -47,7 +47,8 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
                        resources: Mapping[str, Any] | None = None, pmap=None,
                        phases: tuple[str, ...] = PHASE_MODELS,
                        columns: Mapping[str, str] | None = None, time_column: str | None = None,
-                       time_format: str | None = None) -> PhaseSelection:
+                       time_format: str | None = None,
+                       time_options: Mapping[str, Any] | None = None) -> PhaseSelection:
     """Fit each phase model by least squares and report BIC and AIC for each.
 
     The method is built once and reused; each model's depth error is the
@@ -56,7 +57,8 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
     """
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
-                         columns=columns, time_column=time_column, time_format=time_format)
+                         columns=columns, time_column=time_column, time_format=time_format,
+                         time_options=time_options)
     if options.event == "phase-curve" and phases == PHASE_MODELS:
         phases = PHASE_CURVE_MODELS
     rows: list[dict[str, Any]] = []

@@ -35,14 +35,8 @@ __all__ = ["prepare_epoch", "PreparedEpoch", "resolve_system", "predicted_eclips
 _DEFAULT_OPTIONS = ReduceSection()
 
 
-def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: str | None = None,
-              time_format: str | None = None):
-    """An astropy Table with the package's column names from a Table or a path.
-
-    A path is read as FITS, ECSV or CSV (:func:`read_table`); ``columns``,
-    ``time_column`` and ``time_format`` map another pipeline's names and time
-    format (:func:`~eclipsebench.fit.data.standardise_table`).
-    """
+def _read(table):
+    """An astropy Table from a Table or a path (FITS, ECSV or CSV: :func:`read_table`)."""
     if isinstance(table, (str, os.PathLike)):
         path = os.fspath(table)
         if not os.path.exists(path):
@@ -51,8 +45,22 @@ def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: s
         table.meta.setdefault("FILENAME", path)
     elif not isinstance(table, Table):
         raise InputError("table: expected an astropy Table or the path of a photometry table")
-    return standardise_table(table, columns=columns, time_column=time_column,
-                             time_format=time_format)
+    return table
+
+
+def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: str | None = None,
+              time_format: str | None = None, time_options: Mapping[str, Any] | None = None,
+              target=None):
+    """An astropy Table with the package's column names from a Table or a path.
+
+    A path is read as FITS, ECSV or CSV (:func:`read_table`); ``columns``,
+    ``time_column``, ``time_format`` and ``time_options`` (``time_scale``,
+    ``time_at``, ``observer``, ``frame_time_s``) map another pipeline's names
+    and times, converted with ``target``'s coordinates
+    (:func:`~eclipsebench.fit.data.standardise_table`).
+    """
+    return standardise_table(_read(table), columns=columns, time_column=time_column,
+                             time_format=time_format, target=target, **dict(time_options or {}))
 
 
 def resolve_system(system: Any, meta: Mapping[str, Any] | None = None,
@@ -218,6 +226,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                   resources: Mapping[str, Any] | None = None,
                   columns: Mapping[str, str] | None = None, time_column: str | None = None,
                   time_format: str | None = None,
+                  time_options: Mapping[str, Any] | None = None,
                   centroid: str | None = None) -> PreparedEpoch:
     """Read the table, keep the good frames, build the method and predict the eclipse time.
 
@@ -228,9 +237,19 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     the epoch and the resources it declares, loaded by its ``load_resources``
     from ``resources`` (paths or loaded objects). ``centroid`` ("col",
     "gauss", "gauss-fixed") makes those columns the method's ``x``/``y``
-    (the paper profile); None keeps the table's ``x``/``y``.
+    (the paper profile); None keeps the table's ``x``/``y``. ``time_options``:
+    the times' ``time_scale``, ``time_at``, ``observer`` and ``frame_time_s``
+    (:func:`~eclipsebench.fit.data.standardise_table`); times at the observer
+    (``time_format`` jd or mjd) are converted with the planet's coordinates,
+    so the planet is then found before the columns are read.
     """
-    table = _as_table(table, columns=columns, time_column=time_column, time_format=time_format)
+    target = None
+    if time_format in ("jd", "mjd"):
+        table = _read(table)
+        source = str((table.meta or {}).get("FILENAME", "the photometry table"))
+        system = target = resolve_system(system, table.meta, source)
+    table = _as_table(table, columns=columns, time_column=time_column, time_format=time_format,
+                      time_options=time_options, target=target)
     source = str((table.meta or {}).get("FILENAME", "the photometry table"))
     centroid_note = ""
     if centroid is not None:

@@ -34,7 +34,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
                  seed: int = 0, epoch: int | None = None, method_options=None,
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
-                 time_format: str | None = None, profile: str | None = None) -> EpochResult:
+                 time_format: str | None = None, profile: str | None = None,
+                 time_options: Mapping[str, Any] | None = None) -> EpochResult:
     """Fit one epoch with one method and estimate the depth and its uncertainty.
 
     Parameters
@@ -70,8 +71,11 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     time_column : str, optional
         The table's time column (default ``time_bmjd``).
     time_format : {"bmjd", "bjd", "mjd", "jd"}, optional
-        Its format (default ``"bmjd"``); every format is taken as BJD_TDB-based
-        (no time-scale or barycentric conversion is made).
+        Its format (default ``"bmjd"``): ``b`` for barycentric, else times at the
+        observer (converted: :mod:`eclipsebench.astro.timescales`).
+    time_options : Mapping, optional
+        ``time_scale``, ``time_at``, ``observer``, ``frame_time_s`` of the times
+        (:func:`~eclipsebench.fit.data.standardise_table`).
     profile : {"controlled", "paper"}, optional
         Default ``options.profile``. ``controlled``: the ``[reduce]`` settings
         for every method. ``paper``: the method's team's centroid, phase and
@@ -94,6 +98,7 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
+                         time_options=time_options,
                          centroid=None if team is None else team.centroid)
     options, bic = _phase_curve_choice(prep, method, options)
     if team is None:

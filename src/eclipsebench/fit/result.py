@@ -108,6 +108,9 @@ class EpochResult:
     event_detail: dict[str, Any] = field(default_factory=dict)
     #: The points BIC and AIC were computed on: frames, or a binned method's bins.
     bic_n_points: int | None = None
+    #: How the table's times became BMJD_TDB at mid-exposure (:mod:`eclipsebench.astro.timescales`);
+    #: None for a table already in BMJD_TDB.
+    time_conversion: str | None = None
 
     def __post_init__(self) -> None:
         # plain JSON types (tuples as lists, numpy scalars as numbers), so that a result
@@ -220,6 +223,8 @@ class EpochResult:
                     "depth_err_own_ppm": dict(self.depth_err_own_ppm),
                     "bic_n_points": self.bic_n_points, "eclipsebench_version": __version__})
         out["bic_data"] = bic_data(out)
+        if self.time_conversion is not None:
+            out["time_conversion"] = self.time_conversion
         return out
 
     def lightcurve_table(self) -> Table:

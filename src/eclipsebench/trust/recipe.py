@@ -115,7 +115,11 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     gain, gain_text, gain_fit = twin_gain(obs, pmap)
     lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, gain=gain)
-    peak, calibration = calibrate_motion(recipe, options)
+    if np.isfinite(obs.noise_pixels[obs.good]).any():
+        peak, calibration = calibrate_motion(recipe, options)
+    else:   # another pipeline's table without noise pixels: nothing to calibrate on
+        peak, calibration = 0.0, {"noise_pixels_real": None, "rms_per_peak": 0.0,
+                                  "target_vs_grid": "no noise pixels in the table"}
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
             "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),

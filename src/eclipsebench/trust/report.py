@@ -23,31 +23,41 @@ from ..photometry.table import read_table
 from .layout import TrustLayout
 from .score import (
     DISTINGUISHABLE_AT,
+    RECOMMEND_DRAWS,
     REDDER_THAN,
     mse_excess_sigma,
     near_equals,
     observation_statistics,
+    quote,
+    ranking_resolution,
     recommend,
+    recommendation_frequency,
     red_noise_check,
     score_methods,
+    timing_score,
 )
 
-__all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS"]
+__all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS", "ECSV_TIME_COLUMNS",
+           "table_provenance", "ranking_text"]
 
 #: The per-method columns of ``trust.ecsv`` (ppm unless dimensionless).
 ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "coverage_1sigma",
                 "coverage_2sigma", "depth_ppm", "depth_err_ppm", "honest_err_ppm", "n_twins",
-                "beta_red_real", "beta_red_twins_below")
+                "beta_red_real", "beta_red_twins_below", "recommended_frequency")
+#: The mid-event time's columns of ``trust.ecsv`` (seconds), where the fits freed it.
+ECSV_TIME_COLUMNS = ("t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_z_rms",
+                     "t_coverage_1sigma", "t_err_s", "t_honest_err_s")
 
 
 def _load(path: Path) -> dict[str, Any]:
     return json.loads(Path(path).read_text())
 
 
-def collect(root: Path, methods: Sequence[str], n_twins: int
+def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "eclipse"
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
-    """Real results, twin ``(depths, errors, beta_red, twin numbers)`` per method, skipped
-    methods, failed twins."""
+    """Real results, twin ``(depths, errors, beta_red, twin numbers, mid-event times, their
+    errors)`` per method (times in BMJD_TDB and days), skipped methods, failed twins."""
+    when = "t_transit" if event == "transit" else "t_ecl"
     layout = TrustLayout(Path(root))
     real: dict = {}
     twins: dict = {}
@@ -59,7 +69,7 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
             skipped[m] = data["error"]
             continue
         real[m] = data
-        d, e, b, n = [], [], [], []
+        d, e, b, n, t, te = [], [], [], [], [], []
         for i in range(1, n_twins + 1):
             res = _load(layout.twin_result(m, i))
             if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
@@ -69,11 +79,13 @@ def collect(root: Path, methods: Sequence[str], n_twins: int
             e.append(res["depth_err_ppm"])
             b.append(np.nan if res.get("beta_red") is None else res["beta_red"])
             n.append(i)
+            t.append(np.nan if res.get(f"{when}_bmjd") is None else res[f"{when}_bmjd"])
+            te.append(np.nan if res.get(f"{when}_err_d") is None else res[f"{when}_err_d"])
         if len(d) < 2:
             skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
             del real[m]
             continue
-        twins[m] = (d, e, b, n)
+        twins[m] = (d, e, b, n, t, te)
     return real, twins, skipped, failed
 
 
@@ -96,7 +108,23 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
         for m, s in scores.items():
             s["mse_excess_sigma"] = (0.0 if m == best
                                      else mse_excess_sigma(resid[m], resid[best]))
-    return {"methods": scores, "skipped": dict(skipped), "recommended": best,
+    errors = {m: dict(zip(t[3], np.asarray(t[1], float), strict=True))
+              for m, t in twins.items()}
+    frequency = recommendation_frequency(resid, errors, seed=int(settings["seed"]))
+    for m, s in scores.items():
+        s["recommended_frequency"] = frequency.get(m, float("nan"))
+    when = "t_transit" if settings["reduce"]["event"] == "transit" else "t_ecl"
+    for m, s in scores.items():
+        timing = timing_score(twins[m][4], twins[m][5], float(recipe["t_event_bmjd"]),
+                              real[m].get(f"{when}_bmjd", np.nan),
+                              np.nan if real[m].get(f"{when}_err_d") is None
+                              else real[m][f"{when}_err_d"])
+        if timing is not None:
+            s.update(timing)
+    return {"quote": quote(scores, best), "methods": scores, "skipped": dict(skipped),
+            "recommended": best, "recommended_frequency": frequency,
+            "ranking": ranking_resolution(scores, resid, best, int(settings["n_twins"]),
+                                          frequency),
             "recommended_because": why, "near_equals": near_equals(scores, resid, best),
             "n_twins": int(settings["n_twins"]),
             "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],
@@ -107,6 +135,39 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
             "eclipsebench_version": __version__}
 
 
+def table_provenance(meta: Mapping[str, Any]) -> dict[str, Any]:
+    """What the real table's metadata say of where it came from: another pipeline's table
+    (``source_table``), what was inferred to twin it (``inferred``: :func:`~eclipsebench.
+    trust.observation.complete_table`), how its times were converted (``time_conversion``)."""
+    out: dict[str, Any] = {}
+    if meta.get("SOURCE"):
+        out["source_table"] = str(meta["SOURCE"])
+    if meta.get("INFERRED"):
+        out["inferred"] = json.loads(meta["INFERRED"])
+    if meta.get("TIMECONV"):
+        out["time_conversion"] = str(meta["TIMECONV"])
+    return out
+
+
+def _noise_pixels_text(twins: Mapping[str, Any]) -> str:
+    real = (twins.get("calibration") or {}).get("noise_pixels_real")
+    return ("no noise pixels in the table: not calibrated" if real is None
+            else f"median noise pixels {real:.2f} real")
+
+
+def _provenance_html(summary: Mapping[str, Any]) -> str:
+    esc = html.escape
+    parts = []
+    if summary.get("source_table"):
+        parts.append(f"<p>Another pipeline's table, {esc(summary['source_table'])}, completed "
+                     f"for the twins as {esc(summary['table'])}. Inferred:</p><ul>"
+                     + "".join(f"<li>{esc(k)}: {esc(str(v))}</li>"
+                               for k, v in (summary.get("inferred") or {}).items()) + "</ul>")
+    if summary.get("time_conversion"):
+        parts.append(f"<p>Times: {esc(summary['time_conversion'])}.</p>")
+    return "".join(parts)
+
+
 def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
     methods = list(summary["methods"])
     table = Table({"method": methods})
@@ -114,7 +175,13 @@ def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
         table[col] = [summary["methods"][m][col] for m in methods]
         if col.endswith("_ppm"):
             table[col].unit = "ppm"
-    table.meta.update({"recommended": summary["recommended"], "n_twins": summary["n_twins"],
+    for col in ECSV_TIME_COLUMNS:
+        table[col] = [summary["methods"][m].get(col, np.nan) for m in methods]
+        if col.endswith("_s"):
+            table[col].unit = "s"
+    table.meta.update({"quote": summary["quote"]["text"],
+                       "ranking": summary["ranking"]["text"],
+                       "recommended": summary["recommended"], "n_twins": summary["n_twins"],
                        "twin_depth_ppm": summary["twin_depth_ppm"], "system": summary["system"],
                        "table": summary["table"]})
     with atomic_path(path) as tmp:
@@ -197,6 +264,8 @@ def _figure_twin(real_table, twin_table, path: Path) -> None:
         good = np.asarray(t["flag"]) == 0
         time = np.asarray(t["time_bmjd"])[good]
         for ax, col in zip(axes, ("flux", "x", "y", "noise_pixels"), strict=True):
+            if col not in t.colnames:   # another pipeline's table without noise pixels
+                continue
             v = np.asarray(t[col], float)[good]
             tb, vb = _binned(time, v / np.median(v) if col == "flux" else v, 5.0 / 1440)
             ax.plot(tb, vb, ".", ms=3, color=color, label=label)
@@ -211,6 +280,26 @@ def _figure_twin(real_table, twin_table, path: Path) -> None:
     plt.close(fig)
 
 
+def _html_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    esc = html.escape
+    return ("<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>" + "".join(
+        "<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows) + "</table>")
+
+
+def ranking_text(summary: Mapping[str, Any]) -> str:
+    """The ranking's verdict with the bootstrap frequencies, for stdout and the page."""
+    freq = summary.get("recommended_frequency") or {}
+    shown = ", ".join(f"{m} {100 * f:.0f} %" for m, f in sorted(
+        freq.items(), key=lambda kv: -kv[1]) if f > 0)
+    return summary["ranking"]["text"] + (f"; recommended in bootstrap resamples of the twins: "
+                                         f"{shown}" if shown else "")
+
+
+def _none_text(summary: Mapping[str, Any]) -> str:
+    f = (summary.get("recommended_frequency") or {}).get("none")
+    return "n/a" if f is None else f"{100 * f:.0f} %"
+
+
 def _near_equals_text(summary: Mapping[str, Any]) -> str:
     """The sentence naming the methods the twins cannot tell from the recommended one."""
     near = summary.get("near_equals") or []
@@ -223,7 +312,8 @@ def _near_equals_text(summary: Mapping[str, Any]) -> str:
 def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
     esc = html.escape
     head = ["method", "depth (ppm)", "honest error (ppm)", "bias (ppm)", "SD (ppm)",
-            "RMSE (ppm)", "mean error (ppm)", "z_rms", "1-sigma coverage", "2-sigma coverage"]
+            "RMSE (ppm)", "mean error (ppm)", "z_rms", "1-sigma coverage", "2-sigma coverage",
+            "recommended in (bootstrap)"]
     rows = []
     for m, s in summary["methods"].items():
         lo, hi = s["coverage_1sigma_interval"]
@@ -231,9 +321,21 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
                      f"{s['bias_ppm']:.1f}", f"{s['sd_ppm']:.1f}", f"{s['rmse_ppm']:.1f}",
                      f"{s['mean_err_ppm']:.1f}", f"{s['z_rms']:.2f}",
                      f"{s['coverage_1sigma']:.2f} ({lo:.2f}-{hi:.2f})",
-                     f"{s['coverage_2sigma']:.2f}"])
-    table = "<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>" + "".join(
-        "<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows) + "</table>"
+                     f"{s['coverage_2sigma']:.2f}",
+                     f"{100 * s.get('recommended_frequency', float('nan')):.0f} %"])
+    table = _html_table(head, rows)
+    timed = [(m, s) for m, s in summary["methods"].items() if "t_rmse_s" in s]
+    timing = ("<h2>The mid-event time</h2><p>Over the twins whose fit freed it: the "
+              "injected time's bias, scatter and coverage, and an honest error on the real "
+              "time (its reported error times max(1, z_rms)).</p>" + _html_table(
+                  ["method", "real time (BMJD_TDB)", "error (s)", "honest error (s)",
+                   "bias (s)", "SD (s)", "RMSE (s)", "mean error (s)", "z_rms",
+                   "1-sigma coverage"],
+                  [[m, f"{s['t_event_bmjd']:.6f}", f"{s['t_err_s']:.1f}",
+                    f"{s['t_honest_err_s']:.1f}", f"{s['t_bias_s']:.1f}", f"{s['t_sd_s']:.1f}",
+                    f"{s['t_rmse_s']:.1f}", f"{s['t_mean_err_s']:.1f}", f"{s['t_z_rms']:.2f}",
+                    f"{s['t_coverage_1sigma']:.2f}"] for m, s in timed])
+              if timed else "")
     skipped = "".join(f"<li>{esc(m)}: {esc(r)}</li>" for m, r in summary["skipped"].items())
     like = summary.get("resemblance", {})
     resemblance = "".join(
@@ -250,18 +352,22 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
             f"1100px;margin:auto}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}"
             f"img{{max-width:100%}}</style></head><body>"
             f"<h1>How far to trust the depth of {esc(summary['system'])}</h1>"
+            f"<p style='font-size:130%'><b>Quote: {esc(summary['quote']['text'])}</b></p>"
+            f"<p><b>{esc(ranking_text(summary))}</b></p>"
             f"<p>{esc(summary['table'])}: {summary['n_twins']} twins with a "
             f"{summary['twin_depth_ppm']:.1f} ppm {esc(str(tw['event']))} (the real depth of "
             f"{esc(str(tw['from_method']))}), reduced like the real table ({esc(summary['profile'])}"
             f" profile, sampler {esc(summary['sampler'])}). Recommended: <b>"
             f"{esc(str(summary['recommended']))}</b> ({esc(summary['recommended_because'])})."
             f"{esc(_near_equals_text(summary))}</p>"
-            f"{table}<p>Honest error: the reported error times max(1, z_rms). Twins: motion "
+            f"{table}<p>Honest error: the reported error times max(1, z_rms). Recommended in: "
+            f"how often each method would be recommended over {RECOMMEND_DRAWS} bootstrap "
+            f"resamples of the twins (none: {_none_text(summary)}). Twins: motion "
             f"within an exposure {tw['motion_rms_px']:.3f} px rms, the simulator's jitter with "
-            f"a peak of {tw['motion_peak_px']:.3f} px per 131-s block (median noise pixels "
-            f"{tw['calibration']['noise_pixels_real']:.2f} real); gain: "
-            f"{esc(tw['gain_model'])}.</p>" + caution
-            + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
+            f"a peak of {tw['motion_peak_px']:.3f} px per 131-s block ({_noise_pixels_text(tw)});"
+            f" gain: "
+            f"{esc(tw['gain_model'])}.</p>" + _provenance_html(summary) + caution
+            + timing + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
             + ("<h2>The real observation and twin 1</h2><table><tr><th>good frames</th>"
                f"<th>real</th><th>twin 1</th></tr>{resemblance}</table>" if resemblance else "")
             + "".join(f"<p><img src='{esc(f)}' alt='{esc(f)}'></p>" for f in figures)
@@ -272,13 +378,15 @@ def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -
     """Write the report, ``trust.ecsv``, then ``trust.json`` (the engine's outputs, in order)."""
     layout = TrustLayout(Path(root))
     recipe = json.loads(layout.recipe_json.read_text())
-    real, twins, skipped, failed = collect(layout.root, methods, int(settings["n_twins"]))
+    real, twins, skipped, failed = collect(layout.root, methods, int(settings["n_twins"]),
+                                           settings["reduce"]["event"])
     skipped = {**{m: json.loads(layout.real(m).read_text())["error"]
                   for m in settings["methods"] if m not in methods}, **skipped}
     summary = trust_summary(settings, recipe, real, twins, skipped, failed)
     real_table, twin = read_table(settings["table"]), read_table(layout.twin(1))
     summary["resemblance"] = {"real": observation_statistics(real_table),
                               "twin_001": observation_statistics(twin)}
+    summary.update(table_provenance(real_table.meta))
     folder = layout.report.parent
     folder.mkdir(parents=True, exist_ok=True)
     figures = ["depths.png", "z_scores.png", "twin.png"]

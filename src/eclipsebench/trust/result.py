@@ -25,19 +25,23 @@ __all__ = ["TrustResult", "read_trust"]
 _PPM_UNIT = u.def_unit("ppm", 1e-6 * u.dimensionless_unscaled)
 _PPM = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "depth_ppm", "depth_err_ppm",
         "honest_err_ppm")
+_SECONDS = ("t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_err_s", "t_honest_err_s")
 
 
 class TrustResult(dict):
     """``trust.json``'s content (a dict) with a notebook face.
 
-    The headline is the recommended method's real depth with its honest
-    error; ``to_table()`` gives every method's statistics.
+    The headline is the line to quote (the recommended method's real depth
+    with its honest error) and whether the twins rank the methods;
+    ``to_table()`` gives every method's statistics (the mid-event time's in s).
     """
 
     def _fields(self) -> dict[str, Any]:
         best = self.get("recommended")
         row = self.get("methods", {}).get(best, {}) if best else {}
-        return {"method": f"{best} (recommended)" if best else "none recommended",
+        return {"quote": (self.get("quote") or {}).get("text"),
+                "ranking": (self.get("ranking") or {}).get("text"),
+                "method": f"{best} (recommended)" if best else "none recommended",
                 "near_equals": ", ".join(self.get("near_equals") or []) or "none",
                 "system": self.get("system"), "profile": self.get("profile"),
                 "depth_ppm": row.get("depth_ppm"), "depth_err_ppm": row.get("honest_err_ppm"),
@@ -57,9 +61,13 @@ class TrustResult(dict):
         methods = list(self.get("methods", {}))
         table = QTable({"method": methods})
         for key in ("n_twins", *_PPM, "z_rms", "coverage_1sigma", "coverage_2sigma",
-                    "beta_red_real", "beta_red_twins_below"):
+                    "beta_red_real", "beta_red_twins_below", "recommended_frequency"):
             values = [self["methods"][m].get(key) for m in methods]
             table[key] = u.Quantity(values, _PPM_UNIT) if key in _PPM else values
+        for key in _SECONDS:   # the mid-event time, where the fits freed it
+            values = [self["methods"][m].get(key, float("nan")) for m in methods]
+            if any(v == v for v in values):
+                table[key] = u.Quantity(values, u.s)
         table.meta.update({"recommended": self.get("recommended"),
                            "twin_depth_ppm": self.get("twin_depth_ppm")})
         return table

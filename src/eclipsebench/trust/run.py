@@ -45,6 +45,7 @@ from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
 from .layout import TrustLayout
+from .observation import OBSERVATION_FILE
 from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
 from .report import score_task
 from .result import TrustResult, read_trust
@@ -335,7 +336,8 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
     with run_lock(layout.lock):
         ours = _written_by_trust(layout)
         if not layout.config.is_file():   # a new folder: only what this run makes is ours
-            ours = [p for p in ours if not os.path.lexists(p)]
+            adopted = layout.root / OBSERVATION_FILE   # another pipeline's table, completed
+            ours = [p for p in ours if not os.path.lexists(p)] + [adopted]
         claim(layout.root, "trust", settings.inputs, legacy_ok=False)
         _guard(settings, layout)
         try:

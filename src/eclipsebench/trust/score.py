@@ -36,11 +36,22 @@ from typing import Any
 
 import numpy as np
 
+from ..limits import MAX_TWINS
 from ..photometry.binning import bin_indices, bin_values
-from ..stats.ensemble import GAUSS_1SIGMA, coverage
+from ..seeding import rng
+from ..stats.ensemble import GAUSS_1SIGMA, binomial_interval, coverage
 
 __all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "REDDER_THAN",
-           "observation_statistics", "mse_excess_sigma", "near_equals", "DISTINGUISHABLE_AT"]
+           "observation_statistics", "mse_excess_sigma", "near_equals", "DISTINGUISHABLE_AT",
+           "recommendation_frequency", "ranking_resolution", "RECOMMEND_DRAWS", "RESOLVED_AT",
+           "timing_score",
+           "quote"]
+
+#: Bootstrap resamples of the twins behind the recommendation frequencies.
+RECOMMEND_DRAWS = 2000
+#: The recommendation is resolved when the bootstrap makes it in at least this fraction of
+#: the resamples (and the paired test separates it: :func:`ranking_resolution`).
+RESOLVED_AT = 0.9
 
 #: The real residuals are flagged redder than the twins' when their ``beta_red`` exceeds
 #: this fraction of the twins' (a one-sided test at 5 %).
@@ -157,6 +168,193 @@ def near_equals(scores: Mapping[str, Mapping[str, Any]],
     return out
 
 
+def recommendation_frequency(resid_ppm: Mapping[str, Mapping[int, float]],
+                             err_ppm: Mapping[str, Mapping[int, float]], *, seed: int = 0,
+                             n_draws: int = RECOMMEND_DRAWS) -> dict[str, float]:
+    """How often each method would be recommended, over bootstrap resamples of the twins.
+
+    The twins every method reduced are resampled with replacement
+    (``rng(seed, "trust", "recommend")``); on each resample :func:`recommend`'s
+    rule is applied as it is (the lowest RMSE among the methods whose 1-sigma
+    coverage interval contains 68.3 %). A frequency near 1 is a recommendation
+    the twins hold to; several methods near equal frequencies are a choice
+    among near equals. ``"none"`` counts the resamples with no method
+    recommended. Empty with fewer than 3 common twins.
+
+    Examples
+    --------
+    >>> a = {i: (0.5 if i <= 14 else 2.0) * (-1) ** i for i in range(1, 21)}
+    >>> resid = {"a": a, "b": {i: 1.2 * r for i, r in a.items()}}   # b: 20 % worse throughout
+    >>> err = {"a": dict.fromkeys(a, 1.5), "b": dict.fromkeys(a, 1.8)}
+    >>> recommendation_frequency(resid, err)   # "none": resamples whose coverage is off
+    {'a': 0.783, 'b': 0.0, 'none': 0.217}
+    """
+    methods = sorted(resid_ppm)
+    if not methods:
+        return {}
+    common = sorted(set.intersection(*(set(resid_ppm[m]) & set(err_ppm[m]) for m in methods)))
+    n = len(common)
+    if n < 3:
+        return {}
+    draws = rng(seed, "trust", "recommend").integers(0, n, size=(n_draws, n))
+    honest_count = np.array([binomial_interval(k, n, 0.68)[0] <= GAUSS_1SIGMA
+                             <= binomial_interval(k, n, 0.68)[1] for k in range(n + 1)])
+    rmse = np.empty((len(methods), n_draws))
+    honest = np.empty((len(methods), n_draws), dtype=bool)
+    for j, m in enumerate(methods):
+        r = np.array([resid_ppm[m][i] for i in common], float)
+        e = np.array([err_ppm[m][i] for i in common], float)
+        covered = (np.abs(r) <= e)[draws].sum(axis=1)
+        honest[j] = honest_count[covered]
+        rmse[j] = np.sqrt(np.mean((r**2)[draws], axis=1))
+    ranked = np.where(honest, rmse, np.inf)
+    best = np.argmin(ranked, axis=0)    # ties: the first by name, as recommend's rule
+    none = ~honest.any(axis=0)
+    out = {m: float(np.mean((best == j) & ~none)) for j, m in enumerate(methods)}
+    out["none"] = float(np.mean(none))
+    return out
+
+
+def _twins_for(z: float, n: int) -> float:
+    """Twins for a statistic ``z`` at ``n`` twins to reach :data:`DISTINGUISHABLE_AT`, if it
+    grows as the square root of the twins (infinite for ``z <= 0``)."""
+    return n * (DISTINGUISHABLE_AT / z) ** 2 if z > 0 else float("inf")
+
+
+def _coverage_z(p: float, n: int) -> float:
+    """How many binomial standard errors the 1-sigma coverage ``p`` of ``n`` twins lies from
+    68.3 % (the coverage verdict of :func:`recommend`)."""
+    q = min(max(p, 0.5 / n), 1.0 - 0.5 / n)
+    return abs(p - GAUSS_1SIGMA) / np.sqrt(q * (1.0 - q) / n)
+
+
+def ranking_resolution(scores: Mapping[str, Mapping[str, Any]],
+                       resid_ppm: Mapping[str, Mapping[int, float]], best: str | None,
+                       n_twins: int, frequency: Mapping[str, float] | None = None
+                       ) -> dict[str, Any]:
+    """Whether the twins run settle the recommendation, and if not about how many twins would.
+
+    Resolved when the bootstrap recommends ``best`` in at least
+    :data:`RESOLVED_AT` of the resamples (:func:`recommendation_frequency`)
+    and the paired test (:func:`mse_excess_sigma`) puts every other
+    coverage-consistent method at least :data:`DISTINGUISHABLE_AT` standard
+    errors behind it. Otherwise the verdicts that decide between ``best`` and
+    its contenders (the methods recommended in at least 5 % of the
+    resamples, or within the paired test's reach): the paired test against
+    each coverage-consistent contender, and for a contender whose coverage
+    was found inconsistent, how far its 1-sigma coverage lies from 68.3 % in
+    binomial standard errors. Each such statistic ``z`` grows as the square
+    root of the twins, so reaching :data:`DISTINGUISHABLE_AT` takes about
+    ``n (DISTINGUISHABLE_AT / z)^2`` twins; the largest is
+    ``twins_to_resolve`` (None beyond
+    :data:`~eclipsebench.limits.MAX_TWINS`: equal to the twins' precision).
+    An estimate: the statistics are themselves measured on ``n`` twins.
+
+    Examples
+    --------
+    >>> scores = {m: {"coverage_1sigma_interval": [0.6, 0.8], "coverage_1sigma": 0.7}
+    ...           for m in "ab"}
+    >>> resid = {"a": {i: 1.0 + 0.1 * (i % 3) for i in range(10)},
+    ...          "b": {i: 1.05 + 0.1 * ((i + 1) % 3) for i in range(10)}}
+    >>> r = ranking_resolution(scores, resid, "a", 10, {"a": 0.6, "b": 0.4, "none": 0.0})
+    >>> r["resolved"], r["twins_to_resolve"], r["text"][:27]
+    (False, 24, 'too few twins to rank: run ')
+    """
+    frequency = dict(frequency or {})
+    if best is None:
+        return {"resolved": False, "twins_to_resolve": None, "excess_sigma": {},
+                "text": "no method recommended, so nothing to rank"}
+
+    def consistent(m):
+        lo, hi = scores[m]["coverage_1sigma_interval"]
+        return lo <= GAUSS_1SIGMA <= hi
+
+    others = [m for m in scores if m != best and consistent(m)]
+    excess = {m: mse_excess_sigma(resid_ppm[m], resid_ppm[best]) for m in others}
+    share = frequency.get(best, 1.0)
+    if share >= RESOLVED_AT and all(z >= DISTINGUISHABLE_AT for z in excess.values()):
+        text = (f"ranking resolved: {best} in {100 * share:.0f} % of bootstrap resamples, "
+                + (f"every other coverage-consistent method at least {DISTINGUISHABLE_AT:g} "
+                   "paired standard errors behind" if others
+                   else "the only coverage-consistent method"))
+        return {"resolved": True, "twins_to_resolve": None, "excess_sigma": excess,
+                "text": text}
+    contenders = [m for m, f in frequency.items() if m not in (best, "none") and f >= 0.05]
+    contenders += [m for m, z in excess.items() if z < DISTINGUISHABLE_AT and m not in contenders]
+    needed = [_twins_for(excess[m], n_twins) for m in contenders if m in excess]
+    coverage_of = [m for m in contenders if m in scores and not consistent(m)]
+    needed += [_twins_for(_coverage_z(scores[m]["coverage_1sigma"], n_twins), n_twins)
+               for m in coverage_of]
+    most = max(needed, default=float("nan"))
+    rivals = ", ".join(sorted(contenders)) or "no method"
+    if np.isfinite(most) and n_twins < most <= MAX_TWINS:
+        n = int(np.ceil(most))
+        text = (f"too few twins to rank: run --twins {n} ({best} is recommended in "
+                f"{100 * share:.0f} % of bootstrap resamples; against {rivals}, the paired test "
+                "and the coverage verdicts grow as the square root of the twins)")
+        return {"resolved": False, "twins_to_resolve": n, "excess_sigma": excess, "text": text}
+    if np.isfinite(most) and most <= n_twins:
+        text = (f"ranking not resolved: {best} is recommended in {100 * share:.0f} % of "
+                f"bootstrap resamples, against {rivals} (each verdict is decided at "
+                f"{n_twins} twins, but the choice between them is not)")
+        return {"resolved": False, "twins_to_resolve": None, "excess_sigma": excess, "text": text}
+    text = (f"the twins cannot rank {best} and {rivals}: equal to the twins' precision (more "
+            f"than {MAX_TWINS} twins would be needed)")
+    return {"resolved": False, "twins_to_resolve": None, "excess_sigma": excess, "text": text}
+
+
+def timing_score(t_bmjd: Sequence[float], t_err_d: Sequence[float], truth_bmjd: float,
+                 real_t_bmjd: float, real_t_err_d: float) -> dict[str, Any] | None:
+    """The mid-event time's statistics over the twins, in seconds, and an honest timing error.
+
+    Only twins whose fit freed the time (a finite error > 0) count; None when
+    fewer than 3 did (the time was fixed). ``t_bias_s``, ``t_sd_s``,
+    ``t_rmse_s``: the twins' times minus the injected one; ``t_mean_err_s``,
+    ``t_z_rms``, ``t_coverage_1sigma`` (+ interval): as for the depth;
+    ``t_event_bmjd``, ``t_err_s``: the real fit's time and its error;
+    ``t_honest_err_s``: that error times ``max(1, t_z_rms)``.
+
+    Examples
+    --------
+    >>> s = timing_score([1.0 + 10 / 86400, 1.0 - 10 / 86400, 1.0 + 20 / 86400],
+    ...                  [15 / 86400] * 3, 1.0, 1.0, 15 / 86400)
+    >>> round(s["t_rmse_s"], 1), round(s["t_honest_err_s"], 1)
+    (14.1, 15.0)
+    """
+    t = np.asarray(t_bmjd, float)
+    e = np.asarray(t_err_d, float)
+    ok = np.isfinite(t) & np.isfinite(e) & (e > 0)
+    if ok.sum() < 3:
+        return None
+    seconds = 86400.0
+    score = method_score(t[ok] * seconds, e[ok] * seconds, float(truth_bmjd) * seconds)
+    err_s = float(real_t_err_d) * seconds
+    return {"t_n_twins": score["n_twins"], "t_bias_s": score["bias_ppm"],
+            "t_sd_s": score["sd_ppm"], "t_rmse_s": score["rmse_ppm"],
+            "t_mean_err_s": score["mean_err_ppm"], "t_z_rms": score["z_rms"],
+            "t_coverage_1sigma": score["coverage_1sigma"],
+            "t_coverage_1sigma_interval": score["coverage_1sigma_interval"],
+            "t_event_bmjd": float(real_t_bmjd), "t_err_s": err_s,
+            "t_honest_err_s": err_s * max(1.0, score["z_rms"])}
+
+
+def quote(scores: Mapping[str, Mapping[str, Any]], best: str | None) -> dict[str, Any]:
+    """The line a user should quote: the recommended method's real depth and honest error.
+
+    Examples
+    --------
+    >>> quote({"bliss": {"depth_ppm": 1801.7, "honest_err_ppm": 95.26}}, "bliss")["text"]
+    'bliss: depth 1801.7 +- 95.3 ppm (honest error)'
+    """
+    if best is None:
+        return {"method": None, "depth_ppm": None, "honest_err_ppm": None,
+                "text": "no method recommended: no depth to quote without its cautions"}
+    s = scores[best]
+    return {"method": best, "depth_ppm": s["depth_ppm"], "honest_err_ppm": s["honest_err_ppm"],
+            "text": f"{best}: depth {s['depth_ppm']:.1f} +- {s['honest_err_ppm']:.1f} ppm "
+                    "(honest error)"}
+
+
 def score_methods(twin_depths: Mapping[str, tuple[Sequence[float], Sequence[float]]],
                   real: Mapping[str, Mapping[str, float]], truth_ppm: float
                   ) -> dict[str, dict[str, Any]]:
@@ -209,13 +407,15 @@ def observation_statistics(table) -> dict[str, float]:
 
     The median noise pixels, the centroid rms in x and y (px) and the raw
     flux rms in 5-minute bins (relative, ppm): ``docs/trust.md``,
-    "Validation".
+    "Validation". A table without noise pixels gives NaN for them.
     """
     good = np.asarray(table["flag"]) == 0
     flux = np.asarray(table["flux"], float)[good]
     bins = bin_indices(np.asarray(table["time_bmjd"])[good], width_days=5.0 / 1440.0)
     binned, _ = bin_values(flux, bins)
-    return {"noise_pixels_median": float(np.median(np.asarray(table["noise_pixels"])[good])),
+    noise_pixels = (np.asarray(table["noise_pixels"], float)[good]
+                    if "noise_pixels" in table.colnames else np.array([np.nan]))
+    return {"noise_pixels_median": float(np.median(noise_pixels)),
             "x_rms_px": float(np.std(np.asarray(table["x"], float)[good])),
             "y_rms_px": float(np.std(np.asarray(table["y"], float)[good])),
             "flux_rms_5min_ppm": float(np.std(binned / np.median(binned)) * 1e6)}
