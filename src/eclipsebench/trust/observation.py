@@ -544,6 +544,10 @@ def trust_settings(table, root, *, columns: Mapping[str, str] | None = None,
     from ..photometry.table import write_photometry
     from .run import make_settings
 
+    from ..io.pmap_files import check_pmap_path
+
+    if settings.get("pmap") not in (None, ""):   # a device or a FIFO: refused before the table
+        check_pmap_path(settings["pmap"])
     path = Path(table)
     if not path.is_file():
         raise InputError(f"{path}: no such photometry table")
