@@ -369,10 +369,11 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     for rows in obs.aors():
         window = None if whole_frame else photometry_window(x_track[rows], y_track[rows],
                                                             options, model.shape)
+        # no jitter (A_fbm 0): no offsets to draw, and no moments to take of zeros
         frames = np.concatenate([
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
-                             motion=motion.offsets(cube), noise_model=noise_model, star=star,
-                             window=window)
+                             motion=motion.offsets(cube) if motion.peak_px > 0 else None,
+                             noise_model=noise_model, star=star, window=window)
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options, window))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
