@@ -12,6 +12,15 @@ Three parts (``--part``):
     wall time, and the task seconds of the simulation (recipe + twins) and of
     the reductions. Reference in the same script: one BLISS least-squares
     reduction of the real table (median of 3).
+``window``
+    ``--twins`` twins of real epoch 1 (default 10), each rendered twice with
+    the same seed: only where its photometry reads (``trust``'s way,
+    :func:`~eclipsebench.trust.twin.photometry_window`) and over the whole
+    32 x 32 subarray (the noise draws differ). Per quantity (the
+    resemblance statistics, the mean flux, background, flux error and the
+    flux's frame-to-frame rms over good frames, the number of good frames)
+    the mean over the twins of each way, their difference in standard
+    errors of that difference, and the CPU seconds per twin of each way.
 ``predict``
     ``--epochs`` simulated challenge epochs (physical noise) treated as real:
     each epoch's table gets ``--twins`` twins reduced by BLISS, PLD and
@@ -22,8 +31,8 @@ Three parts (``--part``):
     method's.
 
 Command (what BENCHMARKS.md quotes): ``python bench/bench_trust.py --part
-resemble --twins 4``, ``--part speed``, ``--part predict --epochs 20
---twins 50``.
+resemble --twins 4``, ``--part speed``, ``--part window --twins 10``,
+``--part predict --epochs 20 --twins 50``.
 """
 
 from __future__ import annotations
@@ -87,6 +96,51 @@ def resemble(work: Path, n_twins: int) -> None:
     for key, value in real.items():
         mean = statistics.fmean(t[key] for t in twins)
         print(f"| {key} | {value:.4g} | {mean:.4g} | {mean / value:.3f} |")
+
+
+def window(work: Path, n_twins: int) -> None:
+    import eclipsebench as eb
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.trust.recipe import build_recipe, photometry_options
+    from eclipsebench.trust.score import observation_statistics
+    from eclipsebench.trust.twin import photometry_window, twin_star, twin_table
+
+    path = _real_table(work)
+    fit = eb.reduce(path, "bliss", sampler="leastsq", prayer_bead_shifts=0)
+    recipe, _ = build_recipe(str(path), get_system("XO-3b"), fit.to_dict(), fit.depth_ppm)
+    options = photometry_options(recipe.obs)
+    star = twin_star(recipe, options)
+    x, y = recipe.obs.track_px()
+    print("windows (x0, y0, nx, ny) per AOR: " + ", ".join(
+        str(photometry_window(x[r], y[r], options, (32, 32))) for r in recipe.obs.aors()))
+
+    def stats(table) -> dict[str, float]:
+        good = np.asarray(table["flag"]) == 0
+        flux = np.asarray(table["flux"], float)[good]
+        return {**observation_statistics(table), "flux_mean_e": float(flux.mean()),
+                "flux_rms_frame_ppm": float(np.std(np.diff(flux)) / np.sqrt(2) / flux.mean() * 1e6),
+                "background_mean_e": float(np.mean(np.asarray(table["background"])[good])),
+                "flux_err_mean_e": float(np.mean(np.asarray(table["flux_err"])[good])),
+                "good_frames": float(good.sum())}
+
+    runs: dict[bool, list[dict[str, float]]] = {False: [], True: []}
+    cpu = {False: 0.0, True: 0.0}
+    for i in range(1, n_twins + 1):
+        for whole in (False, True):
+            c0 = time.process_time()
+            table = twin_table(recipe, options, seed=0, twin=i, star=star, whole_frame=whole)
+            cpu[whole] += time.process_time() - c0
+            runs[whole].append(stats(table))
+    print(f"CPU seconds per twin: window {cpu[False] / n_twins:.2f}, whole frame "
+          f"{cpu[True] / n_twins:.2f}; ratio {cpu[True] / cpu[False]:.2f}")
+    print(f"| quantity | window (mean of {n_twins}) | whole frame | difference / its SE |")
+    print("| --- | --- | --- | --- |")
+    for key in runs[False][0]:
+        a = np.array([r[key] for r in runs[False]])
+        b = np.array([r[key] for r in runs[True]])
+        se = np.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size)
+        print(f"| {key} | {a.mean():.6g} | {b.mean():.6g} | "
+              f"{(a.mean() - b.mean()) / se if se > 0 else 0.0:+.2f} |")
 
 
 def speed(work: Path, n_twins: int, workers: int) -> None:
@@ -194,7 +248,7 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
 
 def main(argv: list[str]) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--part", choices=("resemble", "speed", "predict"), default="resemble")
+    p.add_argument("--part", choices=("resemble", "speed", "window", "predict"), default="resemble")
     p.add_argument("--twins", type=int, default=None)
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--workers", type=int, default=2)
@@ -211,6 +265,8 @@ def main(argv: list[str]) -> int:
         resemble(work, args.twins or 4)
     elif args.part == "speed":
         speed(work, args.twins or 50, args.workers)
+    elif args.part == "window":
+        window(work, args.twins or 10)
     else:
         predict(work, args.epochs, args.twins or 10, args.workers)
     return 0

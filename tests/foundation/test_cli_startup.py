@@ -21,7 +21,7 @@ import eclipsebench
 
 #: Packages none of which the parser may import (each costs 0.1-1 s to load).
 HEAVY = ("numba", "astropy", "sklearn", "dask", "distributed", "matplotlib", "numpy", "scipy",
-         "batman", "emcee", "photutils", "tqdm")
+         "batman", "emcee", "photutils", "tqdm", "asyncio", "ssl")
 
 _PROBE = """
 import json, sys

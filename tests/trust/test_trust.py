@@ -22,7 +22,7 @@ from eclipsebench.simulation.render import FrameModel, tick_moments
 from eclipsebench.trust.observation import Observation, observation_from_table
 from eclipsebench.trust.result import read_trust
 from eclipsebench.trust.score import observation_statistics
-from eclipsebench.trust.twin import ExposureMotion, make_recipe, twin_table
+from eclipsebench.trust.twin import TWIN_MODEL, ExposureMotion, make_recipe, twin_table
 
 from ..conftest import simulate_eclipse_epoch
 
@@ -90,6 +90,63 @@ def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
     good = np.asarray(a["flag"]) == 0
     assert np.median(np.abs(np.asarray(a["x"])[good] - obs.x_px[good])) < 0.01
     assert a.meta["TWIN"] == 1 and a.meta["SYSTEM"] == table.meta["SYSTEM"]
+
+
+def test_a_twin_rendered_where_its_photometry_reads_measures_as_the_whole_frame(small_table,
+                                                                               monkeypatch):
+    """Noise-free (the noise draws differ with the pixels drawn), the twin rendered only in
+    its photometry window gives the whole frame's photometry: the same flags, backgrounds,
+    noise pixels and stamps, and centroids and fluxes equal to rounding (the window's
+    coordinates are offset)."""
+    import eclipsebench.trust.twin as twin_module
+    from eclipsebench.trust.twin import photometry_window
+
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    x, y = obs.track_px()
+    window = photometry_window(x, y, PhotometrySection(), (32, 32))
+    assert window[2] * window[3] < 0.5 * 32 * 32
+    part = twin_table(recipe, PhotometrySection(), seed=3, twin=1, noise_model="none")
+    whole = twin_table(recipe, PhotometrySection(), seed=3, twin=1, noise_model="none",
+                       whole_frame=True)
+    assert part.colnames == whole.colnames
+    for name in part.colnames:
+        a, b = np.asarray(part[name]), np.asarray(whole[name])
+        if name.startswith(("x", "y", "flux", "width", "aperture")):
+            np.testing.assert_allclose(a, b, rtol=1e-13, atol=0, err_msg=name)
+        else:
+            assert np.array_equal(a, b, equal_nan=True), name
+    # a window short of what the 7 px annulus reads changes the backgrounds
+    monkeypatch.setattr(twin_module, "read_radius_px", lambda options: 4.0)
+    short = twin_table(recipe, PhotometrySection(), seed=3, twin=1, noise_model="none")
+    assert not np.array_equal(np.asarray(short["background"]), np.asarray(whole["background"]))
+
+
+def test_twin_tasks_share_the_recipe_and_do_not_reread_the_real_table(small_table, tmp_path,
+                                                                       monkeypatch):
+    import eclipsebench.trust.recipe as recipe_module
+    from eclipsebench.trust import run as trust_run
+
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    recipe_module.write_recipe(recipe, {"flux_aperture_e": recipe.flux_aperture_e,
+                                        "x_ref_px": recipe.x_ref_px, "y_ref_px": recipe.y_ref_px,
+                                        "motion_peak_px": 0.0, "gain": None},
+                               tmp_path / "r.npz", tmp_path / "r.json")
+    reads = []
+    real_read = recipe_module.read_table
+    monkeypatch.setattr(recipe_module, "read_table", lambda p: reads.append(p) or real_read(p))
+    settings = trust_run.TrustSettings(table=str(small_table), system=get_system("XO-3b"),
+                                       methods=("poly2",), n_twins=10, seed=3, reduce=None)
+    assert trust_run.twin_batches(12) == [(1, 2, 3, 4, 5), (6, 7, 8, 9, 10), (11, 12)]
+    for batch in trust_run.twin_batches(7):
+        trust_run.twin_task(settings, str(tmp_path / "r.npz"), str(tmp_path / "r.json"), batch,
+                            [str(tmp_path / f"twin_{i:03d}.fits") for i in batch])
+    assert len(reads) <= 1
+    # each table is the twin made alone
+    alone = twin_table(recipe, PhotometrySection(), seed=3, twin=7)
+    assert np.array_equal(np.asarray(read_table(tmp_path / "twin_007.fits")["flux"]),
+                          np.asarray(alone["flux"]))
 
 
 @pytest.mark.parametrize("extra, what", [
@@ -163,7 +220,7 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     assert "other settings" in capsys.readouterr().err
     # and so are twins made another way (a folder from before twin_model 2 lacks the key)
     held = json.loads((one / "trust_config.json").read_text())
-    assert held.pop("twin_model") == 2
+    assert held.pop("twin_model") == TWIN_MODEL
     (one / "trust_config.json").write_text(json.dumps(held, sort_keys=True, indent=1))
     assert main(["trust", str(small_table), "--out", str(one)] + FAST) == 2
     assert "other settings" in capsys.readouterr().err

@@ -24,7 +24,6 @@ they are passed to the ``eclipsebench.dask`` logger at DEBUG level, so
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import logging
 import os
@@ -186,6 +185,8 @@ def check_tls_files(ca_file: str, cert: str, key: str | None) -> None:
 
 async def _handshake(address: str, connection_args: dict[str, Any], timeout_s: float) -> None:
     """Connect to ``address`` and ask for its identity; raise on no answer in ``timeout_s``."""
+    import asyncio  # only to reach a scheduler: every command's parser imports this module
+
     from distributed.comm import connect
 
     async def ask() -> None:
@@ -200,6 +201,8 @@ async def _handshake(address: str, connection_args: dict[str, Any], timeout_s: f
 
 
 def _connect_external(address: str, options: ClusterOptions):
+    import asyncio  # only to reach a scheduler: every command's parser imports this module
+
     from distributed import Client
 
     security = external_security(address, options)

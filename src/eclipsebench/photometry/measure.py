@@ -25,6 +25,7 @@ frames passed in.
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -35,7 +36,7 @@ from ..detector.fowler import fowler_variance
 from . import kernels
 from .estimators import per_frame
 
-__all__ = ["radius_name", "variable_name", "measure_stack", "flux_uncertainty"]
+__all__ = ["radius_name", "variable_name", "measure_stack", "flux_uncertainty", "read_radius_px"]
 
 _CHUNK = 8192  # frames converted to float64 and measured per kernel call
 
@@ -78,6 +79,33 @@ def flux_uncertainty(aperture_sum_e, background_e, area_px, n_annulus, *,
     else:
         raise ValueError(f"read: expected 'pixels' or 'paper', got {read!r}")
     return np.sqrt(var)
+
+
+def read_radius_px(options: PhotometrySection) -> float:
+    """How far (px, pixel centre to point) from a frame's brightest pixel or its centroid
+    :func:`measure_stack` may read a pixel with ``options``.
+
+    The largest of: the annulus (pixel centres within its outer radius); the
+    exact-overlap apertures (any pixel the circle touches: radius plus half a
+    pixel diagonal), the variable ones at their largest, ``a box_px + b``
+    (noise pixels over the ``box_px`` square box cannot exceed its area,
+    by the Cauchy-Schwarz inequality); the centroid box and the 5x5 stamp
+    (their corners); the least-asymmetry window with its search grid. The
+    brightest pixel is searched within ``search_px`` of the guess.
+
+    Examples
+    --------
+    >>> round(read_radius_px(PhotometrySection()), 2)   # the 7 px aperture at beta = 49
+    7.71
+    """
+    opt = options
+    corner = 0.5 * math.sqrt(2.0)
+    radii = [*opt.radii_px, opt.radius_px, *(a * opt.box_px + b for a, b in opt.variable_apertures)]
+    reach = [float(opt.annulus_px[1]), max(radii) + corner, (opt.box_px // 2) * math.sqrt(2.0),
+             2 * math.sqrt(2.0), float(opt.search_px)]
+    if opt.centroid == "lsq-asym":
+        reach.append((kernels.LSQ_GRID_HALF_PX + kernels.LSQ_WINDOW_PX) * math.sqrt(2.0))
+    return max(reach)
 
 
 def measure_stack(frames_e: np.ndarray, *, guess_x, guess_y, stamp_x=None, stamp_y=None,

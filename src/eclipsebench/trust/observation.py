@@ -541,10 +541,9 @@ def trust_settings(table, root, *, columns: Mapping[str, str] | None = None,
     from dataclasses import replace
     from pathlib import Path
 
+    from ..io.pmap_files import check_pmap_path
     from ..photometry.table import write_photometry
     from .run import make_settings
-
-    from ..io.pmap_files import check_pmap_path
 
     if settings.get("pmap") not in (None, ""):   # a device or a FIFO: refused before the table
         check_pmap_path(settings["pmap"])

@@ -14,6 +14,7 @@ random draw derives from the one seed: twin ``i``'s frames from
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import os
 import shutil
@@ -49,9 +50,10 @@ from .observation import OBSERVATION_FILE
 from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
 from .report import score_task
 from .result import TrustResult, read_trust
-from .twin import TWIN_MODEL, twin_table
+from .twin import TWIN_MODEL, TwinRecipe, twin_star, twin_table
 
-__all__ = ["TrustSettings", "make_settings", "run_trust", "MIN_TWINS", "MAX_TWINS"]
+__all__ = ["TrustSettings", "make_settings", "run_trust", "twin_batches", "MIN_TWINS", "MAX_TWINS",
+           "TWINS_PER_TASK"]
 
 #: Fewer twins give no coverage worth quoting (the upper bound is the stated limit).
 MIN_TWINS = 10
@@ -137,12 +139,55 @@ def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: s
     write_recipe(recipe, info, Path(npz_path), Path(json_path))
 
 
-def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twin: int,
-              out_path: str) -> None:
-    """Simulate and measure twin ``twin``; write its photometry table."""
-    recipe, _ = read_recipe(settings.table, Path(npz_path), Path(json_path))
-    table = twin_table(recipe, photometry_options(recipe.obs), seed=settings.seed, twin=twin)
-    write_photometry(table, out_path)
+#: Twins simulated per task: they share the recipe (read once per process) and the star
+#: (its PRF tables and gain, built once per task), and are measured in memory.
+TWINS_PER_TASK = 5
+
+#: The recipe last read in this process: ``(key, recipe)`` (:func:`_recipe`).
+_RECIPE_HELD: list[tuple[tuple, TwinRecipe]] = []
+
+
+def _recipe(table: str, npz_path: str, json_path: str) -> TwinRecipe:
+    """The recipe of ``npz_path``/``json_path`` for ``table``, read once per process.
+
+    The real table is read again only when it is another file (path, inode, size or
+    modification time) or the recipe's bytes changed, so a worker's twin tasks after
+    its first do not reread it.
+    """
+    info = os.stat(table)
+    key = (str(table), info.st_ino, info.st_size, info.st_mtime_ns,
+           hashlib.sha256(Path(npz_path).read_bytes()).hexdigest(),
+           hashlib.sha256(Path(json_path).read_bytes()).hexdigest())
+    if _RECIPE_HELD and _RECIPE_HELD[0][0] == key:
+        return _RECIPE_HELD[0][1]
+    recipe, _ = read_recipe(table, Path(npz_path), Path(json_path))
+    _RECIPE_HELD[:] = [(key, recipe)]
+    return recipe
+
+
+def twin_batches(n_twins: int) -> list[tuple[int, ...]]:
+    """Twins 1 to ``n_twins`` in tasks of :data:`TWINS_PER_TASK` (the last may hold fewer);
+    a batch is the same whatever the number of twins asked once it is whole.
+
+    Examples
+    --------
+    >>> twin_batches(12)
+    [(1, 2, 3, 4, 5), (6, 7, 8, 9, 10), (11, 12)]
+    """
+    return [tuple(range(a, min(a + TWINS_PER_TASK, n_twins + 1)))
+            for a in range(1, n_twins + 1, TWINS_PER_TASK)]
+
+
+def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twins: Sequence[int],
+              out_paths: Sequence[str]) -> None:
+    """Simulate and measure the twins ``twins`` in memory; write their photometry tables
+    (``out_paths``, in order)."""
+    recipe = _recipe(settings.table, npz_path, json_path)
+    options = photometry_options(recipe.obs)
+    star = twin_star(recipe, options)
+    for twin, out in zip(twins, out_paths, strict=True):
+        write_photometry(twin_table(recipe, options, seed=settings.seed, twin=twin, star=star),
+                         out)
 
 
 def shared_options(method: str, real: Mapping[str, Any], asked: Mapping[str, Any]
@@ -209,19 +254,22 @@ def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[st
                    str(layout.recipe_json)), (layout.recipe_json, layout.recipe_npz),
                   (f"real/{first}",), sources=settings.sources)]
     results = []
-    for i in range(1, settings.n_twins + 1):
-        tasks.append(Task(f"twin/{i:03d}", "twin", twin_task,
-                          (settings, str(layout.recipe_npz), str(layout.recipe_json), i,
-                           str(layout.twin(i))), (layout.twin(i),), ("recipe",),
+    for batch in twin_batches(settings.n_twins):
+        made = f"twin/{batch[0]:03d}-{batch[-1]:03d}"
+        tasks.append(Task(made, "twin", twin_task,
+                          (settings, str(layout.recipe_npz), str(layout.recipe_json), batch,
+                           tuple(str(layout.twin(i)) for i in batch)),
+                          tuple(layout.twin(i) for i in batch), ("recipe",),
                           sources=settings.sources))
-        for m in usable:
-            key = f"twin-reduce/{m}/{i:03d}"
-            results.append(key)
-            tasks.append(Task(key, "reduce", twin_reduce_task,
-                              (settings, m, i, str(layout.twin(i)), str(layout.real(m)),
-                               str(layout.twin_result(m, i))), (layout.twin_result(m, i),),
-                              (f"twin/{i:03d}", f"real/{m}"), check=partial(_json_ok, m),
-                              sources=settings.sources))
+        for i in batch:
+            for m in usable:
+                key = f"twin-reduce/{m}/{i:03d}"
+                results.append(key)
+                tasks.append(Task(key, "reduce", twin_reduce_task,
+                                  (settings, m, i, str(layout.twin(i)), str(layout.real(m)),
+                                   str(layout.twin_result(m, i))), (layout.twin_result(m, i),),
+                                  (made, f"real/{m}"), check=partial(_json_ok, m),
+                                  sources=settings.sources))
     tasks.append(Task("score", "score", score_task,
                       (settings.describe(), list(usable), str(layout.root)),
                       (layout.report, layout.table, layout.result),

@@ -26,6 +26,7 @@ twin's table is written.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,7 +43,7 @@ from ..instrument.pointing import (
 )
 from ..instrument.prf import BuiltinPRF, GainPolynomial, load_gainmap_coefficients
 from ..photometry.clean import running_median
-from ..photometry.measure import measure_stack
+from ..photometry.measure import measure_stack, read_radius_px
 from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
@@ -52,12 +53,15 @@ from ..simulation.star import StarImager
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "MOTION_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain"]
+           "calibrate_motion", "photometry_window", "twin_star", "MOTION_GRID_PX", "TWIN_MODEL",
+           "gain_model", "map_gain"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 2 since the motion within an exposure is the
-#: simulator's block-scaled jitter (:class:`ExposureMotion`), 1 before (one rms throughout).
-TWIN_MODEL = 2
+#: otherwise is refused rather than mixed): 3 since only the part of the subarray the
+#: photometry reads is rendered (:func:`photometry_window`: the same photometry, other noise
+#: draws); 2 since the motion within an exposure is the simulator's block-scaled jitter
+#: (:class:`ExposureMotion`), 1 before (one rms throughout).
+TWIN_MODEL = 3
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
@@ -244,19 +248,56 @@ class ExposureMotion:
         return dx - mx[:, None], dy - my[:, None]
 
 
+def photometry_window(x_px: np.ndarray, y_px: np.ndarray, options: PhotometrySection,
+                      shape: tuple[int, int]) -> tuple[int, int, int, int]:
+    """``(x0, y0, nx, ny)``: the part of frames of ``shape`` that the photometry with
+    ``options`` reads when the star is at ``(x_px, y_px)`` (one AOR's track).
+
+    Every pixel within :func:`~eclipsebench.photometry.measure.read_radius_px` of
+    the star's brightest pixel (within one pixel of the nearest pixel centre
+    of each position) or of its centroid, with one more pixel of margin; clipped
+    to the frame. The cosmic-ray rejection of the pixels outside it cannot
+    reach the measurements (it is per pixel), and no twin frame is a fault
+    (:func:`~eclipsebench.photometry.clean.frame_faults`), so rendering only
+    this part gives the photometry the whole frame would
+    (``tests/trust/test_trust.py`` checks it byte for byte on noise-free twins).
+
+    Examples
+    --------
+    >>> photometry_window(np.array([15.1, 15.3]), np.array([14.9]), PhotometrySection(),
+    ...                   (32, 32))
+    (5, 5, 21, 21)
+    """
+    reach = int(np.ceil(read_radius_px(options))) + 2
+    ny, nx = shape
+    x_lo = max(int(np.rint(np.min(x_px))) - reach, 0)
+    x_hi = min(int(np.rint(np.max(x_px))) + reach + 1, nx)
+    y_lo = max(int(np.rint(np.min(y_px))) - reach, 0)
+    y_hi = min(int(np.rint(np.max(y_px))) + reach + 1, ny)
+    return x_lo, y_lo, x_hi - x_lo, y_hi - y_lo
+
+
 def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tuple,
                      motion: tuple[np.ndarray, np.ndarray] | None = None,
                      noise_model: str = "physical", radius_px: float = 2.25,
-                     star: StarImager | None = None) -> np.ndarray:
+                     star: StarImager | None = None,
+                     window: tuple[int, int, int, int] | None = None) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
     ``motion``: the offsets within each exposure about the measured centroid
     (:meth:`ExposureMotion.offsets` of ``rows``); None: none. ``key`` names
     the noise's random streams (``seed``, ``*key``, ``"photon"``/``"read"``),
     one set per cube, so a cube's frames do not depend on the others.
+    ``window``: ``(x0, y0, nx, ny)``, render only that part of the subarray
+    (:func:`photometry_window`; the PRF depends on the sub-pixel phase only,
+    so the pixels are the whole frame's); None: the whole subarray.
     """
     obs = recipe.obs
     model = _frame_model(obs, noise_model)
+    x0, y0 = 0, 0
+    if window is not None:
+        x0, y0 = int(window[0]), int(window[1])
+        model = dataclasses.replace(model, shape=(int(window[3]), int(window[2])))
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
                                                recipe.gain)
     x_track, y_track = obs.track_px()
@@ -265,7 +306,7 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     else:
         dx, dy = motion
     x_off, y_off, moments = tick_moments(dx, dy, model)
-    x_f, y_f = x_track[rows] + x_off, y_track[rows] + y_off
+    x_f, y_f = x_track[rows] - x0 + x_off, y_track[rows] - y0 + y_off
     sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]), model.stamp_px,
                             model.shape)
     basis = star.taylor_basis(x_f, y_f, int(sx0[0]), int(sy0[0]), model.stamp_px)
@@ -281,39 +322,60 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
 
 
 def _measure_aor(recipe: TwinRecipe, rows: np.ndarray, frames: np.ndarray,
-                 options: PhotometrySection) -> dict[str, np.ndarray]:
+                 options: PhotometrySection, window: tuple[int, int, int, int] | None = None
+                 ) -> dict[str, np.ndarray]:
     obs = recipe.obs
+    x_off, y_off = (0, 0) if window is None else (int(window[0]), int(window[1]))
     star = brightest_of_median(frames, obs.frame[rows] != 0)
     star_x, star_y = star if star is not None else (frames.shape[2] // 2, frames.shape[1] // 2)
     stack = AorStack(aorkey=int(obs.aorkey[rows[0]]), frames_e=frames.astype(np.float32),
                      bad_mask=None, time_bmjd=obs.time_bmjd[rows], expid=obs.expid[rows],
                      dce=np.zeros(rows.size, np.int64), frame=obs.frame[rows],
-                     first=obs.frame[rows] == 0, x_off=0, y_off=0, star_x=int(star_x),
+                     first=obs.frame[rows] == 0, x_off=x_off, y_off=y_off, star_x=int(star_x),
                      star_y=int(star_y), fowler=obs.mode.fowler, wait=obs.mode.wait,
                      read_noise_e=obs.read_noise_e, files=[])
     return measure_aor(stack, options, stamp_x=int(star_x), stamp_y=int(star_y))
 
 
+def twin_star(recipe: TwinRecipe, options: PhotometrySection) -> StarImager:
+    """The star every twin of ``recipe`` is rendered with (its PRF tables and gain), built
+    once and shared by the twins of a batch."""
+    return _star(recipe.obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain)
+
+
 def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twin: int,
-               noise_model: str = "physical") -> Table:
+               noise_model: str = "physical", star: StarImager | None = None,
+               whole_frame: bool = False) -> Table:
     """Simulate and measure twin number ``twin``: its photometry table.
 
     The real frames' flags are kept (a frame flagged bad in the observation
     is flagged in every twin, beside what the twin's own photometry flags).
     The table's metadata are the real table's, with ``TWIN`` (its number),
     ``SIMULATE`` true and ``EPOCH`` the twin's number.
+
+    Only the part of the subarray that the photometry reads is rendered
+    (:func:`photometry_window`, per AOR); ``whole_frame`` renders all of it
+    (the same photometry without noise, the same statistics with it; slower).
+    ``star``: the twins' :class:`StarImager` (:func:`twin_star`), when several
+    twins share it.
     """
     obs = recipe.obs
-    star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain)
-    motion = ExposureMotion(obs, _frame_model(obs, noise_model), recipe.motion_peak_px,
+    star = star if star is not None else twin_star(recipe, options)
+    model = _frame_model(obs, noise_model)
+    motion = ExposureMotion(obs, model, recipe.motion_peak_px,
                             rng(seed, "trust", "twin", twin, "motion"))
+    x_track, y_track = obs.track_px()
     parts = []
     for rows in obs.aors():
+        window = None if whole_frame else photometry_window(x_track[rows], y_track[rows],
+                                                            options, model.shape)
+        # no jitter (A_fbm 0): no offsets to draw, and no moments to take of zeros
         frames = np.concatenate([
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
-                             motion=motion.offsets(cube), noise_model=noise_model, star=star)
+                             motion=motion.offsets(cube) if motion.peak_px > 0 else None,
+                             noise_model=noise_model, star=star, window=window)
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
-        parts.append(_measure_aor(recipe, rows, frames, options))
+        parts.append(_measure_aor(recipe, rows, frames, options, window))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
     columns["flag"] = columns["flag"] | obs.flag
     meta = {k: v for k, v in obs.meta.items() if k not in ("FLAGCNT", "FILENAME")}
