@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from astropy.table import Table
 
 from ..astro.catalogue import PlanetSystem
 from ..config.base import to_mapping
@@ -40,7 +41,15 @@ from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
 from .layout import TrustLayout
-from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
+from .recipe import (
+    PILOT_TWIN,
+    build_recipe,
+    photometry_options,
+    pilot_twin,
+    read_recipe,
+    with_real_noise,
+    write_recipe,
+)
 from .report import score_task
 from .result import TrustResult, read_trust
 from .twin import TWIN_MODEL, twin_table
@@ -109,7 +118,8 @@ def real_task(settings: TrustSettings, method: str, out_path: str) -> None:
 
 def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: str,
                 json_path: str) -> None:
-    """The twins' shared recipe from the first method's real fit (and the depth asked for)."""
+    """The twins' shared recipe from the first method's real fit (and the depth asked for),
+    with the real correlated noise a pilot twin reduced by that method lacks."""
     fit = json.loads(Path(real_path).read_text())
     depth = settings.depth_ppm if settings.depth_ppm is not None else float(fit["depth_ppm"])
     if not depth > 0:
@@ -118,6 +128,21 @@ def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: s
     event = settings.reduce.event
     recipe, info = build_recipe(settings.table, settings.system, fit, depth, event,
                                 settings.pmap)
+    # the pilot's residuals at the least-squares solution: no sampling, no prayer bead
+    quick = dataclasses.replace(settings, reduce=dataclasses.replace(
+        settings.reduce, sampler="leastsq", prayer_bead_shifts=0))
+    extra = shared_options(first, fit, settings.method_options.get(first, {}))
+    try:
+        pilot = _reduce(quick, pilot_twin(recipe, seed=settings.seed), first,
+                        seed=spawn_ints(settings.seed, "trust", "reduce")[0], epoch=PILOT_TWIN,
+                        extra_options=extra).lightcurve_table()
+    except InputError as exc:
+        info = {**info, "correlated_noise": {"method": None, "why": f"pilot twin: {exc}"}}
+    else:
+        real = Table.read(Path(real_path).with_suffix(".lc.ecsv"), format="ascii.ecsv")
+        recipe, info = with_real_noise(
+            recipe, info, (np.asarray(real["time_bmjd"], float), np.asarray(real["residual"], float)),
+            (np.asarray(pilot["time_bmjd"], float), np.asarray(pilot["residual"], float)))
     write_recipe(recipe, info, Path(npz_path), Path(json_path))
 
 
