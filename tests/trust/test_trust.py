@@ -163,7 +163,7 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     assert "other settings" in capsys.readouterr().err
     # and so are twins made another way (a folder from before twin_model 2 lacks the key)
     held = json.loads((one / "trust_config.json").read_text())
-    assert held.pop("twin_model") == 2
+    assert held.pop("twin_model") == 3
     (one / "trust_config.json").write_text(json.dumps(held, sort_keys=True, indent=1))
     assert main(["trust", str(small_table), "--out", str(one)] + FAST) == 2
     assert "other settings" in capsys.readouterr().err

@@ -7,17 +7,23 @@ A twin shares with the real observation everything but the noise draw
 - the pointing: the measured centroid of each real frame is the twin's
   exposure-mean position, and the simulator's motion within an exposure
   (its fractional Brownian jitter, paper Appendix A.1, drawn as the
-  challenge simulator draws it: :class:`ExposureMotion`) is added with an
-  amplitude chosen so that the twins' median noise pixels match the real
-  ones (:func:`calibrate_motion`);
+  challenge simulator draws it: :class:`ExposureMotion`) is added;
+- the PSF's width: the builtin PRF's blur (:func:`builtin_prf`) and the
+  jitter's amplitude are fitted together so that the twins' noise pixels
+  have the real median and the real spread over cubes (:func:`calibrate_motion`);
 - the star's aperture flux and the background level in electrons, so the
-  photon and read noise are the real ones;
+  photon and read noise are the real ones, and the share of the real
+  background's frame-to-frame deviations that the twins' own noise leaves
+  out (:func:`background_scatter_share`);
 - the detector: the simulator's intra-pixel gain model of the channel
-  (``BuiltinPRF``), or, where the user gives an SSC warm pixel map, a gain
-  fitted to that map (:func:`map_gain`), rendered through the Fowler
-  sampling of paper Appendix A.2-A.3 (:func:`eclipsebench.simulation.render.render_frames`);
+  refitted for the PSF (:func:`builtin_gain`), or, where the user gives an
+  SSC warm pixel map, a gain fitted to that map (:func:`map_gain`), rendered
+  through the Fowler sampling of paper Appendix A.2-A.3
+  (:func:`eclipsebench.simulation.render.render_frames`);
 - the astrophysics: L(t) given per frame (the real fit's phase model with a
-  known depth at the real mid-time).
+  known depth at the real mid-time);
+- the real correlated noise that the twins lack, added to each twin's
+  photometry cyclically shifted (:mod:`eclipsebench.trust.noise`).
 
 Frames are rendered in memory and measured by the same photometry as the
 real frames (:func:`eclipsebench.photometry.pipeline.measure_aor`); only the
@@ -62,8 +68,10 @@ __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "t
            "builtin_prf", "builtin_gain", "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 2 since the motion within an exposure is the
-#: simulator's block-scaled jitter (:class:`ExposureMotion`), 1 before (one rms throughout).
+#: otherwise is refused rather than mixed): 3 since the PSF's blur is fitted with the motion
+#: and the real background scatter and correlated noise are added (issue 36); 2 since the
+#: motion within an exposure is the simulator's block-scaled jitter (:class:`ExposureMotion`),
+#: 1 before (one rms throughout).
 TWIN_MODEL = 3
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
