@@ -140,10 +140,14 @@ def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: s
         info = {**info, "correlated_noise": {"method": None, "why": f"pilot twin: {exc}"}}
     else:
         real = Table.read(Path(real_path).with_suffix(".lc.ecsv"), format="ascii.ecsv")
-        recipe, info = with_real_noise(
-            recipe, info, (np.asarray(real["time_bmjd"], float), np.asarray(real["residual"], float)),
-            (np.asarray(pilot["time_bmjd"], float), np.asarray(pilot["residual"], float)))
+        recipe, info = with_real_noise(recipe, info, _residuals(real), _residuals(pilot))
     write_recipe(recipe, info, Path(npz_path), Path(json_path))
+
+
+def _residuals(lightcurve: Table) -> tuple[np.ndarray, np.ndarray]:
+    """``(time_bmjd, residual)`` of a result's light curve (``RESULT.lc.ecsv``)."""
+    return (np.asarray(lightcurve["time_bmjd"], float),
+            np.asarray(lightcurve["residual"], float))
 
 
 def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twin: int,

@@ -64,8 +64,8 @@ from .noise import add_correlated
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "MOTION_GRID_PX", "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain",
-           "builtin_prf", "builtin_gain", "background_scatter_share"]
+           "calibrate_motion", "MOTION_GRID_PX", "BLUR_GRID_PX", "TWIN_MODEL", "gain_model",
+           "map_gain", "builtin_prf", "builtin_gain", "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
 #: otherwise is refused rather than mixed): 3 since the PSF's blur is fitted with the motion
