@@ -36,7 +36,6 @@ from .twin import (
     gain_model,
     make_recipe,
     map_gain,
-    sharpened_gain,
     twin_table,
 )
 
@@ -131,7 +130,7 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
 
     The PSF's blur and the motion within an exposure are fitted to the real
     noise pixels (:func:`~eclipsebench.trust.twin.calibrate_motion`), then the
-    gain for that PSF and motion (:func:`~eclipsebench.trust.twin.sharpened_gain`), then the share of the real background's scatter the
+    gain for that PSF, then the share of the real background's scatter the
     twins' sky carries (:func:`~eclipsebench.trust.twin.background_scatter_share`).
     The real correlated noise is added by :func:`with_real_noise`.
     """
@@ -142,11 +141,6 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     blur, peak, calibration = calibrate_motion(make_recipe(obs, lc, radius_px=options.radius_px),
                                                options)
     gain, gain_text, gain_fit = twin_gain(obs, pmap, blur)
-    motion_rms = peak * calibration["rms_per_peak"]
-    if gain is not None and motion_rms > 0:
-        gain = sharpened_gain(gain, motion_rms**2)
-        gain_text += (f"; sharpened for the twins' motion within an exposure ({motion_rms:.3f} px "
-                      "rms), since the map already holds the real motion's average")
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
                          blur_px=blur)
     share, background = background_scatter_share(recipe, options)

@@ -65,8 +65,7 @@ from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
            "calibrate_motion", "MOTION_GRID_PX", "BLUR_GRID_PX", "TWIN_MODEL", "gain_model",
-           "map_gain", "builtin_prf", "builtin_gain", "background_scatter_share",
-           "sharpened_gain"]
+           "map_gain", "builtin_prf", "builtin_gain", "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
 #: otherwise is refused rather than mixed): 3 since the PSF's blur is fitted with the motion
@@ -131,36 +130,6 @@ def builtin_gain(channel: int, blur_px: float) -> tuple[GainPolynomial, str]:
     return gain, (f"the simulator's gain model of channel {channel} refitted for the twins' PSF "
                   f"(blur {blur_px:.3f} px): aperture photometry follows the polynomial fitted "
                   f"to {source} (data/gainmap_ch{channel}.json)")
-
-
-def sharpened_gain(gain: GainPolynomial, variance_px2: float) -> GainPolynomial:
-    """The gain whose average over motion of variance ``variance_px2`` (px^2 per axis, about
-    each exposure's mean position) is ``gain``, to second order: ``G - (s^2 / 2) (G_uu + G_vv)``.
-
-    An SSC pixel map is measured on real frames, whose star moved within each
-    exposure, so it is the gain already averaged over that motion; the twins
-    add their own motion, and the renderer's second-order expansion in the
-    offsets (:func:`eclipsebench.simulation.render.tick_moments`) averages the
-    gain again by ``(s^2 / 2)`` times its Laplacian. Without this, the twins of
-    real epoch 1 (0.169 px rms within an exposure) had a raw flux 26 % less
-    variable in 5-minute bins than the real one.
-
-    Examples
-    --------
-    >>> g = GainPolynomial(((0, 0), (2, 0), (0, 2)), (1.0, -0.1, -0.1))
-    >>> sharpened_gain(g, 0.01).coeffs
-    (1.002, -0.1, -0.1)
-    """
-    s2 = float(variance_px2)
-    coeffs = dict(zip(gain.powers, gain.coeffs, strict=True))
-    out = dict(coeffs)
-    for (m, n), c in coeffs.items():
-        if m >= 2:
-            out[(m - 2, n)] = out.get((m - 2, n), 0.0) - 0.5 * s2 * c * m * (m - 1)
-        if n >= 2:
-            out[(m, n - 2)] = out.get((m, n - 2), 0.0) - 0.5 * s2 * c * n * (n - 1)
-    powers = tuple(out)
-    return GainPolynomial(powers, tuple(round(out[p], 15) for p in powers), gain.box)
 
 
 _BACKGROUND_WINDOW = 65   # frames of the running median of the real background (one cube)
