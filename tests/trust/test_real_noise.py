@@ -54,8 +54,8 @@ def test_the_calibration_finds_the_blur_and_jitter_a_simulated_epoch_was_made_wi
     options = PhotometrySection()
     blur, peak, info = calibrate_motion(make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25),
                                         options)
-    assert info["target_vs_grid"] == "inside"
-    assert abs(blur - info["blur_px_builtin"]) < 0.03, info      # made with the committed 0.294
+    # made with the committed PSF (0.294 px), which is not too broad for it: kept, as it was
+    assert info["target_vs_grid"] == "inside" and blur is None and not info["blur_fitted"]
     assert 0.3 < peak < 0.5, info                                 # made with A_fbm = 0.4
     assert info["noise_pixels_twins"] == pytest.approx(info["noise_pixels_real"], rel=0.01)
     # the twins' background: the simulated one scatters by photon and read noise only, so

@@ -181,6 +181,8 @@ def with_real_noise(recipe: TwinRecipe, info: Mapping[str, Any],
     (:func:`eclipsebench.trust.noise.correlated_component`).
     """
     correlated, noise = correlated_component(recipe.obs.time_bmjd, real, pilot)
+    if noise["bins_in_excess"] == 0:   # as red as a twin already: nothing to add
+        return recipe, {**info, "correlated_noise": noise}
     return dataclasses.replace(recipe, correlated=correlated), \
         {**info, "correlated_noise": noise}
 

@@ -433,41 +433,45 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
                      frames_per_cube: int = 8, max_frames: int = 2048,
                      blur_grid_px: tuple[float, ...] = BLUR_GRID_PX,
                      grid_px: tuple[float, ...] = MOTION_GRID_PX
-                     ) -> tuple[float, float, dict]:
+                     ) -> tuple[float | None, float, dict]:
     """The PSF's blur and the jitter's amplitude whose twins match the real noise pixels.
 
-    Two numbers of the real frames fix the two: the median noise pixels (the
-    image's size: a broader PSF or more motion within an exposure) and the
-    standard deviation over cubes of each cube's median noise pixels (how the
-    size follows the pointing from cube to cube: a sharper PSF changes more
-    with the sub-pixel position, and the jitter's block-to-block scaling adds
-    its own; paper Appendix A.1-A.2, noise pixels Lewis et al. 2013). Frames
-    spread over every cube (``frames_per_cube``, at most ``max_frames`` in all)
-    are rendered noise-free along the real track with one draw of
-    :class:`ExposureMotion` scaled to each peak of ``grid_px``, for each blur
-    of ``blur_grid_px``; for each blur the peak that gives the real median is
-    interpolated, and the blur where the cube-to-cube spread at that peak
-    equals the real one (the crossing nearest the committed blur, else the
-    closest), after which the peak is solved again at that blur. Noise adds
-    about 0.005 to a cube's median over 63 frames (real epoch 1), negligible
-    beside the spread of 0.06 it is compared with.
+    Frames spread over every cube (``frames_per_cube``, at most ``max_frames``
+    in all) are rendered noise-free along the real track with one draw of
+    :class:`ExposureMotion` scaled to each peak of ``grid_px``. With the
+    committed PSF, where its noise pixels without motion are no larger than
+    the real median, the peak that gives the real median is interpolated and
+    the PSF kept (the simulator's own: a simulated epoch's twins are made as
+    it was). Where the committed PSF is too broad even without motion (real
+    epoch 1: 4.25 against 3.98), the blur is fitted as well, on a second
+    number: the standard deviation over cubes of each cube's median noise
+    pixels (how the image's size follows the pointing from cube to cube: a
+    sharper PSF changes more with the sub-pixel position, and the jitter's
+    block-to-block scaling adds its own; paper Appendix A.1-A.2). For each
+    blur of ``blur_grid_px`` the peak that gives the real median is
+    interpolated, then the blur where the spread at that peak equals the
+    real one (the crossing nearest the committed blur, else the closest),
+    and the peak again at that blur. Noise adds about 0.005 to a cube's
+    median over 63 frames (real epoch 1), negligible beside the spread of
+    0.06 it is compared with.
 
     Returns
     -------
-    blur_px : float
-        The builtin PRF's blur (:func:`builtin_prf`).
+    blur_px : float or None
+        The builtin PRF's blur (:func:`builtin_prf`); None: the committed one.
     peak_px : float
         ``A_fbm`` for :class:`ExposureMotion`.
     diagnostics : dict
         The real targets (``noise_pixels_real``, ``noise_pixels_cube_sd_real``),
         the grids and what each gave, the twins' values at the solution
         (``noise_pixels_twins``, ``noise_pixels_cube_sd_twins``, interpolated on
-        the motion grid at the chosen blur), ``target_vs_grid`` (``"inside"``:
-        both matched; ``"spread_outside"``: the median matched, the spread only
-        as near as the grid allows; ``"below"``/``"above"``: even the sharpest
-        PSF without motion is broader than the real image / the broadest with
-        the most motion narrower), ``blur_px_builtin`` and ``rms_per_peak``: the
-        rms of the motion within an exposure per px of peak.
+        the motion grid at the chosen blur), ``blur_px`` and ``blur_fitted``,
+        ``target_vs_grid`` (``"inside"``: matched; ``"spread_outside"``: the
+        median matched, the spread only as near as the grid allows;
+        ``"below"``/``"above"``: even the sharpest PSF without motion is broader
+        than the real image / the broadest with the most motion narrower),
+        ``blur_px_builtin`` and ``rms_per_peak``: the rms of the motion within
+        an exposure per px of peak.
     """
     obs = recipe.obs
     rows, cube_of, cubes = _calibration_rows(obs, frames_per_cube, max_frames)
@@ -489,6 +493,22 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
             spreads.append(_cube_median_sd(npx, cube_of))
         return np.asarray(medians), np.asarray(spreads)
 
+    builtin_blur = float(load_gainmap_coefficients(obs.channel)["builtin"]["blur_px"])
+    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
+    # the committed PSF where it is not too broad: the motion alone on the median
+    med, sd = curves(builtin_blur)
+    peak_builtin = _solve_on_curve(target, med, grid_px)
+    if peak_builtin is not None:
+        return None, peak_builtin, {
+            "noise_pixels_real": target, "noise_pixels_cube_sd_real": target_sd,
+            "noise_pixels_twins": float(np.interp(peak_builtin, grid_px, med)),
+            "noise_pixels_cube_sd_twins": float(np.interp(peak_builtin, grid_px, sd)),
+            "blur_px": builtin_blur, "blur_px_builtin": builtin_blur, "blur_fitted": False,
+            "motion_peak_px": peak_builtin, "target_vs_grid": "inside",
+            "rms_per_peak": rms_per_peak, "frames_calibrated": int(rows.size),
+            "cubes_calibrated": len(cubes), "motion_grid_px": list(grid_px),
+            "noise_pixels_grid": [med.tolist()], "noise_pixels_cube_sd_grid": [sd.tolist()],
+            "blur_grid_px": [builtin_blur]}
     grid_medians, grid_spreads, on_curve = [], [], []
     for blur in blur_grid_px:
         med, sd = curves(blur)
@@ -497,7 +517,6 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
         peak = _solve_on_curve(target, med, grid_px)
         if peak is not None:
             on_curve.append((float(blur), peak, float(np.interp(peak, grid_px, sd))))
-    builtin_blur = float(load_gainmap_coefficients(obs.channel)["builtin"]["blur_px"])
     if on_curve:
         blurs = np.array([b for b, _, _ in on_curve])
         excess = np.array([sd for _, _, sd in on_curve]) - target_sd
@@ -525,13 +544,12 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
             blur, peak, where = float(blur_grid_px[int(np.argmax(top))]), float(grid_px[-1]), \
                 "above"
         med, sd = curves(blur)
-    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
     return blur, peak, {
         "noise_pixels_real": target, "noise_pixels_cube_sd_real": target_sd,
         "noise_pixels_twins": float(np.interp(peak, grid_px, med)),
         "noise_pixels_cube_sd_twins": float(np.interp(peak, grid_px, sd)),
-        "blur_px": blur, "blur_px_builtin": builtin_blur, "motion_peak_px": peak,
-        "target_vs_grid": where, "rms_per_peak": rms_per_peak,
+        "blur_px": blur, "blur_px_builtin": builtin_blur, "blur_fitted": True,
+        "motion_peak_px": peak, "target_vs_grid": where, "rms_per_peak": rms_per_peak,
         "frames_calibrated": int(rows.size), "cubes_calibrated": len(cubes),
         "blur_grid_px": list(blur_grid_px), "motion_grid_px": list(grid_px),
         "noise_pixels_grid": grid_medians, "noise_pixels_cube_sd_grid": grid_spreads}
