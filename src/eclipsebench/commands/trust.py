@@ -137,6 +137,29 @@ def run(args: argparse.Namespace) -> dict:
                                 "stage_seconds": report.stage_seconds()}}
 
 
+def _twin_lines(twins: dict) -> list[str]:
+    """What was fitted to make the twins resemble the real frames (``docs/trust.md``)."""
+    cal = twins.get("calibration") or {}
+    if "blur_px" not in cal:
+        return []
+    lines = [f"twins' PSF    blur {cal['blur_px']:.3f} px (builtin {cal['blur_px_builtin']:.3f}), "
+             f"motion within an exposure {twins['motion_rms_px']:.3f} px rms (A_fbm "
+             f"{twins['motion_peak_px']:.3f}): noise pixels {cal['noise_pixels_twins']:.2f}, "
+             f"SD over cubes {cal['noise_pixels_cube_sd_twins']:.3f} (real "
+             f"{cal['noise_pixels_real']:.2f}, {cal['noise_pixels_cube_sd_real']:.3f}; "
+             f"{cal['target_vs_grid']})"]
+    bg, noise = twins.get("background") or {}, twins.get("correlated_noise") or {}
+    if bg:
+        lines.append(f"twins' noise  background {bg['share']:.2f} of the real frame-to-frame "
+                     f"deviations (real {bg['background_sd_real']:.2f} e/px rms, twins' own "
+                     f"{bg['background_sd_twin_noise']:.2f})" + (
+                         f"; real correlated noise {noise['rms_ppm']:.0f} ppm rms in "
+                         f"{noise['bins_in_excess']} of {noise['bins']} frequency bins (real "
+                         f"beta_red {noise['beta_red_real']:.2f}, pilot twin "
+                         f"{noise['beta_red_pilot']:.2f})" if "rms_ppm" in noise else ""))
+    return lines
+
+
 def format_text(result: dict) -> str:
     from ..trust.report import ranking_text
 
@@ -147,6 +170,7 @@ def format_text(result: dict) -> str:
     lines += [f"{result['system']}: {result['n_twins']} twins with a "
              f"{result['twin_depth_ppm']:.1f} ppm {result['twins']['event']} "
              f"({result['profile']} profile, {result['sampler']})",
+             *_twin_lines(result.get("twins") or {}),
              f"{'method':<10} {'depth':>8} {'honest':>7} {'bias':>7} {'SD':>6} {'RMSE':>6} "
              f"{'<err>':>6} {'z_rms':>5} {'cov1':>5} {'cov2':>5}"]
     for m, s in result["methods"].items():

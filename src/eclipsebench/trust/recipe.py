@@ -10,6 +10,7 @@ and the twins' detector is the simulator's.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Mapping
 from pathlib import Path
@@ -25,10 +26,21 @@ from ..instrument.prf import GainPolynomial
 from ..io.atomic import atomic_path, write_json
 from ..io.pmap_files import GriddedPmap, find_pmap_path, load_pmap
 from ..photometry.table import read_table
+from .noise import correlated_component
 from .observation import Observation, observation_from_table
-from .twin import TwinRecipe, calibrate_motion, gain_model, make_recipe, map_gain
+from .twin import (
+    TwinRecipe,
+    background_scatter_share,
+    builtin_gain,
+    calibrate_motion,
+    gain_model,
+    make_recipe,
+    map_gain,
+    twin_table,
+)
 
-__all__ = ["twin_light_curve", "build_recipe", "twin_map", "twin_gain", "write_recipe", "read_recipe", "EVENTS"]
+__all__ = ["twin_light_curve", "build_recipe", "twin_map", "twin_gain", "write_recipe",
+           "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin", "with_real_noise"]
 
 #: The events a twin can carry (a whole phase curve is several AORs of its own kind).
 EVENTS = ("eclipse", "transit")
@@ -74,23 +86,30 @@ def twin_map(obs: Observation, pmap: str | None) -> tuple[Path, GriddedPmap | No
     return path, (found if isinstance(found, GriddedPmap) else None)
 
 
-def twin_gain(obs: Observation, pmap: str | None) -> tuple[GainPolynomial | None, str, dict]:
-    """The twins' intra-pixel gain: fitted to the gridded SSC map ``pmap`` (:func:`twin_map`),
-    else the simulator's model.
+def twin_gain(obs: Observation, pmap: str | None, blur_px: float | None = None
+              ) -> tuple[GainPolynomial | None, str, dict]:
+    """The twins' intra-pixel gain for the builtin PRF blurred by ``blur_px`` (None: the
+    committed blur): fitted to the gridded SSC map ``pmap`` (:func:`twin_map`), else the
+    simulator's model (refitted for the blur, :func:`~eclipsebench.trust.twin.builtin_gain`).
 
-    Returns the gain (None: the simulator's), its description and the map fit's
-    diagnostics. A calibration-star table is not a gridded map: the twins keep the
+    Returns the gain (None: the simulator's as committed), its description and the map
+    fit's diagnostics. A calibration-star table is not a gridded map: the twins keep the
     simulator's model and the description says so.
     """
     chosen = twin_map(obs, pmap)
-    if chosen is None:
-        return None, gain_model(obs.channel), {}
+    if chosen is None or chosen[1] is None:
+        if blur_px is None:
+            poly, text = None, gain_model(obs.channel)
+        else:
+            poly, text = builtin_gain(obs.channel, blur_px)
+        if chosen is not None:
+            text += (f"; {chosen[0].name} is a calibration-star table, not a gridded map of the "
+                     "gain, so the twins keep the simulator's model")
+        return poly, text, {}
     path, found = chosen
-    if found is None:
-        return None, (gain_model(obs.channel) + f"; {path.name} is a calibration-star table, "
-                      "not a gridded map of the gain, so the twins keep the simulator's model"), {}
+    assert found is not None   # a gridded map (a calibration-star table returned above)
     poly, text, info = map_gain(obs.channel, found.x_grid, found.y_grid, found.gain,
-                                found.occupancy, source=path.name)
+                                found.occupancy, source=path.name, blur_px=blur_px)
     return poly, text, {"path": str(path), **info}
 
 
@@ -108,28 +127,69 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
 
     ``pmap``: an SSC warm map (file or folder of versions) whose gain the
     twins carry (:func:`twin_gain`); None: the simulator's gain model.
+
+    The PSF's blur and the motion within an exposure are fitted to the real
+    noise pixels (:func:`~eclipsebench.trust.twin.calibrate_motion`), then the
+    gain for that PSF, then the share of the real background's scatter the
+    twins' sky carries (:func:`~eclipsebench.trust.twin.background_scatter_share`).
+    The real correlated noise is added by :func:`with_real_noise`.
     """
     table = read_table(table_path)
     obs = observation_from_table(table, table_path)
     options = photometry_options(obs)
-    gain, gain_text, gain_fit = twin_gain(obs, pmap)
     lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, gain=gain)
     if np.isfinite(obs.noise_pixels[obs.good]).any():
-        peak, calibration = calibrate_motion(recipe, options)
+        blur, peak, calibration = calibrate_motion(
+            make_recipe(obs, lc, radius_px=options.radius_px), options)
     else:   # another pipeline's table without noise pixels: nothing to calibrate on
-        peak, calibration = 0.0, {"noise_pixels_real": None, "rms_per_peak": 0.0,
-                                  "target_vs_grid": "no noise pixels in the table"}
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain)
+        blur, peak, calibration = None, 0.0, {
+            "noise_pixels_real": None, "rms_per_peak": 0.0,
+            "target_vs_grid": "no noise pixels in the table"}
+    gain, gain_text, gain_fit = twin_gain(obs, pmap, blur)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
+                         blur_px=blur)
+    share, background = background_scatter_share(recipe, options)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
+                         blur_px=blur, sky_scatter=share)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
             "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
             "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
             "y_ref_px": recipe.y_ref_px, "motion_peak_px": peak,
             "motion_rms_px": peak * calibration["rms_per_peak"], "calibration": calibration,
+            "blur_px": blur, "sky_scatter": share, "background": background,
+            "correlated_noise": None,
             "gain_model": gain_text, "gain": _gain_dict(gain), "gain_fit": gain_fit,
             "n_frames": obs.n_frames, "n_good": int(obs.good.sum())}
     return recipe, info
+
+
+#: The pilot twin's number: made and reduced like the others to measure how red a twin's
+#: residuals are before the real correlated noise is added (:func:`with_real_noise`), never
+#: scored (the scored twins are numbered from 1).
+PILOT_TWIN = 0
+
+
+def pilot_twin(recipe: TwinRecipe, *, seed: int) -> Any:
+    """The pilot twin's photometry table (:data:`PILOT_TWIN`), without correlated noise."""
+    return twin_table(dataclasses.replace(recipe, correlated=None), photometry_options(recipe.obs),
+                      seed=seed, twin=PILOT_TWIN)
+
+
+def with_real_noise(recipe: TwinRecipe, info: Mapping[str, Any],
+                    real: tuple[np.ndarray, np.ndarray], pilot: tuple[np.ndarray, np.ndarray]
+                    ) -> tuple[TwinRecipe, dict[str, Any]]:
+    """``recipe`` with the real correlated noise its twins lack, and ``info`` saying what it is.
+
+    ``real`` and ``pilot``: ``(time_bmjd, residual)`` of the first method's fit
+    of the real table and of :func:`pilot_twin`
+    (:func:`eclipsebench.trust.noise.correlated_component`).
+    """
+    correlated, noise = correlated_component(recipe.obs.time_bmjd, real, pilot)
+    if noise["bins_in_excess"] == 0:   # as red as a twin already: nothing to add
+        return recipe, {**info, "correlated_noise": noise}
+    return dataclasses.replace(recipe, correlated=correlated), \
+        {**info, "correlated_noise": noise}
 
 
 def photometry_options(obs: Observation) -> PhotometrySection:
@@ -146,8 +206,12 @@ def write_recipe(recipe: TwinRecipe, info: Mapping[str, Any], npz_path: Path,
                  json_path: Path) -> None:
     """The description (JSON), then the per-frame arrays (``.npz``, written last)."""
     write_json(json_path, dict(info))
+    arrays: dict[str, Any] = {"light_curve": recipe.light_curve,
+                              "sky_e_per_px": recipe.sky_e_per_px}
+    if recipe.correlated is not None:
+        arrays["correlated"] = recipe.correlated
     with atomic_path(npz_path) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, light_curve=recipe.light_curve, sky_e_per_px=recipe.sky_e_per_px)
+        np.savez(fh, **arrays)
 
 
 def read_recipe(table_path: str, npz_path: Path, json_path: Path
@@ -155,6 +219,7 @@ def read_recipe(table_path: str, npz_path: Path, json_path: Path
     """The recipe written by :func:`write_recipe` for the table at ``table_path``."""
     info = json.loads(Path(json_path).read_text())
     obs = observation_from_table(read_table(table_path), table_path)
+    blur = info.get("blur_px")
     with np.load(npz_path) as arrays:
         recipe = TwinRecipe(obs=obs, light_curve=arrays["light_curve"],
                             flux_aperture_e=float(info["flux_aperture_e"]),
@@ -162,5 +227,9 @@ def read_recipe(table_path: str, npz_path: Path, json_path: Path
                             sky_e_per_px=arrays["sky_e_per_px"],
                             motion_peak_px=float(info["motion_peak_px"]),
                             gain=(None if info.get("gain") is None
-                                  else GainPolynomial.from_dict(info["gain"])))
+                                  else GainPolynomial.from_dict(info["gain"])),
+                            blur_px=None if blur is None else float(blur),
+                            sky_scatter=float(info.get("sky_scatter", 0.0)),
+                            correlated=(arrays["correlated"] if "correlated" in arrays.files
+                                        else None))
     return recipe, info

@@ -131,7 +131,8 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
             "seed": settings["seed"], "profile": settings["reduce"]["profile"],
             "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
                 "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
-                "motion_peak_px", "motion_rms_px", "calibration", "gain_model", "gain_fit")},
+                "motion_peak_px", "motion_rms_px", "calibration", "gain_model", "gain_fit",
+                "blur_px", "sky_scatter", "background", "correlated_noise")},
             "eclipsebench_version": __version__}
 
 

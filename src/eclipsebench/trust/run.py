@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from astropy.table import Table
 
 from ..astro.catalogue import PlanetSystem
 from ..config.base import to_mapping
@@ -47,7 +48,15 @@ from ..progress import get_logger
 from ..seeding import spawn_ints
 from .layout import TrustLayout
 from .observation import OBSERVATION_FILE
-from .recipe import build_recipe, photometry_options, read_recipe, write_recipe
+from .recipe import (
+    PILOT_TWIN,
+    build_recipe,
+    photometry_options,
+    pilot_twin,
+    read_recipe,
+    with_real_noise,
+    write_recipe,
+)
 from .report import score_task
 from .result import TrustResult, read_trust
 from .twin import TWIN_MODEL, TwinRecipe, twin_star, twin_table
@@ -127,7 +136,8 @@ def real_task(settings: TrustSettings, method: str, out_path: str) -> None:
 
 def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: str,
                 json_path: str) -> None:
-    """The twins' shared recipe from the first method's real fit (and the depth asked for)."""
+    """The twins' shared recipe from the first method's real fit (and the depth asked for),
+    with the real correlated noise a pilot twin reduced by that method lacks."""
     fit = json.loads(Path(real_path).read_text())
     depth = settings.depth_ppm if settings.depth_ppm is not None else float(fit["depth_ppm"])
     if not depth > 0:
@@ -136,7 +146,26 @@ def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: s
     event = settings.reduce.event
     recipe, info = build_recipe(settings.table, settings.system, fit, depth, event,
                                 settings.pmap)
+    # the pilot's residuals at the least-squares solution: no sampling, no prayer bead
+    quick = dataclasses.replace(settings, reduce=dataclasses.replace(
+        settings.reduce, sampler="leastsq", prayer_bead_shifts=0))
+    extra = shared_options(first, fit, settings.method_options.get(first, {}))
+    try:
+        pilot = _reduce(quick, pilot_twin(recipe, seed=settings.seed), first,
+                        seed=spawn_ints(settings.seed, "trust", "reduce")[0], epoch=PILOT_TWIN,
+                        extra_options=extra).lightcurve_table()
+    except InputError as exc:
+        info = {**info, "correlated_noise": {"method": None, "why": f"pilot twin: {exc}"}}
+    else:
+        real = Table.read(Path(real_path).with_suffix(".lc.ecsv"), format="ascii.ecsv")
+        recipe, info = with_real_noise(recipe, info, _residuals(real), _residuals(pilot))
     write_recipe(recipe, info, Path(npz_path), Path(json_path))
+
+
+def _residuals(lightcurve: Table) -> tuple[np.ndarray, np.ndarray]:
+    """``(time_bmjd, residual)`` of a result's light curve (``RESULT.lc.ecsv``)."""
+    return (np.asarray(lightcurve["time_bmjd"], float),
+            np.asarray(lightcurve["residual"], float))
 
 
 #: Twins simulated per task: they share the recipe (read once per process) and the star

@@ -7,17 +7,23 @@ A twin shares with the real observation everything but the noise draw
 - the pointing: the measured centroid of each real frame is the twin's
   exposure-mean position, and the simulator's motion within an exposure
   (its fractional Brownian jitter, paper Appendix A.1, drawn as the
-  challenge simulator draws it: :class:`ExposureMotion`) is added with an
-  amplitude chosen so that the twins' median noise pixels match the real
-  ones (:func:`calibrate_motion`);
+  challenge simulator draws it: :class:`ExposureMotion`) is added;
+- the PSF's width: the builtin PRF's blur (:func:`builtin_prf`) and the
+  jitter's amplitude are fitted together so that the twins' noise pixels
+  have the real median and the real spread over cubes (:func:`calibrate_motion`);
 - the star's aperture flux and the background level in electrons, so the
-  photon and read noise are the real ones;
+  photon and read noise are the real ones, and the share of the real
+  background's frame-to-frame deviations that the twins' own noise leaves
+  out (:func:`background_scatter_share`);
 - the detector: the simulator's intra-pixel gain model of the channel
-  (``BuiltinPRF``), or, where the user gives an SSC warm pixel map, a gain
-  fitted to that map (:func:`map_gain`), rendered through the Fowler
-  sampling of paper Appendix A.2-A.3 (:func:`eclipsebench.simulation.render.render_frames`);
+  refitted for the PSF (:func:`builtin_gain`), or, where the user gives an
+  SSC warm pixel map, a gain fitted to that map (:func:`map_gain`), rendered
+  through the Fowler sampling of paper Appendix A.2-A.3
+  (:func:`eclipsebench.simulation.render.render_frames`);
 - the astrophysics: L(t) given per frame (the real fit's phase model with a
-  known depth at the real mid-time).
+  known depth at the real mid-time);
+- the real correlated noise that the twins lack, added to each twin's
+  photometry cyclically shifted (:mod:`eclipsebench.trust.noise`).
 
 Frames are rendered in memory and measured by the same photometry as the
 real frames (:func:`eclipsebench.photometry.pipeline.measure_aor`); only the
@@ -41,7 +47,12 @@ from ..instrument.pointing import (
     PointingParams,
     frame_windows,
 )
-from ..instrument.prf import BuiltinPRF, GainPolynomial, load_gainmap_coefficients
+from ..instrument.prf import (
+    BuiltinPRF,
+    GainPolynomial,
+    load_gainmap_coefficients,
+    warm_rescaling,
+)
 from ..photometry.clean import running_median
 from ..photometry.measure import measure_stack, read_radius_px
 from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
@@ -50,23 +61,30 @@ from ..seeding import rng
 from ..simulation.plan import SECONDS_PER_DAY
 from ..simulation.render import FrameModel, render_frames, stamp_origin, tick_moments
 from ..simulation.star import StarImager
+from .noise import add_correlated
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "photometry_window", "twin_star", "MOTION_GRID_PX", "TWIN_MODEL",
-           "gain_model", "map_gain"]
+           "calibrate_motion", "photometry_window", "twin_star", "MOTION_GRID_PX",
+           "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain", "builtin_prf", "builtin_gain",
+           "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 3 since only the part of the subarray the
-#: photometry reads is rendered (:func:`photometry_window`: the same photometry, other noise
-#: draws); 2 since the motion within an exposure is the simulator's block-scaled jitter
-#: (:class:`ExposureMotion`), 1 before (one rms throughout).
+#: otherwise is refused rather than mixed): 3 since the PSF's blur is fitted with the motion,
+#: the real background scatter and correlated noise are added (issue 36), and only the part of
+#: the subarray the photometry reads is rendered (:func:`photometry_window`); 2 since the
+#: motion within an exposure is the simulator's block-scaled jitter (:class:`ExposureMotion`),
+#: 1 before (one rms throughout).
 TWIN_MODEL = 3
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
 #: within an exposure.
 MOTION_GRID_PX = (0.0, 0.1, 0.2, 0.3, 0.45, 0.6, 0.9, 1.25)
+
+#: Gaussian blurs (px) of the builtin PRF's optics among which the twins' PSF is chosen
+#: (:func:`calibrate_motion`); the committed one of channel 2 is 0.294 px.
+BLUR_GRID_PX = (0.0, 0.08, 0.15, 0.22, 0.3, 0.38, 0.46)
 
 
 def gain_model(channel: int) -> str:
@@ -85,20 +103,36 @@ def gain_model(channel: int) -> str:
 
 
 def map_gain(channel: int, x_grid: np.ndarray, y_grid: np.ndarray, gain: np.ndarray,
-             occupancy: np.ndarray, *, source: str, radius_px: float = 3.0
-             ) -> tuple[GainPolynomial, str, dict]:
+             occupancy: np.ndarray, *, source: str, radius_px: float = 3.0,
+             blur_px: float | None = None) -> tuple[GainPolynomial, str, dict]:
     """The twins' gain from a gridded SSC warm map: what ``BuiltinPRF`` of ``channel``
-    needs so that aperture photometry (radius ``radius_px``, the map's 3 px) at the
-    measured centroid follows the map (:func:`~eclipsebench.instrument.gain_fit.fit_true_phase_gain`).
+    (its optics blurred by ``blur_px``, :func:`builtin_prf`) needs so that aperture
+    photometry (radius ``radius_px``, the map's 3 px) at the measured centroid follows
+    the map (:func:`~eclipsebench.instrument.gain_fit.fit_true_phase_gain`).
 
     Returns the gain, its description for the report and the fit's diagnostics.
     """
-    poly, info = fit_true_phase_gain(BuiltinPRF(gain=False, channel=channel), x_grid, y_grid,
+    poly, info = fit_true_phase_gain(builtin_prf(channel, blur_px, gain=False), x_grid, y_grid,
                                      gain, occupancy, radius_px=radius_px)
     text = (f"the SSC pixel map {source} (a degree-6 gain in the true sub-pixel phase fitted "
             f"so that {radius_px:g} px aperture photometry of BuiltinPRF follows the map: "
             f"rms {100 * info['fit_rms']:.3f} % over {info['n_positions']} positions)")
     return poly, text, info
+
+
+def builtin_gain(channel: int, blur_px: float) -> tuple[GainPolynomial, str]:
+    """The simulator's gain model of ``channel`` refitted for the builtin PRF blurred by
+    ``blur_px``: the gain that makes aperture photometry of that PSF at its centroid follow
+    the committed polynomial of the channel's SSC map (:func:`~eclipsebench.instrument.prf.
+    warm_rescaling`, paper Appendix A.2), as the committed gain does for the committed blur.
+
+    Returns the gain and its description for the report.
+    """
+    source = load_gainmap_coefficients(channel).get("source", "an SSC pixel map")
+    gain = warm_rescaling(builtin_prf(channel, blur_px, gain=False), channel=channel)
+    return gain, (f"the simulator's gain model of channel {channel} refitted for the twins' PSF "
+                  f"(blur {blur_px:.3f} px): aperture photometry follows the polynomial fitted "
+                  f"to {source} (data/gainmap_ch{channel}.json)")
 
 
 _BACKGROUND_WINDOW = 65   # frames of the running median of the real background (one cube)
@@ -118,15 +152,28 @@ class TwinRecipe:
     x_ref_px, y_ref_px : float
         Where that flux is defined: the median real position.
     sky_e_per_px : ndarray
-        Sky per pixel and exposure under the star, per frame (the real annulus
-        background, smoothed over a cube, minus the PRF's own wings).
+        Sky per pixel and exposure under the star, per frame: the real annulus
+        background's running median over a cube plus ``sky_scatter`` times its
+        deviation from it, minus the PRF's own wings.
     motion_peak_px : float
         Peak of the jitter's fractional Brownian motion in each block of the
         simulator (Table 5's ``A_fbm``), which sets the motion within an
         exposure (:class:`ExposureMotion`).
     gain : GainPolynomial or None
-        The intra-pixel gain in the true phase (:func:`map_gain`); None: the
-        simulator's model of the channel.
+        The intra-pixel gain in the true phase (:func:`map_gain`,
+        :func:`builtin_gain`); None: the simulator's model of the channel.
+    blur_px : float or None
+        The Gaussian blur (px) of the builtin PRF's optics (:func:`builtin_prf`),
+        fitted to the real noise pixels by :func:`calibrate_motion`; None: the
+        committed one.
+    sky_scatter : float
+        The share (0-1) of the real background's frame-to-frame deviations
+        from its running median that ``sky_e_per_px`` carries
+        (:func:`background_scatter_share`).
+    correlated : ndarray or None
+        The real observation's correlated noise (relative flux per frame,
+        :func:`eclipsebench.trust.noise.correlated_component`), added to each
+        twin's photometry cyclically shifted; None: none.
     """
 
     obs: Observation
@@ -137,11 +184,29 @@ class TwinRecipe:
     sky_e_per_px: np.ndarray
     motion_peak_px: float = 0.0
     gain: GainPolynomial | None = None
+    blur_px: float | None = None
+    sky_scatter: float = 0.0
+    correlated: np.ndarray | None = None
+
+
+def builtin_prf(channel: int, blur_px: float | None = None, *, gain: bool = True) -> BuiltinPRF:
+    """``BuiltinPRF`` of ``channel`` with its optics blurred by ``blur_px`` (px; None: the
+    committed blur of ``data/gainmap_ch<N>.json``), with or without the committed gain.
+
+    Examples
+    --------
+    >>> builtin_prf(2, 0.1, gain=False).coefficients["blur_px"]
+    0.1
+    """
+    coefficients = None
+    if blur_px is not None:
+        coefficients = {**load_gainmap_coefficients(channel)["builtin"], "blur_px": float(blur_px)}
+    return BuiltinPRF(gain=gain, channel=channel, coefficients=coefficients)
 
 
 def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
-          gain: GainPolynomial | None = None) -> StarImager:
-    prf = BuiltinPRF(gain=gain is None, channel=obs.channel)
+          gain: GainPolynomial | None = None, blur_px: float | None = None) -> StarImager:
+    prf = builtin_prf(obs.channel, blur_px, gain=gain is None)
     if gain is not None:
         prf.gain = gain
     return StarImager(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
@@ -152,22 +217,31 @@ def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
 
 
 def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
-                motion_peak_px: float = 0.0, gain: GainPolynomial | None = None) -> TwinRecipe:
+                motion_peak_px: float = 0.0, gain: GainPolynomial | None = None,
+                blur_px: float | None = None, sky_scatter: float = 0.0,
+                correlated: np.ndarray | None = None) -> TwinRecipe:
     """The shared part of the twins of ``obs`` with astrophysics ``light_curve``.
 
     The star's flux is the real median aperture flux divided by the median of
     ``light_curve`` over the good frames, so the twins' flux level is the
-    real one whatever the eclipse.
+    real one whatever the eclipse. The sky is the real background's running
+    median over a cube plus ``sky_scatter`` of each frame's deviation from it
+    (frames without a finite background: the running median), less the PRF's
+    wings in the annulus.
     """
     good = obs.good
     x_ref, y_ref = float(np.median(obs.x_px[good])), float(np.median(obs.y_px[good]))
     flux = float(np.median(obs.flux_e[good]) / np.median(light_curve[good]))
-    star = _star(obs, x_ref, y_ref, radius_px, gain)
+    star = _star(obs, x_ref, y_ref, radius_px, gain, blur_px)
     level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, good)
+    deviation = np.where(np.isfinite(obs.background_e_per_px),
+                         obs.background_e_per_px - level, 0.0)
     wing = star.annulus_per_unit * star.electrons_per_unit(flux)
+    sky = level + float(sky_scatter) * deviation - wing
     return TwinRecipe(obs=obs, light_curve=np.asarray(light_curve, float), flux_aperture_e=flux,
-                      x_ref_px=x_ref, y_ref_px=y_ref, sky_e_per_px=np.clip(level - wing, 0, None),
-                      motion_peak_px=float(motion_peak_px), gain=gain)
+                      x_ref_px=x_ref, y_ref_px=y_ref, sky_e_per_px=np.clip(sky, 0, None),
+                      motion_peak_px=float(motion_peak_px), gain=gain, blur_px=blur_px,
+                      sky_scatter=float(sky_scatter), correlated=correlated)
 
 
 class ExposureMotion:
@@ -299,7 +373,7 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
         x0, y0 = int(window[0]), int(window[1])
         model = dataclasses.replace(model, shape=(int(window[3]), int(window[2])))
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
-                                               recipe.gain)
+                                               recipe.gain, recipe.blur_px)
     x_track, y_track = obs.track_px()
     if motion is None:
         dx = dy = np.zeros((rows.size, model.grid_samples_per_frame))
@@ -340,7 +414,8 @@ def _measure_aor(recipe: TwinRecipe, rows: np.ndarray, frames: np.ndarray,
 def twin_star(recipe: TwinRecipe, options: PhotometrySection) -> StarImager:
     """The star every twin of ``recipe`` is rendered with (its PRF tables and gain), built
     once and shared by the twins of a batch."""
-    return _star(recipe.obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain)
+    return _star(recipe.obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain,
+                 recipe.blur_px)
 
 
 def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twin: int,
@@ -381,50 +456,210 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     meta = {k: v for k, v in obs.meta.items() if k not in ("FLAGCNT", "FILENAME")}
     meta.update({"TWIN": int(twin), "EPOCH": int(twin), "SIMULATE": True,
                  "TWINMOT": float(recipe.motion_peak_px)})
-    return make_table(columns, meta)
+    return add_correlated(make_table(columns, meta), recipe.correlated, seed=seed, twin=twin)
 
 
-def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *, n_frames: int = 256,
-                     grid_px: tuple[float, ...] = MOTION_GRID_PX) -> tuple[float, dict]:
-    """The jitter amplitude whose noise-free twins match the real median noise pixels.
+def _calibration_rows(obs: Observation, frames_per_cube: int, max_frames: int
+                      ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """Up to ``frames_per_cube`` good frames spread over each cube (fewer per cube when the
+    observation has more than ``max_frames / frames_per_cube`` cubes, at least 2): the rows,
+    the index of each row's cube among the cubes kept, and every good row of each kept cube."""
+    cubes = [c[obs.good[c]] for c in obs.cubes()]
+    cubes = [c for c in cubes if c.size >= 2]
+    k = int(np.clip(max_frames // max(len(cubes), 1), 2, frames_per_cube))
+    picked = [c[np.unique(np.linspace(0, c.size - 1, min(k, c.size)).astype(int))]
+              for c in cubes]
+    rows = np.concatenate(picked)
+    cube_of = np.concatenate([np.full(p.size, i) for i, p in enumerate(picked)])
+    return rows, cube_of, cubes
 
-    Renders ``n_frames`` frames spread over the good frames, noise-free, with
-    one draw of :class:`ExposureMotion` scaled to each peak amplitude of
-    ``grid_px``, measures their median noise pixels and interpolates to the
-    real median. Outside the grid's range the nearest end is taken and the
-    returned diagnostics say so.
+
+def _cube_median_sd(values: np.ndarray, cube_of: np.ndarray) -> float:
+    """Sample SD over cubes of each cube's median of ``values``."""
+    medians = [np.median(values[cube_of == i]) for i in np.unique(cube_of)]
+    return float(np.std(medians, ddof=1)) if len(medians) > 1 else float("nan")
+
+
+def _solve_on_curve(target: float, values: np.ndarray, grid: tuple[float, ...]
+                    ) -> float | None:
+    """The grid point (interpolated) where the non-decreasing envelope of ``values`` reaches
+    ``target``; None outside its range."""
+    env = np.maximum.accumulate(np.asarray(values, float))
+    if not env[0] <= target <= env[-1]:
+        return None
+    return float(np.interp(target, env, grid))
+
+
+def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
+                     frames_per_cube: int = 8, max_frames: int = 2048,
+                     blur_grid_px: tuple[float, ...] = BLUR_GRID_PX,
+                     grid_px: tuple[float, ...] = MOTION_GRID_PX
+                     ) -> tuple[float | None, float, dict]:
+    """The PSF's blur and the jitter's amplitude whose twins match the real noise pixels.
+
+    Frames spread over every cube (``frames_per_cube``, at most ``max_frames``
+    in all) are rendered noise-free along the real track with one draw of
+    :class:`ExposureMotion` scaled to each peak of ``grid_px``. With the
+    committed PSF, where its noise pixels without motion are no larger than
+    the real median, the peak that gives the real median is interpolated and
+    the PSF kept (the simulator's own: a simulated epoch's twins are made as
+    it was). Where the committed PSF is too broad even without motion (real
+    epoch 1: 4.25 against 3.98), the blur is fitted as well, on a second
+    number: the standard deviation over cubes of each cube's median noise
+    pixels (how the image's size follows the pointing from cube to cube: a
+    sharper PSF changes more with the sub-pixel position, and the jitter's
+    block-to-block scaling adds its own; paper Appendix A.1-A.2). For each
+    blur of ``blur_grid_px`` the peak that gives the real median is
+    interpolated, then the blur where the spread at that peak equals the
+    real one (the crossing nearest the committed blur, else the closest),
+    and the peak again at that blur. Noise adds about 0.005 to a cube's
+    median over 63 frames (real epoch 1), negligible beside the spread of
+    0.06 it is compared with.
 
     Returns
     -------
+    blur_px : float or None
+        The builtin PRF's blur (:func:`builtin_prf`); None: the committed one.
     peak_px : float
         ``A_fbm`` for :class:`ExposureMotion`.
     diagnostics : dict
-        ``noise_pixels_real``, the grid, the median noise pixels at each, and
-        ``rms_per_peak``: the rms of the motion within an exposure per px of peak.
+        The real targets (``noise_pixels_real``, ``noise_pixels_cube_sd_real``),
+        the grids and what each gave, the twins' values at the solution
+        (``noise_pixels_twins``, ``noise_pixels_cube_sd_twins``, interpolated on
+        the motion grid at the chosen blur), ``blur_px`` and ``blur_fitted``,
+        ``target_vs_grid`` (``"inside"``: matched; ``"spread_outside"``: the
+        median matched, the spread only as near as the grid allows;
+        ``"below"``/``"above"``: even the sharpest PSF without motion is broader
+        than the real image / the broadest with the most motion narrower),
+        ``blur_px_builtin`` and ``rms_per_peak``: the rms of the motion within
+        an exposure per px of peak.
     """
     obs = recipe.obs
-    good = np.flatnonzero(obs.good)
-    rows = good[np.linspace(0, good.size - 1, min(n_frames, good.size)).astype(int)]
+    rows, cube_of, cubes = _calibration_rows(obs, frames_per_cube, max_frames)
     target = float(np.median(obs.noise_pixels[obs.good]))
+    real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
+    target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
     model = _frame_model(obs, "none")
     unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
-    medians = []
-    for peak in grid_px:
-        frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
-                                  motion=(peak * unit_x, peak * unit_y), noise_model="none",
-                                  radius_px=options.radius_px)
-        medians.append(float(np.median(_measure_rows(frames, obs, options))))
-    medians_arr = np.maximum.accumulate(np.asarray(medians))
-    if target <= medians_arr[0]:
-        peak_px, where = float(grid_px[0]), "below"
-    elif target >= medians_arr[-1]:
-        peak_px, where = float(grid_px[-1]), "above"
-    else:
-        peak_px, where = float(np.interp(target, medians_arr, grid_px)), "inside"
+
+    def curves(blur: float) -> tuple[np.ndarray, np.ndarray]:
+        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
+        medians, spreads = [], []
+        for peak in grid_px:
+            frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
+                                      motion=(peak * unit_x, peak * unit_y), noise_model="none",
+                                      star=star)
+            npx = _measure_rows(frames, obs, options)
+            medians.append(float(np.median(npx)))
+            spreads.append(_cube_median_sd(npx, cube_of))
+        return np.asarray(medians), np.asarray(spreads)
+
+    builtin_blur = float(load_gainmap_coefficients(obs.channel)["builtin"]["blur_px"])
     rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
-    return peak_px, {"noise_pixels_real": target, "motion_grid_px": list(grid_px),
-                     "noise_pixels_grid": medians, "target_vs_grid": where,
-                     "rms_per_peak": rms_per_peak}
+    # the committed PSF where it is not too broad: the motion alone on the median
+    med, sd = curves(builtin_blur)
+    peak_builtin = _solve_on_curve(target, med, grid_px)
+    if peak_builtin is not None:
+        return None, peak_builtin, {
+            "noise_pixels_real": target, "noise_pixels_cube_sd_real": target_sd,
+            "noise_pixels_twins": float(np.interp(peak_builtin, grid_px, med)),
+            "noise_pixels_cube_sd_twins": float(np.interp(peak_builtin, grid_px, sd)),
+            "blur_px": builtin_blur, "blur_px_builtin": builtin_blur, "blur_fitted": False,
+            "motion_peak_px": peak_builtin, "target_vs_grid": "inside",
+            "rms_per_peak": rms_per_peak, "frames_calibrated": int(rows.size),
+            "cubes_calibrated": len(cubes), "motion_grid_px": list(grid_px),
+            "noise_pixels_grid": [med.tolist()], "noise_pixels_cube_sd_grid": [sd.tolist()],
+            "blur_grid_px": [builtin_blur]}
+    grid_medians, grid_spreads, on_curve = [], [], []
+    for blur in blur_grid_px:
+        med, sd = curves(blur)
+        grid_medians.append(med.tolist())
+        grid_spreads.append(sd.tolist())
+        peak = _solve_on_curve(target, med, grid_px)
+        if peak is not None:
+            on_curve.append((float(blur), peak, float(np.interp(peak, grid_px, sd))))
+    if on_curve:
+        blurs = np.array([b for b, _, _ in on_curve])
+        excess = np.array([sd for _, _, sd in on_curve]) - target_sd
+        crossings = [(b0 + (b1 - b0) * e0 / (e0 - e1))
+                     for b0, b1, e0, e1 in zip(blurs[:-1], blurs[1:], excess[:-1], excess[1:],
+                                               strict=True)
+                     if e0 == 0 or e0 * e1 < 0]
+        if crossings:
+            blur = float(min(crossings, key=lambda b: abs(b - builtin_blur)))
+            where = "inside"
+        else:
+            blur, where = float(blurs[int(np.argmin(np.abs(excess)))]), "spread_outside"
+        med, sd = curves(blur)
+        peak_solved = _solve_on_curve(target, med, grid_px)
+        peak = float(peak_solved) if peak_solved is not None else \
+            float(grid_px[int(np.argmin(np.abs(med - target)))])
+    else:
+        # no blur reaches the real median: the sharpest PSF without motion, or the broadest
+        # with the most, whichever side the target is on
+        zero = np.array([m[0] for m in grid_medians])
+        if target < zero.min():
+            blur, peak, where = float(blur_grid_px[int(np.argmin(zero))]), 0.0, "below"
+        else:
+            top = np.array([max(m) for m in grid_medians])
+            blur, peak, where = float(blur_grid_px[int(np.argmax(top))]), float(grid_px[-1]), \
+                "above"
+        med, sd = curves(blur)
+    return blur, peak, {
+        "noise_pixels_real": target, "noise_pixels_cube_sd_real": target_sd,
+        "noise_pixels_twins": float(np.interp(peak, grid_px, med)),
+        "noise_pixels_cube_sd_twins": float(np.interp(peak, grid_px, sd)),
+        "blur_px": blur, "blur_px_builtin": builtin_blur, "blur_fitted": True,
+        "motion_peak_px": peak, "target_vs_grid": where, "rms_per_peak": rms_per_peak,
+        "frames_calibrated": int(rows.size), "cubes_calibrated": len(cubes),
+        "blur_grid_px": list(blur_grid_px), "motion_grid_px": list(grid_px),
+        "noise_pixels_grid": grid_medians, "noise_pixels_cube_sd_grid": grid_spreads}
+
+
+def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
+                             frames_per_cube: int = 8, max_frames: int = 2048
+                             ) -> tuple[float, dict]:
+    """The share of the real background's deviations the twins' sky must carry so that their
+    measured background scatters as much as the real one, and no more.
+
+    A twin's measured background already scatters by its photon and read
+    noise; the real one scatters more (on real epoch 1 about 3 e/px rms about
+    its running median, against 1 e/px of noise). Frames spread over the
+    cubes are rendered with noise on the smooth sky of ``recipe`` (its
+    ``sky_scatter`` 0); with ``v_twin`` the variance of their measured
+    background about the real running median and ``v_real`` the real
+    frames', the share is ``sqrt(1 - v_twin / v_real)`` (0 when the twins
+    already scatter as much): the real deviations, scaled so that they and
+    the twin's own noise add up to the real variance (robust variances:
+    1.4826 MAD squared).
+
+    Returns
+    -------
+    share : float
+    diagnostics : dict
+        ``background_sd_real``, ``background_sd_twin_noise`` (e/px) and ``share``.
+    """
+    obs = recipe.obs
+    rows, _, _ = _calibration_rows(obs, frames_per_cube, max_frames)
+    level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, obs.good)
+    model = _frame_model(obs, "physical")
+    motion = ExposureMotion(obs, model, recipe.motion_peak_px, rng(0, "trust", "calibrate"))
+    frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate", "background"),
+                              motion=motion.offsets(rows), radius_px=options.radius_px)
+    sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
+    measured = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
+                             fowler=obs.mode.fowler, wait=obs.mode.wait,
+                             read_noise_e=obs.read_noise_e)["background"]
+
+    def robust_var(x: np.ndarray) -> float:
+        x = x[np.isfinite(x)]
+        return float((1.4826 * np.median(np.abs(x - np.median(x)))) ** 2) if x.size else 0.0
+
+    v_real = robust_var(obs.background_e_per_px[rows] - level[rows])
+    v_twin = robust_var(np.asarray(measured, float) - level[rows])
+    share = float(np.sqrt(max(0.0, 1.0 - v_twin / v_real))) if v_real > 0 else 0.0
+    return share, {"background_sd_real": float(np.sqrt(v_real)),
+                   "background_sd_twin_noise": float(np.sqrt(v_twin)), "share": share}
 
 
 def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
