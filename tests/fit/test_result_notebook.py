@@ -20,7 +20,8 @@ import eclipsebench as eb
 from eclipsebench.cli import main
 from eclipsebench.fit.display import html_repr, text_repr
 
-pytestmark = pytest.mark.shared_data
+# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
+pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("result_notebook")]
 
 
 @pytest.fixture(scope="module")

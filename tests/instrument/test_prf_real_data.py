@@ -13,7 +13,8 @@ from photutils.aperture import CircularAperture
 
 from eclipsebench.instrument import prf as P
 
-pytestmark = pytest.mark.shared_data
+# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
+pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("prf_real_data")]
 
 
 def read_fits(path):
