@@ -31,6 +31,8 @@ def make_test_options() -> list[str]:
 
 
 def _pytest(args: list[str], env: dict[str, str]) -> subprocess.CompletedProcess:
+    # a fresh run, not a worker of this one (xdist tells its workers so in the environment)
+    env = {k: v for k, v in env.items() if not k.startswith(("PYTEST_XDIST", "PYTEST_CURRENT"))}
     run = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", *args],
                          cwd=REPO, capture_output=True, text=True, env=env, timeout=900)
     assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
@@ -44,7 +46,7 @@ def _serial_ids(tmp_path: Path) -> list[str]:
     return lines[:lines.index("")]
 
 
-@pytest.mark.slow  # collects the suite three times: ~30 s
+@pytest.mark.slow  # collects the suite three times: ~30 s of CPU
 @pytest.mark.timeout(1800)
 def test_the_parallel_run_collects_the_serial_run_s_test_ids(tmp_path):
     options = make_test_options()
