@@ -1,12 +1,12 @@
 """Shared test fixtures: where the real IRAC reference files live, data built once per run;
-how the suite runs in parallel (``make test``: pytest-xdist, ``--dist loadgroup``).
+how the suite runs in parallel (``make test``: pytest-xdist, ``-n auto --dist loadfile``).
 
-In a parallel run each worker process runs single-threaded (BLAS, numba), as the engine's
-tasks do: the parallelism is across tests, and two workers on two cores each starting two
-threads would only take turns. The tests that start Dask clusters of processes are in
-``xdist_group("dask")``: one worker runs them one at a time (a test that starts a local
-cluster outside that group fails, saying so). A module whose tests share an expensive
-module fixture is one group too, so the fixture is built once, not once per worker.
+A parallel run hands out whole files: one worker runs the tests of a file, so a module
+fixture is built once, not once per worker. The files whose tests start Dask clusters of
+processes (``DASK_MODULES``) are one unit more: one worker runs them, one test at a time, and
+a test elsewhere that starts a local cluster fails, saying so. (xdist's own ``loadgroup``
+does not group under pytest 9.2, whose node ids it can no longer rename.) Each worker runs
+single-threaded (BLAS, numba), as the engine's tasks do: the parallelism is across tests.
 """
 
 from __future__ import annotations
@@ -41,6 +41,36 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
         pytest.skip("only the collected ids were asked for")
 
 
+#: The test files that start Dask clusters of processes (``workers=2``, ``--workers 2``, the
+#: default two workers of ``run``, ``simulate`` and ``trust``, the ``dask`` command).
+DASK_MODULES = frozenset({
+    "tests/challenge/test_faults.py", "tests/challenge/test_runner.py",
+    "tests/engine/test_cluster.py", "tests/engine/test_cluster_security.py",
+    "tests/engine/test_engine.py", "tests/foundation/test_planet_cli.py",
+    "tests/simulation/test_sim_challenge.py", "tests/trust/test_trust.py",
+})
+
+
+def file_of(nodeid: str) -> str:
+    """The file part of a test id (``tests/x/test_y.py::test_z[a]`` -> ``tests/x/test_y.py``)."""
+    return nodeid.split("::", 1)[0]
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """``--dist loadfile``: xdist's, with the files of ``DASK_MODULES`` as one unit."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class FilesAndDask(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = file_of(nodeid)
+            return "dask" if path in DASK_MODULES else path
+
+    return FilesAndDask(config, log)
+
+
 def pytest_configure(config: pytest.Config) -> None:
     if os.environ.get("PYTEST_XDIST_WORKER"):
         import numba
@@ -52,21 +82,16 @@ def pytest_configure(config: pytest.Config) -> None:
         numba.set_num_threads(1)
 
 
-def _group(item: pytest.Item) -> str | None:
-    mark = item.get_closest_marker("xdist_group")
-    return None if mark is None else (mark.args[0] if mark.args else mark.kwargs.get("name"))
-
-
 @pytest.fixture(autouse=True)
-def _local_clusters_only_in_their_group(request, monkeypatch):
-    """A test outside ``xdist_group("dask")`` that starts a local Dask cluster fails."""
-    if _group(request.node) == "dask":
+def _local_clusters_only_in_the_dask_modules(request, monkeypatch):
+    """A test outside ``DASK_MODULES`` that starts a local Dask cluster fails."""
+    if file_of(request.node.nodeid) in DASK_MODULES:
         return
     from eclipsebench.engine import cluster
 
     def refuse(*args, **kwargs):
-        raise AssertionError("this test starts a local Dask cluster: mark it "
-                             "@pytest.mark.xdist_group(\"dask\") (tests/conftest.py)")
+        raise AssertionError("this test starts a local Dask cluster: add its file to "
+                             "DASK_MODULES in tests/conftest.py")
 
     monkeypatch.setattr(cluster, "_start_local", refuse)
 

@@ -28,10 +28,6 @@ from eclipsebench.config import load_config
 from eclipsebench.engine.tasks import Task, run_tasks, stamp_path
 from eclipsebench.errors import EXIT_ENVIRONMENT, EnvironmentFailure
 
-# `make test` (pytest-xdist): the modules whose tests start Dask clusters run on one worker,
-# one test at a time
-pytestmark = pytest.mark.xdist_group("dask")
-
 # The tiny challenge of tests/challenge/test_runner.py, one method, one profile, no
 # calibration set: the fewest tasks that still simulate, measure, reduce and score.
 SMALL = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",

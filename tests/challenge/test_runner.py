@@ -17,10 +17,6 @@ from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.errors import InputError
 
-# `make test` (pytest-xdist): the modules whose tests start Dask clusters run on one worker,
-# one test at a time
-pytestmark = pytest.mark.xdist_group("dask")
-
 # Two epochs of 233 two-frame cubes (the eclipse stays inside the Main AOR), one sub-sample.
 TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
         "simulation.subsamples=1", "simulation.calibration_frames=2000",

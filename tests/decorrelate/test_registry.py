@@ -18,9 +18,6 @@ from eclipsebench.decorrelate import available_methods, get_method
 from eclipsebench.decorrelate.base import EpochData, Systematics
 from eclipsebench.errors import InputError
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("registry")
-
 METHODS = available_methods()
 ARRAY_FIELDS = ("time_bmjd", "flux", "flux_err", "x", "y", "noise_pixels", "pixels", "aorkey")
 

@@ -23,10 +23,6 @@ from distributed import Client
 
 from eclipsebench.cli import main
 
-# `make test` (pytest-xdist): the modules whose tests start Dask clusters run on one worker,
-# one test at a time
-pytestmark = pytest.mark.xdist_group("dask")
-
 # as tests/challenge/test_runner.py: two epochs of 233 two-frame cubes, two methods
 TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
         "simulation.subsamples=1", "simulation.calibration_frames=2000",

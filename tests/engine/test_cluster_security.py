@@ -42,10 +42,6 @@ TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per
 INTRUDER = """
 import os, sys
 from distributed import Client
-
-# `make test` (pytest-xdist): the modules whose tests start Dask clusters run on one worker,
-# one test at a time
-pytestmark = pytest.mark.xdist_group("dask")
 client = Client(sys.argv[1], timeout="5s")
 print(client.submit(os.getpid, pure=False).result(timeout=10))
 """

@@ -132,7 +132,6 @@ def test_graph_errors(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("dask")  # a local cluster: see tests/conftest.py
 def test_two_dask_workers_give_the_same_bytes(tmp_path):
     one, two = tmp_path / "one", tmp_path / "two"
     one.mkdir()
@@ -150,7 +149,6 @@ def test_two_dask_workers_give_the_same_bytes(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("dask")  # a local cluster: see tests/conftest.py
 def test_dask_workers_keep_glibc_malloc_dynamic(tmp_path):
     """No MALLOC_TRIM_THRESHOLD_ (every task ran 1.8x slower) and no statistical profiler
     (1.17x) in the workers; one BLAS thread."""

@@ -28,9 +28,6 @@ from eclipsebench.fit.data import epoch_data_from_table, median_cadence_s, stand
 from eclipsebench.fit.reduce import reduce_epoch
 from eclipsebench.photometry.table import read_table, table_format
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("other_pipelines")
-
 #: No prayer bead: the comparisons are of the least-squares depths, and fast.
 FAST = replace(ReduceSection(), prayer_bead_shifts=0)
 MINIMAL = ("time_bmjd", "flux", "flux_err", "x", "y", "noise_pixels")

@@ -25,9 +25,6 @@ from eclipsebench.photometry.table import read_table
 
 from ..conftest import simulate_eclipse_epoch
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("other_pipelines_simulated")
-
 FAST = replace(ReduceSection(), prayer_bead_shifts=0)
 MINIMAL = ("time_bmjd", "flux", "flux_err", "x", "y", "noise_pixels")
 METHODS = {"bliss": None, "kr-data": None, "gp": {"bin_seconds": 240.0}, "poly2": None}

@@ -21,9 +21,6 @@ from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.fit.reduce import reduce_epoch
 from eclipsebench.photometry.table import read_table
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("phase_curve_simulated")
-
 SPARSE = ["observation.frames_per_cube=8", "observation.cube_interval_s=480.0",
           "simulation.subsamples=2"]
 OPTIONS = replace(ReduceSection(), event="phase-curve", prayer_bead_shifts=0)

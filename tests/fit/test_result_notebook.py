@@ -20,8 +20,7 @@ import eclipsebench as eb
 from eclipsebench.cli import main
 from eclipsebench.fit.display import html_repr, text_repr
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("result_notebook")]
+pytestmark = pytest.mark.shared_data
 
 
 @pytest.fixture(scope="module")

@@ -28,9 +28,6 @@ from eclipsebench.fit.astro_model import AstroModel, q_from_u, u_from_q
 from eclipsebench.fit.leastsq import _Problem
 from eclipsebench.fit.reduce import reduce_epoch, reduce_joint
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("transit")
-
 SYSTEM = get_system(SystemSection().name)   # the default planet (2015 challenge's XO-3b)
 T_TR = transit_time_bmjd(SYSTEM, 57234.0)
 TIME = T_TR - 0.16 + np.arange(0.0, 0.36, 4.0 / 86400.0)

@@ -22,9 +22,6 @@ from eclipsebench.commands.options import planet_overrides
 from eclipsebench.config import load_config
 from eclipsebench.simulation.plan import JD_OFFSET_BMJD
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("planet_cli")
-
 # An XO-3b-like planet in no catalogue: its own period, ephemeris and orbit.
 TEST_B = {"name": "test-b", "period_days": 2.7431, "t_transit_bjd": 2456001.2345, "ecc": 0.12,
           "omega_deg": 75.0, "inc_deg": 85.5, "a_rs": 6.2, "rp_rs": 0.1, "teff_star_k": 6200.0,

@@ -13,8 +13,7 @@ from photutils.aperture import CircularAperture
 
 from eclipsebench.instrument import prf as P
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("prf_real_data")]
+pytestmark = pytest.mark.shared_data
 
 
 def read_fits(path):

@@ -18,8 +18,7 @@ from eclipsebench.photometry.clean import FLAG_BITS
 from eclipsebench.photometry.estimators import noise_pixels
 from eclipsebench.photometry.table import read_photometry
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("phot_real_ch1")]
+pytestmark = pytest.mark.shared_data
 
 FOLDER = "real_hd209458_ch1_0p1s_41629440"
 

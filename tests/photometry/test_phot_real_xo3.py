@@ -11,8 +11,7 @@ from eclipsebench.cli import main
 from eclipsebench.photometry.clean import FLAG_BITS
 from eclipsebench.photometry.table import read_photometry
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("phot_real_xo3")]
+pytestmark = pytest.mark.shared_data
 
 # Table 1 (xo3meas) of the paper, epoch starting JD 2455000 + 1270.9776 (Pre AOR 46466816)
 TABLE1_X, TABLE1_SX, TABLE1_Y, TABLE1_SY = 15.13, 0.06, 15.12, 0.05

@@ -41,8 +41,7 @@ import pytest
 from eclipsebench.api import measure
 from eclipsebench.photometry.clean import FLAG_BITS
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("table1_real")]
+pytestmark = pytest.mark.shared_data
 
 # Table 1 (xo3meas), first row: epoch 1, AORs 46467072 (Pre) + 46471424 (Main)
 TABLE1_ROW1 = {"x_mean_px": 15.17, "x_sd_px": 0.03, "y_mean_px": 15.00, "y_sd_px": 0.05,

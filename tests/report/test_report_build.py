@@ -14,9 +14,6 @@ from eclipsebench.report.build import build_report
 from eclipsebench.report.figures import fit_inverse, fit_line
 from eclipsebench.stats.summary import summarize
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("report_build")
-
 METHODS = ("bliss", "pld", "gp")
 
 

@@ -22,9 +22,6 @@ from eclipsebench.photometry.measure import measure_stack
 from eclipsebench.simulation.challenge import challenge_plans, simulate_aor
 from eclipsebench.simulation.star import IRACSIM2015_ANNULUS_WING_PER_E, StarImager, make_prf
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = pytest.mark.xdist_group("iracsim2015_calibration")
-
 CUBE_FLUX_E = 73173.0
 CUBE_BACKGROUND_E_PER_PX = 111.0
 CUBE_SCATTER_RATIO, CUBE_SCATTER_ERR = 1.57, 0.14

@@ -15,10 +15,6 @@ from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.simulation.challenge import simulate_challenge
 
-# `make test` (pytest-xdist): the modules whose tests start Dask clusters run on one worker,
-# one test at a time
-pytestmark = pytest.mark.xdist_group("dask")
-
 TINY = ["challenge.epochs=1", "observation.pre_cubes=1", "observation.main_cubes=2",
         "simulation.calibration_frames=600"]
 

@@ -13,8 +13,7 @@ from eclipsebench.config import load_config
 from eclipsebench.simulation.challenge import simulate_aor
 from eclipsebench.simulation.plan import plan_challenge
 
-# `make test` (pytest-xdist): one worker runs this module, its shared fixture built once
-pytestmark = [pytest.mark.shared_data, pytest.mark.xdist_group("sim_realism")]
+pytestmark = pytest.mark.shared_data
 
 
 def _electrons(files: list[Path]) -> np.ndarray:

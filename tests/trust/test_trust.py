@@ -26,10 +26,6 @@ from eclipsebench.trust.twin import ExposureMotion, make_recipe, twin_table
 
 from ..conftest import simulate_eclipse_epoch
 
-# `make test` (pytest-xdist): the modules whose tests start Dask clusters run on one worker,
-# one test at a time
-pytestmark = pytest.mark.xdist_group("dask")
-
 SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
         "observation.main_cubes=80", "observation.cube_interval_s=220.0",
         "simulation.subsamples=2"]
