@@ -1,13 +1,121 @@
-"""Shared test fixtures: where the real IRAC reference files live."""
+"""Shared test fixtures: where the real IRAC reference files live, data built once per run;
+how the suite runs in parallel (``make test``: pytest-xdist, ``-n auto --dist loadfile``).
+
+A parallel run hands out whole files: one worker runs the tests of a file, so a module
+fixture is built once, not once per worker. The files whose tests start Dask clusters of
+processes (``DASK_MODULES``) are one unit more: one worker runs them, one test at a time, and
+a test elsewhere that starts a local cluster fails, saying so. (xdist's own ``loadgroup``
+does not group under pytest 9.2, whose node ids it can no longer rename.) Each worker runs
+single-threaded (BLAS, numba), as the engine's tasks do: the parallelism is across tests.
+"""
 
 from __future__ import annotations
 
+import fcntl
+import os
+import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_IRAC = (ROOT / ".." / "shared" / "data" / "irac").resolve()
+
+#: With this variable naming a folder, a parallel run (pytest-xdist) writes there the test ids
+#: each worker collected (``gw0.txt``...) and skips every test before its fixtures.
+COLLECTED_IDS_ENV = "ECLIPSEBENCH_COLLECTED_IDS"
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_node_collection_finished(node, ids: list[str]) -> None:
+    """The controller of a parallel run: ``ids`` is what worker ``node`` collected."""
+    folder = os.environ.get(COLLECTED_IDS_ENV)
+    if folder:
+        (Path(folder) / f"{node.gateway.id}.txt").write_text("".join(f"{i}\n" for i in ids))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    if os.environ.get(COLLECTED_IDS_ENV):
+        pytest.skip("only the collected ids were asked for")
+
+
+#: The test files that start Dask clusters of processes (``workers=2``, ``--workers 2``, the
+#: default two workers of ``run``, ``simulate`` and ``trust``, the ``dask`` command).
+DASK_MODULES = frozenset({
+    "tests/challenge/test_faults.py", "tests/challenge/test_runner.py",
+    "tests/engine/test_cluster.py", "tests/engine/test_cluster_security.py",
+    "tests/engine/test_engine.py", "tests/foundation/test_planet_cli.py",
+    "tests/simulation/test_sim_challenge.py", "tests/trust/test_trust.py",
+})
+
+
+def file_of(nodeid: str) -> str:
+    """The file part of a test id (``tests/x/test_y.py::test_z[a]`` -> ``tests/x/test_y.py``)."""
+    return nodeid.split("::", 1)[0]
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log):
+    """``--dist loadfile``: xdist's, with the files of ``DASK_MODULES`` as one unit."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class FilesAndDask(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = file_of(nodeid)
+            return "dask" if path in DASK_MODULES else path
+
+    return FilesAndDask(config, log)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        import numba
+        import numpy  # noqa: F401 - load the BLAS libraries, then limit them
+        import scipy.linalg  # noqa: F401
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(limits=1)
+        numba.set_num_threads(1)
+
+
+@pytest.fixture(autouse=True)
+def _local_clusters_only_in_the_dask_modules(request, monkeypatch):
+    """A test outside ``DASK_MODULES`` that starts a local Dask cluster fails."""
+    if file_of(request.node.nodeid) in DASK_MODULES:
+        return
+    from eclipsebench.engine import cluster
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("this test starts a local Dask cluster: add its file to "
+                             "DASK_MODULES in tests/conftest.py")
+
+    monkeypatch.setattr(cluster, "_start_local", refuse)
+
+
+def built_once(tmp_path_factory: pytest.TempPathFactory, name: str,
+               build: Callable[[Path], None]) -> Path:
+    """A folder ``name`` that ``build(folder)`` fills once per test run, for every worker.
+
+    A session fixture runs once per pytest-xdist worker; this one builds under a kernel lock in
+    the folder the workers' temporary folders share (the run's own one when serial), and the
+    other workers wait and then read it. Only for data the tests read and never change.
+    """
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent
+    folder = base / name
+    with open(base / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)   # released when the file closes, or its process ends
+        if not (base / f"{name}.done").is_file():
+            shutil.rmtree(folder, ignore_errors=True)   # a build that died half-way
+            folder.mkdir()
+            build(folder)
+            (base / f"{name}.done").touch()
+    return folder
 
 
 @pytest.fixture(scope="session")
@@ -21,11 +129,11 @@ def shared_irac() -> Path:
 @pytest.fixture(scope="session")
 def real_epoch1_table(shared_irac, tmp_path_factory) -> Path:
     """Our photometry (built-in settings) of real epoch 1 (``real_xo3_eclipse1``), as a FITS
-    table written once per session."""
+    table written once per test run (tests only read it)."""
     from eclipsebench.api import measure
 
-    out = tmp_path_factory.mktemp("real_epoch1")
-    measure(shared_irac / "real_xo3_eclipse1", out)
+    out = built_once(tmp_path_factory, "real_epoch1",
+                     lambda folder: measure(shared_irac / "real_xo3_eclipse1", folder))
     return out / "epoch_01.fits"
 
 
