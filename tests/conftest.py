@@ -3,10 +3,12 @@ how the suite runs in parallel (``make test``: pytest-xdist, ``-n auto --dist lo
 
 A parallel run hands out whole files: one worker runs the tests of a file, so a module
 fixture is built once, not once per worker. The files whose tests start Dask clusters of
-processes (``DASK_MODULES``) are one unit more: one worker runs them, one test at a time, and
-a test elsewhere that starts a local cluster fails, saying so. (xdist's own ``loadgroup``
-does not group under pytest 9.2, whose node ids it can no longer rename.) Each worker runs
-single-threaded (BLAS, numba), as the engine's tasks do: the parallelism is across tests.
+processes (``DASK_MODULES``) are handed out first, longest first, so that the two workers
+each start with one and the short files fill in behind them; at most two clusters run at
+once, one per worker, and a test elsewhere that starts a local cluster fails, saying so.
+(xdist's own ``loadgroup`` does not group under pytest 9.2, whose node ids it can no longer
+rename.) Each worker runs single-threaded (BLAS, numba), as the engine's tasks do: the
+parallelism is across tests.
 """
 
 from __future__ import annotations
@@ -42,13 +44,14 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
 
 
 #: The test files that start Dask clusters of processes (``workers=2``, ``--workers 2``, the
-#: default two workers of ``run``, ``simulate`` and ``trust``, the ``dask`` command).
-DASK_MODULES = frozenset({
-    "tests/challenge/test_faults.py", "tests/challenge/test_runner.py",
-    "tests/engine/test_cluster.py", "tests/engine/test_cluster_security.py",
-    "tests/engine/test_engine.py", "tests/foundation/test_planet_cli.py",
-    "tests/simulation/test_sim_challenge.py", "tests/trust/test_trust.py",
-})
+#: default two workers of ``run``, ``simulate`` and ``trust``, the ``dask`` command), longest
+#: first (``--durations``): a parallel run hands them out first, in this order.
+DASK_MODULES = (
+    "tests/challenge/test_faults.py", "tests/trust/test_trust.py",
+    "tests/challenge/test_runner.py", "tests/engine/test_cluster.py",
+    "tests/engine/test_engine.py", "tests/simulation/test_sim_challenge.py",
+    "tests/engine/test_cluster_security.py", "tests/foundation/test_planet_cli.py",
+)
 
 
 def file_of(nodeid: str) -> str:
@@ -58,17 +61,24 @@ def file_of(nodeid: str) -> str:
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config: pytest.Config, log):
-    """``--dist loadfile``: xdist's, with the files of ``DASK_MODULES`` as one unit."""
+    """``--dist loadfile``: xdist's, handing out the files of ``DASK_MODULES`` first."""
     if config.getvalue("dist") != "loadfile":
         return None
     from xdist.scheduler import LoadScopeScheduling
 
-    class FilesAndDask(LoadScopeScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            path = file_of(nodeid)
-            return "dask" if path in DASK_MODULES else path
+    rank = {path: i for i, path in enumerate(DASK_MODULES)}
 
-    return FilesAndDask(config, log)
+    class DaskFilesFirst(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return file_of(nodeid)
+
+        def _assign_work_unit(self, node) -> None:
+            # the first file by rank (the others keep their order): min returns the first
+            first = min(self.workqueue, key=lambda scope: rank.get(scope, len(rank)))
+            self.workqueue.move_to_end(first, last=False)
+            super()._assign_work_unit(node)
+
+    return DaskFilesFirst(config, log)
 
 
 def pytest_configure(config: pytest.Config) -> None:
