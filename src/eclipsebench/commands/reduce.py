@@ -82,13 +82,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="MCMC step cap (default 5000)")
     p.add_argument("--radius", type=positive_float(), default=None, metavar="PX",
                    help="aperture radius whose flux column is fitted (default: the table's flux)")
-    p.add_argument("--columns", dest="columns", action="append", default=[],
-                   metavar="NEW=OLD,...",
-                   help="map the table's column names to the package's, e.g. "
-                        "--columns flux=FLUX,flux_err=FLUX_ERR (repeatable)")
-    p.add_argument("--time-column", metavar="NAME", default=None,
-                   help="the table's time column (default: time_bmjd)")
-    add_time_options(p)
+    add_table_options(p, "map the table's column names to the package's, e.g. "
+                         "--columns flux=FLUX,flux_err=FLUX_ERR (repeatable)")
     p.add_argument("--pmap", metavar="PATH", default=None,
                    help="calibration set for kr-pmap (a calibration-star table, the SSC pmap, or "
                         "a folder of SSC map versions: the one in force at the observation's "
@@ -117,8 +112,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="plot the binned decorrelated light curve with the model")
 
 
-def add_time_options(p: argparse.ArgumentParser) -> None:
-    """``--time-format``, ``--time-scale``, ``--time-at``, ``--observer`` (reduce and trust)."""
+def add_table_options(p: argparse.ArgumentParser, columns_help: str) -> None:
+    """How to read another pipeline's table (reduce and trust): ``--columns``,
+    ``--time-column``, ``--time-format``, ``--time-scale``, ``--time-at``, ``--observer``."""
+    p.add_argument("--columns", dest="columns", action="append", default=[],
+                   metavar="NEW=OLD,...", help=columns_help)
+    p.add_argument("--time-column", metavar="NAME", default=None,
+                   help="the table's time column (default: time_bmjd)")
     p.add_argument("--time-format", choices=tuple(TIME_FORMATS), default=None,
                    help="format of the time column: bmjd (default, BJD - 2400000.5) or bjd, "
                         "barycentric; mjd or jd, at the observer, converted to BMJD_TDB with "

@@ -19,7 +19,7 @@ from .options import (
     positive_float,
     positive_int,
 )
-from .reduce import _TABLE_LABELS, _column_map, add_time_options, time_options
+from .reduce import _TABLE_LABELS, _column_map, add_table_options, time_options
 
 #: The readouts twins are made for (subarray modes).
 SUBARRAY_READOUTS = tuple(name for name, mode in READOUT_MODES.items() if mode.subarray)
@@ -64,13 +64,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "gridded SSC map (or a folder of dated versions), the twins' gain")
     p.add_argument("--seed", type=positive_int(minimum=0), default=0, metavar="N",
                    help="one seed for every twin's noise and every reduction")
-    p.add_argument("--columns", dest="columns", action="append", default=[],
-                   metavar="NEW=OLD,...",
-                   help="map another pipeline's column names to the package's, as reduce "
-                        "--columns (repeatable)")
-    p.add_argument("--time-column", metavar="NAME", default=None,
-                   help="the table's time column (default: time_bmjd)")
-    add_time_options(p)
+    add_table_options(p, "map another pipeline's column names to the package's, as reduce "
+                         "--columns (repeatable)")
     p.add_argument("--readout", choices=SUBARRAY_READOUTS, default=None,
                    help="another pipeline's subarray readout (default: the mode whose frame "
                         "time is the table's cadence)")
