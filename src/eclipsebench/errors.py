@@ -16,8 +16,8 @@ import errno
 EXIT_ENVIRONMENT = 3
 
 #: ``errno`` values of a write that fail because of the machine, not of the input.
-ENVIRONMENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EPERM,
-                                errno.EROFS, errno.EIO, errno.ENOMEM})
+ENVIRONMENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EACCES,
+                                errno.EPERM, errno.EROFS, errno.EIO, errno.ENOMEM})
 
 
 class InputError(Exception):

@@ -195,3 +195,24 @@ def test_read_bcd_header_error_is_a_data_error(tmp_path, bad):
     path = bad.write_cube(tmp_path, bad.star_cube(2), expid=3, EXPID=4)
     with pytest.raises(DataError, match="EXPID = 4 but the name says 0003"):
         read_bcd_header(path)
+
+
+def test_a_file_size_limit_is_one_line_exit_3_and_leaves_nothing(tmp_path):
+    """EFBIG (``ulimit -f``) is the machine's limit, not bad input: exit 3, one line naming
+    the file and what to do, no partial file (issue 38: it was exit 2 in three lines)."""
+    import resource
+    import subprocess
+    import sys
+
+    out = tmp_path / "out" / "lc.ecsv"
+    code = ("import resource, sys\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))\n"
+            "from eclipsebench.cli import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    assert resource.getrlimit(resource.RLIMIT_FSIZE)[0] != 0
+    run = subprocess.run([sys.executable, "-c", code, "lightcurve", "--hours", "2", "--out",
+                          str(out), "--quiet"], capture_output=True, text=True, timeout=300)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == EXIT_ENVIRONMENT, run.stderr
+    assert len(lines) == 1 and str(out) in lines[0] and "ulimit -f" in lines[0], lines
+    assert not out.exists() and not list(out.parent.glob("*"))

@@ -120,7 +120,8 @@ def _write_error(dest: Path, exc: OSError, *, nothing_written: bool = False,
     if exc.errno in ENVIRONMENT_ERRNOS:
         needed = f", {size_bytes} bytes needed" if size_bytes is not None else ""
         hint = ("free space there and rerun" if exc.errno in (errno.ENOSPC, errno.EDQUOT)
-                else "make it writable and rerun" if exc.errno in (errno.EACCES, errno.EPERM,
+                else "raise the file-size limit (ulimit -f) and rerun"
+                if exc.errno == errno.EFBIG else "make it writable and rerun" if exc.errno in (errno.EACCES, errno.EPERM,
                                                                     errno.EROFS)
                 else "rerun when the device is back")
         return EnvironmentFailure(f"{dest}: cannot write in {dest.parent} ({_reason(exc)}"
