@@ -33,7 +33,15 @@ from collections.abc import Iterator, Sequence
 from typing import Any, NoReturn
 
 from . import __version__
-from .errors import EXIT_ENVIRONMENT, EnvironmentFailure, InputError
+from .errors import (
+    EXIT_ENVIRONMENT,
+    EnvironmentFailure,
+    InputError,
+    Interrupted,
+    clear_interrupts,
+    note_interrupt,
+    raise_pending_interrupt,
+)
 from .io.paths import missing_folders, remove_empty_folders
 from .progress import configure
 
@@ -137,14 +145,6 @@ class _Silenced:
 INTERRUPT_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
-class Interrupted(KeyboardInterrupt):
-    """A KeyboardInterrupt that remembers the signal that raised it."""
-
-    def __init__(self, signum: int):
-        self.signum = signum
-        super().__init__(signal.Signals(signum).name)
-
-
 @contextlib.contextmanager
 def _one_line_interrupt() -> Iterator[None]:
     """On Ctrl-C or SIGTERM, silence stdout and stderr until the interrupt reaches :func:`main`.
@@ -176,6 +176,7 @@ def _one_line_interrupt() -> Iterator[None]:
                 os.close(devnull)
             saved["fds"] = fds
             sys.stdout = sys.stderr = _Silenced()
+        note_interrupt(signum)   # raised again between tasks if something swallows this one
         raise Interrupted(signum)
 
     previous = {signum: signal.signal(signum, handler) for signum in INTERRUPT_SIGNALS}
@@ -184,6 +185,7 @@ def _one_line_interrupt() -> Iterator[None]:
     finally:
         for signum, old in previous.items():
             signal.signal(signum, old)
+        clear_interrupts()
         if saved:
             for fd, copy in saved["fds"].items():
                 with contextlib.suppress(OSError):
@@ -230,9 +232,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     configure(quiet=args.quiet or args.json)
     created = [folder for name in ("out", "plot")
                for folder in missing_folders(getattr(args, name, None))]
+    clear_interrupts()
     try:
         with _one_line_interrupt():
             result = module.run(args)
+            raise_pending_interrupt()   # one that something swallowed: still an interrupt
     except InputError as exc:
         remove_empty_folders(created)
         print(f"eclipsebench {module.NAME}: error: {' '.join(str(exc).split())}",

@@ -11,6 +11,7 @@ unwritable, memory exhausted) is an :class:`EnvironmentFailure` (exit code
 from __future__ import annotations
 
 import errno
+import signal
 
 #: Exit code of an environment failure (disk full, permission, memory): not bad input.
 EXIT_ENVIRONMENT = 3
@@ -78,6 +79,46 @@ class EnvironmentFailure(Exception):
 
     def __reduce__(self):  # pickled across Dask workers with its attributes
         return type(self), (str(self), self.folder, self.bytes_needed)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A KeyboardInterrupt that remembers the signal (SIGINT, SIGTERM) that raised it."""
+
+    def __init__(self, signum: int):
+        self.signum = signum
+        super().__init__(signal.Signals(signum).name)
+
+
+#: The interrupt signals received and not yet honoured (see :func:`raise_pending_interrupt`).
+_pending_signals: list[int] = []
+
+
+def note_interrupt(signum: int) -> None:
+    """Remember that ``signum`` asked the command to stop (called by the CLI's signal handler)."""
+    _pending_signals.append(int(signum))
+
+
+def pending_interrupt() -> int | None:
+    """The first interrupt signal received and not cleared, else None."""
+    return _pending_signals[0] if _pending_signals else None
+
+
+def clear_interrupts() -> None:
+    """Forget the interrupts received (the CLI does at the start and end of a command)."""
+    _pending_signals.clear()
+
+
+def raise_pending_interrupt() -> None:
+    """Raise :class:`Interrupted` again if an interrupt was received and swallowed.
+
+    A signal handler raises where the main thread happens to be; code that
+    catches everything (emcee's ``random_state`` setter has a bare
+    ``except: pass``; an exception in ``__del__`` is only printed) can swallow
+    it, and the run would go on to the end. The engine calls this between
+    tasks, so such a run still stops at the next task boundary.
+    """
+    if _pending_signals:
+        raise Interrupted(_pending_signals[0])
 
 
 def require(condition: bool, name: str, expected: str) -> None:

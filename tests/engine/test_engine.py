@@ -247,3 +247,54 @@ def test_dask_workers_keep_their_scratch_in_a_private_folder(tmp_path):
     seen = json.loads(out.read_text())
     assert seen["private"].startswith("eclipsebench-dask-") and seen["mode"] == 0o700, seen
     assert not seen["folder"].startswith("/tmp/dask-scratch-space")
+
+
+def swallow_sigterm(path: str) -> None:
+    """A task in which a library swallows the interrupt (as emcee's ``random_state``
+    setter does with its bare ``except: pass``), then writes its output."""
+    import os
+    import signal
+    import time
+
+    try:
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5.0)
+    except KeyboardInterrupt:
+        pass
+    write_json(path, {"done": True})
+
+
+def test_an_interrupt_a_task_swallowed_still_stops_the_run_at_the_next_task(tmp_path):
+    """The SIGTERM test of tests/challenge/test_faults.py once saw exit 0 and an empty
+    stderr: the run had gone to its end after the signal. A swallowed interrupt is
+    raised again between tasks, so the next task does not run."""
+    from eclipsebench.cli import _one_line_interrupt
+    from eclipsebench.errors import Interrupted
+
+    first = Task("a", "x", swallow_sigterm, (str(tmp_path / "a.json"),), (tmp_path / "a.json",))
+    second = Task("b", "x", make_numbers, (str(tmp_path / "b.json"), 1, 1),
+                  (tmp_path / "b.json",), deps=("a",))
+    with pytest.raises(Interrupted) as caught, _one_line_interrupt():
+        run_tasks([first, second], workers=1)
+    assert caught.value.signum == 15
+    assert (tmp_path / "a.json").exists() and not (tmp_path / "b.json").exists()
+    assert stamp_path(first).exists()   # written whole: not redone on resume
+
+
+def test_a_command_that_swallowed_its_interrupt_exits_143_in_one_line(monkeypatch, capsys):
+    import os
+    import signal
+
+    from eclipsebench import cli
+    from eclipsebench.commands import stats
+
+    def swallowing(args):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+        except KeyboardInterrupt:
+            pass
+
+    monkeypatch.setattr(stats, "run", swallowing)
+    assert cli.main(["stats", "x.ecsv"]) == 143
+    assert capsys.readouterr().err.splitlines() == [
+        "eclipsebench stats: interrupted by SIGTERM; rerun the same command to resume"]

@@ -52,7 +52,7 @@ import cloudpickle
 import numba
 from threadpoolctl import threadpool_limits
 
-from ..errors import EnvironmentFailure, InputError
+from ..errors import EnvironmentFailure, InputError, raise_pending_interrupt
 from ..io.atomic import confined_to, write_json
 from ..io.digest import file_sha256
 from ..io.paths import check_inside
@@ -540,6 +540,7 @@ def _run_sync(run: _Run, todo: list[str]) -> None:
             continue  # a dependency failed: not run
         run.in_flight[key] = time.time_ns()
         run.settle(key, functools.partial(_call, task.func, task.args, run.root))
+        raise_pending_interrupt()
         if run.stopped:
             break
 
@@ -575,6 +576,7 @@ def _run_dask(run: _Run, todo: list[str], *, workers: int, scheduler: str | None
         for fut in ac:
             key = futures.pop(fut.key)
             run.settle(key, fut.result)
+            raise_pending_interrupt()
             if run.stopped:
                 client.cancel(list(ac.futures))  # the others would meet the same failure
                 break
