@@ -8,7 +8,7 @@ the rule, and exits 1 if there is any. The layers are read from the table in
 the test holds). A package may import its own modules and any package of a
 row above its own in the table (a lower layer, or an earlier row of its
 layer); an import of a package in its own row or below it fails, and so does
-a cycle. Every import statement counts: at module level, inside a
+a cycle, between packages or between modules (:func:`module_cycles`). Every import statement counts: at module level, inside a
 function, and under ``if TYPE_CHECKING`` (an annotation that names a higher
 layer is a dependency of the reader all the same). The package root
 (``eclipsebench/__init__.py``: the version and the lazily loaded public names)
@@ -56,14 +56,32 @@ def module_name(path: Path, root: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imports(path: Path, root: Path) -> list[tuple[int, str]]:
-    """(line, module) of every eclipsebench module ``path`` imports, wherever the statement is."""
+def _type_checking_nodes(tree: ast.AST) -> set[int]:
+    """The ids of the nodes under ``if TYPE_CHECKING:`` (imports for annotations only)."""
+    inside: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            inside |= {id(n) for stmt in node.body for n in ast.walk(stmt)}
+    return inside
+
+
+def imports(path: Path, root: Path, modules: set[str] | None = None,
+            runtime_only: bool = False) -> list[tuple[int, str]]:
+    """(line, module) of every eclipsebench module ``path`` imports, wherever the statement is.
+
+    With ``modules`` (the names of the package's modules), ``from X import n`` is
+    ``X.n`` where that is a module of its own; with ``runtime_only``, imports under
+    ``if TYPE_CHECKING:`` (never executed) are left out.
+    """
     tree = ast.parse(path.read_text(encoding="utf-8"))
+    skipped = _type_checking_nodes(tree) if runtime_only else set()
     here = module_name(path, root).split(".")
     if path.name != "__init__.py":
         here = here[:-1]
     found = []
     for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = here[:len(here) - node.level + 1]
@@ -73,12 +91,33 @@ def imports(path: Path, root: Path) -> list[tuple[int, str]]:
                     continue
             else:
                 target = node.module or ""
-            if target.split(".")[0] == root.name:
+            if target.split(".")[0] != root.name:
+                continue
+            if modules is None:
                 found.append((node.lineno, target))
+            else:
+                found += [(node.lineno, f"{target}.{a.name}" if f"{target}.{a.name}" in modules
+                           else target) for a in node.names]
         elif isinstance(node, ast.Import):
             found += [(node.lineno, a.name) for a in node.names
                       if a.name.split(".")[0] == root.name]
     return found
+
+
+def module_cycles(root: Path = ROOT) -> list[list[str]]:
+    """Cycles between modules through imports that run (a function's own included).
+
+    The package graph cannot see a loop inside one package (``fit.result``
+    importing ``fit.reduce`` in a function while ``fit.reduce`` imports it at
+    the top); this graph joins modules, not packages. Imports under ``if
+    TYPE_CHECKING:`` are left out: they never run, and the package rule already
+    holds them to the layers.
+    """
+    paths = {module_name(p, root): p for p in sorted(root.rglob("*.py"))}
+    names = set(paths)
+    graph = {name: {t for _, t in imports(path, root, names, runtime_only=True)
+                    if t in names and t != name} for name, path in paths.items()}
+    return cycles(graph)
 
 
 def package(module: str) -> str:
@@ -134,6 +173,8 @@ def check(root: Path = ROOT, doc: Path = DOC) -> tuple[dict[str, set[str]], list
                                 f"the table)")
     for c in cycles(graph):
         problems.append("cycle: " + " -> ".join(c))
+    for c in module_cycles(root):
+        problems.append("module cycle: " + " -> ".join(c))
     return graph, sorted(set(problems))
 
 

@@ -342,8 +342,7 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         it), ``n_twins``, ``twin_depth_ppm``.
     """
     from .io.paths import check_output_path
-    from .trust.observation import trust_settings
-    from .trust.run import run_trust
+    from .trust.run import run_trust, trust_settings
 
     cfg = _config(config)
     section = cfg.reduce

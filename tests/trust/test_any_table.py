@@ -20,8 +20,8 @@ from eclipsebench.trust.observation import (
     OBSERVATION_FILE,
     complete_table,
     flux_scale_from_scatter,
-    trust_settings,
 )
+from eclipsebench.trust.run import trust_settings
 
 from ..conftest import real_epoch1_jd_utc, simulate_eclipse_epoch
 from .test_trust import SETS

@@ -104,8 +104,7 @@ def _method_options(items: list[str]) -> dict[str, dict]:
 
 def run(args: argparse.Namespace) -> dict:
     # the simulator and every method: imported when the command runs, not for --help
-    from ..trust.observation import trust_settings
-    from ..trust.run import run_trust
+    from ..trust.run import run_trust, trust_settings
 
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))

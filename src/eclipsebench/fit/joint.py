@@ -7,7 +7,6 @@ depth is shared. :func:`reduce_joint` returns a :class:`JointResult`.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -15,7 +14,6 @@ from scipy.optimize import least_squares
 
 from ..config.reduce import ReduceSection
 from ..errors import InputError
-from .display import html_repr, text_repr
 from .leastsq import (
     _covariance,
     _Problem,
@@ -23,60 +21,9 @@ from .leastsq import (
     fit_leastsq,
 )
 from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch, resolve_method_options
-from .result import joint_extra_keys, joint_fields_shown
+from .result import JointResult
 
-__all__ = ["JointResult", "reduce_joint"]
-
-
-@dataclass(frozen=True)
-class JointResult:
-    """One depth common to several epochs; every other parameter per epoch."""
-
-    method: str
-    epochs: tuple[int | None, ...]
-    depth_ppm: float
-    depth_err_ppm: float
-    depth_err_jacobian_ppm: float
-    beta_red: float
-    chi2_red: float
-    bic: float
-    aic: float
-    k: int
-    n_points: int
-    phase: str
-    converged: bool
-    t_ecl_bmjd: tuple[float, ...]
-    per_epoch: tuple[dict[str, Any], ...]
-
-    @property
-    def depth_combined_ppm(self) -> float:
-        """Inverse-variance mean of the epochs' depths fitted alone."""
-        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
-        return float(np.sum(w * [e["depth_alone_ppm"] for e in self.per_epoch]) / np.sum(w))
-
-    @property
-    def depth_combined_err_ppm(self) -> float:
-        """``1 / sqrt(sum 1 / sigma_i^2)`` of the epochs' errors fitted alone."""
-        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
-        return float(1.0 / np.sqrt(np.sum(w)))
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"method": self.method, "joint": True, "epochs": list(self.epochs),
-                "depth_ppm": self.depth_ppm,
-                "depth_combined_ppm": self.depth_combined_ppm,
-                "depth_combined_err_ppm": self.depth_combined_err_ppm,
-                "depth_err_ppm": self.depth_err_ppm,
-                "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
-                "beta_red": self.beta_red, "chi2_red": self.chi2_red, "bic": self.bic,
-                "aic": self.aic, "k": self.k, "n_points": self.n_points, "phase": self.phase,
-                "converged": self.converged, "t_ecl_bmjd": list(self.t_ecl_bmjd),
-                "per_epoch": list(self.per_epoch), **joint_extra_keys(self)}
-
-    def __repr__(self) -> str:
-        return text_repr("JointResult", joint_fields_shown(self))
-
-    def _repr_html_(self) -> str:
-        return html_repr("JointResult", joint_fields_shown(self))
+__all__ = ["reduce_joint"]
 
 
 class _JointProblem:

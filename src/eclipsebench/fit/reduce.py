@@ -17,7 +17,7 @@ result (:mod:`.result`). This module keeps their public names in one place.
 from __future__ import annotations
 
 from .epoch_fit import fit_prepared, phase_curve_detail
-from .joint import JointResult, reduce_joint
+from .joint import reduce_joint
 from .phase_select import PhaseSelection, select_phase_model
 from .prepare import (
     PreparedEpoch,
@@ -28,7 +28,7 @@ from .prepare import (
     resolve_system,
 )
 from .profile_fit import reduce_epoch, resolve_profile
-from .result import EpochResult
+from .result import EpochResult, JointResult
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",

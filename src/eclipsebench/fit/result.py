@@ -29,7 +29,7 @@ from ..io.atomic import atomic_path
 from .display import html_repr, text_repr
 
 __all__ = ["EpochResult", "jsonable", "lightcurve_errors", "lightcurve_path", "chain_path",
-           "read_result", "bic_data", "joint_extra_keys", "joint_fields_shown",
+           "read_result", "bic_data", "JointResult",
            "LIGHTCURVE_COLUMNS"]
 
 #: ``RESULT.lc.ecsv``'s columns: their description (all relative fluxes, units of the star).
@@ -403,7 +403,7 @@ def read_result(path: str | os.PathLike):
     path = Path(path)
     data = _read_json(path)
     if data.get("joint"):
-        return _joint_from_dict(path, data)
+        return JointResult.from_dict(data, path)
     lc_file, chain_file = lightcurve_path(path), chain_path(path)
     lightcurve = _read_lightcurve(lc_file) if lc_file.is_file() else {}
     chain = _read_chain(chain_file) if chain_file.is_file() else None
@@ -452,34 +452,81 @@ def _read_chain(path: Path) -> dict[str, np.ndarray]:
             from None
 
 
-def joint_extra_keys(result) -> dict[str, Any]:
-    """A joint result's keys beyond its fields: its BIC's points (every epoch's, summed;
-    bins for a binned method) and the software version."""
-    return {"bic_n_points": result.n_points,
-            "bic_data": f"{result.n_points} points of {len(result.epochs)} epochs",
-            "eclipsebench_version": __version__}
+@dataclass(frozen=True)
+class JointResult:
+    """One depth common to several epochs; every other parameter per epoch."""
 
+    method: str
+    epochs: tuple[int | None, ...]
+    depth_ppm: float
+    depth_err_ppm: float
+    depth_err_jacobian_ppm: float
+    beta_red: float
+    chi2_red: float
+    bic: float
+    aic: float
+    k: int
+    n_points: int
+    phase: str
+    converged: bool
+    t_ecl_bmjd: tuple[float, ...]
+    per_epoch: tuple[dict[str, Any], ...]
 
-def joint_fields_shown(result) -> dict[str, Any]:
-    """A joint result's fields for :func:`~eclipsebench.fit.display.text_repr` and
-    :func:`~eclipsebench.fit.display.html_repr`."""
-    return {"method": result.method, "epoch": ", ".join(str(e) for e in result.epochs),
-            "depth_ppm": result.depth_ppm, "depth_err_ppm": result.depth_err_ppm,
-            "combined_ppm": result.depth_combined_ppm, "beta_red": result.beta_red,
-            "chi2_red": result.chi2_red,
-            "BIC": f"{result.bic:.1f} on {result.n_points} points",
-            "phase": result.phase, "converged": result.converged}
+    @property
+    def depth_combined_ppm(self) -> float:
+        """Inverse-variance mean of the epochs' depths fitted alone."""
+        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
+        return float(np.sum(w * [e["depth_alone_ppm"] for e in self.per_epoch]) / np.sum(w))
 
+    @property
+    def depth_combined_err_ppm(self) -> float:
+        """``1 / sqrt(sum 1 / sigma_i^2)`` of the epochs' errors fitted alone."""
+        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
+        return float(1.0 / np.sqrt(np.sum(w)))
 
-def _joint_from_dict(path: Path, data: Mapping[str, Any]):
-    from .reduce import JointResult  # the joint fit's module imports this one
+    def to_dict(self) -> dict[str, Any]:
+        """The result as JSON-ready data (:meth:`from_dict` reads it back); with its BIC's
+        points (every epoch's, summed; bins for a binned method) and the software version."""
+        return {"method": self.method, "joint": True, "epochs": list(self.epochs),
+                "depth_ppm": self.depth_ppm,
+                "depth_combined_ppm": self.depth_combined_ppm,
+                "depth_combined_err_ppm": self.depth_combined_err_ppm,
+                "depth_err_ppm": self.depth_err_ppm,
+                "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
+                "beta_red": self.beta_red, "chi2_red": self.chi2_red, "bic": self.bic,
+                "aic": self.aic, "k": self.k, "n_points": self.n_points, "phase": self.phase,
+                "converged": self.converged, "t_ecl_bmjd": list(self.t_ecl_bmjd),
+                "per_epoch": list(self.per_epoch), "bic_n_points": self.n_points,
+                "bic_data": f"{self.n_points} points of {len(self.epochs)} epochs",
+                "eclipsebench_version": __version__}
 
-    try:
-        kw = {f.name: data[f.name] for f in fields(JointResult)}
-    except KeyError as exc:
-        raise InputError(f"{path}: not a joint result (no {exc})") from None
-    for name in ("epochs", "t_ecl_bmjd", "per_epoch"):
-        kw[name] = tuple(kw[name])
-    for name in ("beta_red", "chi2_red", "bic", "aic"):
-        kw[name] = math.nan if kw[name] is None else kw[name]
-    return JointResult(**kw)
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: object = "joint result"
+                  ) -> JointResult:
+        """The result :meth:`to_dict` wrote; InputError naming ``source`` when a field is
+        missing."""
+        try:
+            kw = {f.name: data[f.name] for f in fields(cls)}
+        except KeyError as exc:
+            raise InputError(f"{source}: not a joint result (no {exc})") from None
+        for name in ("epochs", "t_ecl_bmjd", "per_epoch"):
+            kw[name] = tuple(kw[name])
+        for name in ("beta_red", "chi2_red", "bic", "aic"):
+            kw[name] = math.nan if kw[name] is None else kw[name]
+        return cls(**kw)
+
+    def _shown(self) -> dict[str, Any]:
+        """The fields :func:`~eclipsebench.fit.display.text_repr` and
+        :func:`~eclipsebench.fit.display.html_repr` show."""
+        return {"method": self.method, "epoch": ", ".join(str(e) for e in self.epochs),
+                "depth_ppm": self.depth_ppm, "depth_err_ppm": self.depth_err_ppm,
+                "combined_ppm": self.depth_combined_ppm, "beta_red": self.beta_red,
+                "chi2_red": self.chi2_red,
+                "BIC": f"{self.bic:.1f} on {self.n_points} points",
+                "phase": self.phase, "converged": self.converged}
+
+    def __repr__(self) -> str:
+        return text_repr("JointResult", self._shown())
+
+    def _repr_html_(self) -> str:
+        return html_repr("JointResult", self._shown())

@@ -39,8 +39,7 @@ from ..errors import InputError
 
 __all__ = ["Observation", "observation_from_table", "MIN_GOOD_FRAMES", "complete_table",
            "needs_completion", "flux_scale_from_scatter", "SUBARRAY_CUBE_FRAMES",
-           "AOR_GAP_S", "completed_observation", "adopt_observation", "OBSERVATION_FILE",
-           "trust_settings"]
+           "AOR_GAP_S", "completed_observation", "adopt_observation", "OBSERVATION_FILE"]
 
 #: Fewer good frames than this cannot be twinned (nor reduced with any confidence).
 MIN_GOOD_FRAMES = 100
@@ -523,46 +522,3 @@ def adopt_observation(table: Table, root, write) -> str:
     final.parent.mkdir(parents=True, exist_ok=True)
     write(table, final)
     return str(final.resolve())
-
-
-def trust_settings(table, root, *, columns: Mapping[str, str] | None = None,
-                   time_column: str | None = None, time_format: str | None = None,
-                   time_options: Mapping[str, Any] | None = None, readout: str | None = None,
-                   channel: int | None = None, labels: Mapping[str, str] | None = None,
-                   **settings: Any):
-    """The settings of a trust run of any table (``make_settings``' keywords in ``settings``).
-
-    An ``eclipsebench photometry`` table is used as it is. Another pipeline's
-    is completed (:func:`completed_observation`), checked with every other
-    input on a temporary copy, and only then written to the trust folder
-    (:func:`adopt_observation`): bad input writes nothing.
-    """
-    import tempfile
-    from dataclasses import replace
-    from pathlib import Path
-
-    from ..io.pmap_files import check_pmap_path
-    from ..photometry.table import write_photometry
-    from .run import make_settings
-
-    if settings.get("pmap") not in (None, ""):   # a device or a FIFO: refused before the table
-        check_pmap_path(settings["pmap"])
-    path = Path(table)
-    if not path.is_file():
-        raise InputError(f"{path}: no such photometry table")
-    done = completed_observation(str(path), system=settings.get("system"),
-                                 system_section=settings.get("system_section"),
-                                 hint=settings.get("hint", "--system NAME"), columns=columns,
-                                 time_column=time_column, time_format=time_format,
-                                 time_options=time_options, readout=readout, channel=channel,
-                                 labels=labels)
-    if done is None:
-        return make_settings(path, **settings)
-    with tempfile.TemporaryDirectory() as tmp:
-        probe = Path(tmp) / OBSERVATION_FILE
-        write_photometry(done, probe)
-        try:
-            checked = make_settings(probe, **settings)
-        except InputError as exc:   # named by the user's table, not the temporary copy
-            raise InputError(str(exc).replace(str(probe), str(path))) from None
-    return replace(checked, table=adopt_observation(done, root, write_photometry))

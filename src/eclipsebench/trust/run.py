@@ -47,7 +47,7 @@ from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
 from .layout import TrustLayout
-from .observation import OBSERVATION_FILE
+from .observation import OBSERVATION_FILE, adopt_observation, completed_observation
 from .recipe import (
     PILOT_TWIN,
     build_recipe,
@@ -61,8 +61,8 @@ from .report import score_task
 from .result import TrustResult, read_trust
 from .twin import TWIN_MODEL, TwinRecipe, twin_star, twin_table
 
-__all__ = ["TrustSettings", "make_settings", "run_trust", "twin_batches", "MIN_TWINS", "MAX_TWINS",
-           "TWINS_PER_TASK"]
+__all__ = ["TrustSettings", "make_settings", "trust_settings", "run_trust", "twin_batches",
+           "MIN_TWINS", "MAX_TWINS", "TWINS_PER_TASK"]
 
 #: Fewer twins give no coverage worth quoting (the upper bound is the stated limit).
 MIN_TWINS = 10
@@ -515,3 +515,44 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
                          depth_ppm=None if depth_ppm is None else float(depth_ppm),
                          method_options=options, pmap=pmap, resolved_options=resolved,
                          inputs=inputs, table_frames=int(obs.n_frames))
+
+
+def trust_settings(table, root, *, columns: Mapping[str, str] | None = None,
+                   time_column: str | None = None, time_format: str | None = None,
+                   time_options: Mapping[str, Any] | None = None, readout: str | None = None,
+                   channel: int | None = None, labels: Mapping[str, str] | None = None,
+                   **settings: Any):
+    """The settings of a trust run of any table (``make_settings``' keywords in ``settings``).
+
+    An ``eclipsebench photometry`` table is used as it is. Another pipeline's
+    is completed (:func:`completed_observation`), checked with every other
+    input on a temporary copy, and only then written to the trust folder
+    (:func:`adopt_observation`): bad input writes nothing.
+    """
+    import tempfile
+    from dataclasses import replace
+    from pathlib import Path
+
+    from ..io.pmap_files import check_pmap_path
+    from ..photometry.table import write_photometry
+    if settings.get("pmap") not in (None, ""):   # a device or a FIFO: refused before the table
+        check_pmap_path(settings["pmap"])
+    path = Path(table)
+    if not path.is_file():
+        raise InputError(f"{path}: no such photometry table")
+    done = completed_observation(str(path), system=settings.get("system"),
+                                 system_section=settings.get("system_section"),
+                                 hint=settings.get("hint", "--system NAME"), columns=columns,
+                                 time_column=time_column, time_format=time_format,
+                                 time_options=time_options, readout=readout, channel=channel,
+                                 labels=labels)
+    if done is None:
+        return make_settings(path, **settings)
+    with tempfile.TemporaryDirectory() as tmp:
+        probe = Path(tmp) / OBSERVATION_FILE
+        write_photometry(done, probe)
+        try:
+            checked = make_settings(probe, **settings)
+        except InputError as exc:   # named by the user's table, not the temporary copy
+            raise InputError(str(exc).replace(str(probe), str(path))) from None
+    return replace(checked, table=adopt_observation(done, root, write_photometry))
