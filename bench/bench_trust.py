@@ -21,6 +21,11 @@ Three parts (``--part``):
     flux's frame-to-frame rms over good frames, the number of good frames)
     the mean over the twins of each way, their difference in standard
     errors of that difference, and the CPU seconds per twin of each way.
+``table``
+    another pipeline's table (issue 36): the real epoch-1 table cut to
+    time_bmjd, flux and flux_err in an arbitrary unit, x and y (CSV), twinned
+    beside the full table with the same seed: which methods are skipped, what
+    was inferred, and the ratio of the BLISS and KR/Data twin RMSEs.
 ``predict``
     ``--epochs`` simulated challenge epochs (physical noise) treated as real:
     each epoch's table gets ``--twins`` twins reduced by BLISS, PLD and
@@ -179,6 +184,44 @@ def speed(work: Path, n_twins: int, workers: int) -> None:
     print(f"  recommended {summary['recommended']}; skipped {summary['skipped']}")
 
 
+def table(work: Path, n_twins: int, workers: int) -> None:
+    """Issue 36: twins of another pipeline's table (time_bmjd, flux in arbitrary units,
+    flux_err, x, y) against twins of the full photometry table, same seed."""
+    from astropy.table import Table
+
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.config import load_config
+    from eclipsebench.trust.run import run_trust, trust_settings
+
+    path = _real_table(work)
+    full = Table.read(path)
+    good = np.asarray(full["flag"]) == 0
+    unit = 1.0 / 3737.0     # electrons to an arbitrary unit
+    csv = work / "table" / "five_columns.csv"
+    csv.parent.mkdir(parents=True, exist_ok=True)
+    Table({"time_bmjd": full["time_bmjd"][good], "flux": full["flux"][good] * unit,
+           "flux_err": full["flux_err"][good] * unit, "x": full["x"][good],
+           "y": full["y"][good]}).write(csv, format="ascii.csv", overwrite=True)
+    cfg = load_config(None, ["reduce.sampler=\"leastsq\""])
+    rmse: dict[str, dict[str, float]] = {}
+    for name, source, methods in (("full", path, ["bliss", "kr-data"]),
+                                  ("csv", csv, ["bliss", "kr-data", "pld", "ica"])):
+        out = work / "table" / name
+        shutil.rmtree(out, ignore_errors=True)
+        settings = trust_settings(source, out, reduce=cfg.reduce, system_section=cfg.system,
+                                  system=get_system("XO-3b"), methods=methods, n_twins=n_twins, seed=1)
+        summary, _ = run_trust(settings, out, workers=workers)
+        rmse[name] = {m: s["rmse_ppm"] for m, s in summary["methods"].items()}
+        inferred = json.loads((out / "trust.json").read_text()).get("table", {})
+        print(f"{name}: skipped {sorted(summary['skipped'])}; "
+              + ", ".join(f"{m} RMSE {v:.1f} ppm" for m, v in rmse[name].items())
+              + (f"; table {json.dumps(inferred)[:400]}" if name == "csv" else ""))
+    for m in ("bliss", "kr-data"):
+        print(f"{m}: twin RMSE of the five-column CSV / the full table = "
+              f"{rmse['csv'][m]:.1f} / {rmse['full'][m]:.1f} = "
+              f"{rmse['csv'][m] / rmse['full'][m]:.3f} (goal within 20 %)")
+
+
 def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
     from astropy.table import Table
 
@@ -248,7 +291,7 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
 
 def main(argv: list[str]) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--part", choices=("resemble", "speed", "window", "predict"), default="resemble")
+    p.add_argument("--part", choices=("resemble", "speed", "window", "table", "predict"), default="resemble")
     p.add_argument("--twins", type=int, default=None)
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--workers", type=int, default=2)
@@ -267,6 +310,8 @@ def main(argv: list[str]) -> int:
         speed(work, args.twins or 50, args.workers)
     elif args.part == "window":
         window(work, args.twins or 10)
+    elif args.part == "table":
+        table(work, args.twins or 20, args.workers)
     else:
         predict(work, args.epochs, args.twins or 10, args.workers)
     return 0
