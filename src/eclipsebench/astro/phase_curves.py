@@ -33,13 +33,18 @@ __all__ = ["PHASE_MODELS", "N_COEFFS", "flat", "linear", "quadratic", "sinusoid"
 
 
 def _x(time, t_ref: float) -> np.ndarray:
-    return np.asarray(time, dtype=float) - float(t_ref)
+    x = np.asarray(time, dtype=float)
+    return x if t_ref == 0 else x - float(t_ref)
 
 
+# The one definition of each phase model, used by the astro bias tool and by the fitter
+# (fit/astro_parts.py), whose coefficients may be arrays of shape (m, 1) against times of
+# shape (m, n); fit/astro_kernels.py holds a compiled copy of flat, linear and quadratic,
+# held equal by tests/fit/test_fit_mcmc.py::test_astro_batch_is_the_model_of_each_row.
 def flat(time, coeffs: Sequence[float], *, t_ref: float = 0.0, period: float = 1.0):
     """``c0`` at every time."""
     (c0,) = coeffs
-    return np.full(np.shape(time), float(c0))
+    return np.full(np.broadcast_shapes(np.shape(time), np.shape(c0)), c0, dtype=float)
 
 
 def linear(time, coeffs: Sequence[float], *, t_ref: float = 0.0, period: float = 1.0):
@@ -55,10 +60,14 @@ def quadratic(time, coeffs: Sequence[float], *, t_ref: float = 0.0, period: floa
     return c0 + x * (c1 + c2 * x)
 
 
+def _orbital_phase(x: np.ndarray, period: float) -> np.ndarray:
+    return (2.0 * math.pi / period) * x
+
+
 def sinusoid(time, coeffs: Sequence[float], *, t_ref: float = 0.0, period: float = 1.0):
     """``c0 + c1 (cos(2 pi x / P) - 1) + c2 sin(2 pi x / P)``."""
     c0, c1, c2 = coeffs
-    ph = 2.0 * math.pi * _x(time, t_ref) / period
+    ph = _orbital_phase(_x(time, t_ref), period)
     return c0 + c1 * (np.cos(ph) - 1.0) + c2 * np.sin(ph)
 
 
@@ -81,7 +90,7 @@ def design_matrix(name: str, time, *, t_ref: float = 0.0, period: float = 1.0) -
     elif name == "quadratic":
         cols = [ones, x, x * x]
     else:
-        ph = 2.0 * math.pi * x / period
+        ph = _orbital_phase(x, period)
         cols = [ones, np.cos(ph) - 1.0, np.sin(ph)]
     return np.stack(cols, axis=-1)
 

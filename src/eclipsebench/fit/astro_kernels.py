@@ -38,7 +38,8 @@ def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, expos
                 xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
     """``AstroModel.__call__`` of every row of ``thetas``, one compiled pass per row.
 
-    The expressions are those of :meth:`AstroModel.planet`,
+    A compiled copy of :mod:`eclipsebench.astro.phase_curves` (flat, linear,
+    quadratic; held equal by a test). The expressions are those of :meth:`AstroModel.planet`,
     :func:`box_visible_fraction` (``box``) or :func:`_interp_table` (the
     physical shape's table), and :meth:`AstroModel.ramp_factor` (linear ramp
     when ``ramp_at >= 0``), in the same order, so each value is the same.

@@ -40,7 +40,7 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from ..astro.phase_curves import harmonic_curve
+from ..astro.phase_curves import PHASE_MODELS, harmonic_curve
 from ..errors import InputError
 
 __all__ = ["TRANSIT_FREE", "SCALES", "TRANSIT_BOUNDS", "MAX_SUBEXPOSURE_S", "NONNEGATIVE_SCALE",
@@ -196,7 +196,7 @@ def known_period(period_d: float | None) -> float:
     return period_d
 
 
-class PhaseTerm(ABC):
+class PhaseTerm:
     """p(t), the planet-to-star flux ratio of one phase model, ``p(t_ecl) = level``.
 
     ``level`` is the depth (an eclipse or phase curve) or 0 (a transit's
@@ -223,20 +223,21 @@ class PhaseTerm(ABC):
     #: The model's code in the compiled eclipse batch (``_astro_rows``); None: numpy's.
     kernel_code: ClassVar[int | None] = None
 
-    @abstractmethod
+    def _period(self, period_d: float | None) -> float:
+        return known_period(period_d) if self.needs_period else 1.0
+
     def value(self, level: float, c: np.ndarray, dt: np.ndarray,
               period_d: float | None) -> np.ndarray:
-        """p at the times ``dt`` from mid-eclipse of one parameter vector."""
+        """p at the times ``dt`` from mid-eclipse of one parameter vector: the model's one
+        definition in :mod:`eclipsebench.astro.phase_curves`."""
+        return PHASE_MODELS[self.kind](dt, (level, *c), period=self._period(period_d))
 
     def rows(self, level: np.ndarray, c: np.ndarray, dt: np.ndarray,
              period_d: float | None) -> np.ndarray:
-        """p of every row: ``level`` (m, 1), ``c`` (m, len(names)), ``dt`` (m, n).
-
-        The same arithmetic as :meth:`value`, element by element; by default
-        :meth:`value` row by row.
-        """
-        return np.stack([self.value(level[i, 0], c[i], dt[i], period_d)
-                         for i in range(len(dt))])
+        """p of every row: ``level`` (m, 1), ``c`` (m, len(names)), ``dt`` (m, n); the same
+        arithmetic as :meth:`value`, broadcast."""
+        columns = tuple(c[:, j:j + 1] for j in range(len(self.names)))
+        return PHASE_MODELS[self.kind](dt, (level, *columns), period=self._period(period_d))
 
 
 class FlatPhase(PhaseTerm):
@@ -246,12 +247,6 @@ class FlatPhase(PhaseTerm):
     varies = False
     kernel_code = 0
 
-    def value(self, level, c, dt, period_d):
-        return np.full_like(dt, level)
-
-    def rows(self, level, c, dt, period_d):
-        return np.broadcast_to(level, dt.shape)
-
 
 class LinearPhase(PhaseTerm):
     """p = D + c1 dt."""
@@ -259,12 +254,6 @@ class LinearPhase(PhaseTerm):
     kind = "linear"
     names = ("c1_per_day",)
     kernel_code = 1
-
-    def value(self, level, c, dt, period_d):
-        return level + c[0] * dt
-
-    def rows(self, level, c, dt, period_d):
-        return level + c[:, :1] * dt
 
 
 class QuadraticPhase(PhaseTerm):
@@ -274,12 +263,6 @@ class QuadraticPhase(PhaseTerm):
     names = ("c1_per_day", "c2_per_day2")
     kernel_code = 2
 
-    def value(self, level, c, dt, period_d):
-        return level + dt * (c[0] + c[1] * dt)
-
-    def rows(self, level, c, dt, period_d):
-        return level + dt * (c[:, :1] + c[:, 1:2] * dt)
-
 
 class SinusoidPhase(PhaseTerm):
     """p = D + c1 [cos(2 pi dt / P) - 1] + c2 sin(2 pi dt / P)."""
@@ -287,14 +270,6 @@ class SinusoidPhase(PhaseTerm):
     kind = "sinusoid"
     names = ("c_cos", "c_sin")
     needs_period = True
-
-    def value(self, level, c, dt, period_d):
-        arg = (2.0 * np.pi / known_period(period_d)) * dt
-        return level + c[0] * (np.cos(arg) - 1.0) + c[1] * np.sin(arg)
-
-    def rows(self, level, c, dt, period_d):
-        arg = (2.0 * np.pi / known_period(period_d)) * dt
-        return level + c[:, :1] * (np.cos(arg) - 1.0) + c[:, 1:2] * np.sin(arg)
 
 
 class FirstHarmonic(PhaseTerm):
@@ -306,6 +281,10 @@ class FirstHarmonic(PhaseTerm):
 
     def value(self, level, c, dt, period_d):
         return harmonic_curve((2.0 * np.pi / known_period(period_d)) * dt, level, c)
+
+    def rows(self, level, c, dt, period_d):
+        return np.stack([self.value(level[i, 0], c[i], dt[i], period_d)
+                         for i in range(len(dt))])
 
 
 class SecondHarmonic(FirstHarmonic):
