@@ -63,7 +63,8 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
 
     from eclipsebench.config import load_config
-    from eclipsebench.simulation.challenge import light_curve_of, simulate_challenge
+    from eclipsebench.simulation.challenge import simulate_challenge
+    from eclipsebench.simulation.from_config import light_curve_of
     from eclipsebench.simulation.star import make_star_imager
 
     cfg = load_config(None, [f"challenge.epochs={args.epochs}"])

@@ -10,7 +10,7 @@ import pytest
 from eclipsebench.config import detector as D
 from eclipsebench.config import load_config
 from eclipsebench.detector import constants as C
-from eclipsebench.simulation import challenge
+from eclipsebench.simulation import from_config
 
 
 def test_read_noise_per_model_and_override():
@@ -25,7 +25,7 @@ def test_read_noise_per_model_and_override():
 
 
 def test_simulation_uses_the_one_read_noise_definition():
-    assert challenge.read_noise_of is D.read_noise_of
+    assert from_config.read_noise_of is D.read_noise_of
 
 
 def test_calibration_does_not_import_the_challenge_simulation():

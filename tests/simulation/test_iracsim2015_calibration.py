@@ -19,7 +19,8 @@ from astropy.io import fits
 
 from eclipsebench.config import load_config
 from eclipsebench.photometry.measure import measure_stack
-from eclipsebench.simulation.challenge import challenge_plans, simulate_aor
+from eclipsebench.simulation.aor import simulate_aor
+from eclipsebench.simulation.stage import challenge_plans
 from eclipsebench.simulation.star import IRACSIM2015_ANNULUS_WING_PER_E, StarImager, make_prf
 
 CUBE_FLUX_E = 73173.0

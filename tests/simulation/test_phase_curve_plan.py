@@ -19,17 +19,15 @@ from eclipsebench.astro.phase_curves import (
 from eclipsebench.cli import main
 from eclipsebench.config import builtin_config_names, load_config
 from eclipsebench.errors import ConfigError, InputError
-from eclipsebench.simulation.challenge import (
-    challenge_plans,
-    epoch_truth_row,
-    light_curve_of,
-    simulate_challenge,
-)
+from eclipsebench.simulation.challenge import simulate_challenge
+from eclipsebench.simulation.from_config import light_curve_of
 from eclipsebench.simulation.plan import (
     SECONDS_PER_DAY,
     eclipse_half_duration_d,
     phase_curve_main_cubes,
 )
+from eclipsebench.simulation.stage import challenge_plans
+from eclipsebench.simulation.truth import epoch_truth_row
 
 PHASE_KEYS = ("rp_rs", "transit_depth_ppm", "t_transit_bmjd", "phase_amplitude_ppm",
               "phase_offset_deg", "nightside_flux_ppm", "phase_amplitude_h2_ppm",

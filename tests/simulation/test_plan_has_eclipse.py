@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 
 from eclipsebench.config import load_config
-from eclipsebench.simulation.challenge import challenge_plans
+from eclipsebench.simulation.stage import challenge_plans
 
 
 def test_another_planet_with_the_challenge_start_times_is_named(caplog):

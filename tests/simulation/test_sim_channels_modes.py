@@ -31,7 +31,7 @@ from eclipsebench.io.bcd_write import AorWriter, bcd_path
 from eclipsebench.io.header_template import BcdHeaderInfo
 from eclipsebench.photometry.estimators import aperture_flux, centroid_col
 from eclipsebench.photometry.table import read_photometry
-from eclipsebench.simulation.challenge import frame_model_from_config, light_curve_of
+from eclipsebench.simulation.from_config import frame_model_from_config, light_curve_of
 from eclipsebench.simulation.plan import JD_OFFSET_BMJD
 from eclipsebench.simulation.star import make_star_imager
 

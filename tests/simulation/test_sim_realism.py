@@ -10,7 +10,7 @@ from astropy.io import fits
 from photutils.geometry import circular_overlap_grid
 
 from eclipsebench.config import load_config
-from eclipsebench.simulation.challenge import simulate_aor
+from eclipsebench.simulation.aor import simulate_aor
 from eclipsebench.simulation.plan import plan_challenge
 
 pytestmark = pytest.mark.shared_data

@@ -13,13 +13,15 @@ from eclipsebench.astro.catalogue import system_for
 from eclipsebench.astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from eclipsebench.config import load_config
 from eclipsebench.errors import ConfigError
-from eclipsebench.simulation.challenge import challenge_plans, epoch_truth_row, light_curve_of
+from eclipsebench.simulation.from_config import light_curve_of
 from eclipsebench.simulation.plan import (
     SECONDS_PER_DAY,
     epoch_start_times_bmjd,
     plan_challenge,
     transit_window_starts_bmjd,
 )
+from eclipsebench.simulation.stage import challenge_plans
+from eclipsebench.simulation.truth import epoch_truth_row
 
 
 def _window(plan):

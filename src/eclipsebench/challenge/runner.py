@@ -7,7 +7,7 @@ runs it on the engine (:mod:`.engine`) and returns the summary.
 =========== ============================================ ===========================
 stage       planner                                       task keys
 =========== ============================================ ===========================
-simulate    :func:`eclipsebench.simulation.challenge.plan_simulate_tasks`
+simulate    :func:`eclipsebench.simulation.stage.plan_simulate_tasks`
                                                           ``simulate[_flat]/...``
 photometry  :func:`.photometry_stage.plan_photometry_tasks` ``photometry[_flat]/epoch_NN``
 reduce      :func:`.reduce_stage.plan_reduce_tasks`        ``reduce[_flat|_paper]/<m>/epoch_NN``
@@ -47,7 +47,7 @@ from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
 from ..io.paths import check_links_inside, check_output_path
 from ..report.challenge import plan_report_tasks
-from ..simulation.challenge import challenge_plans, plan_simulate_tasks, simulated_bytes
+from ..simulation.stage import challenge_plans, plan_simulate_tasks, simulated_bytes
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
 from .photometry_stage import photometry_key, plan_photometry_tasks
 from .reduce_stage import plan_reduce_tasks, reduce_key

@@ -30,7 +30,10 @@ from pathlib import Path
 from ..io.paths import check_name
 from .folder import LOCK, MARKER
 
-__all__ = ["Layout"]
+__all__ = ["Layout", "SimulationLayout", "STATE_DIR"]
+
+#: The simulated challenge's resume state: each AOR's truth and each epoch's truth row.
+STATE_DIR = ".simstate"
 
 
 @dataclass(frozen=True)
@@ -59,13 +62,13 @@ class Layout:
         return self.result(method, epoch, flat, profile).with_suffix(".lc.ecsv")
 
     def truth(self, flat: bool = False) -> Path:
-        return self.sim(flat) / "truth.ecsv"
+        return SimulationLayout(self.sim(flat)).truth
 
     def truth_lightcurve(self, epoch: int, flat: bool = False) -> Path:
-        return self.sim(flat) / "lightcurves" / f"epoch_{epoch:02d}.ecsv"
+        return SimulationLayout(self.sim(flat)).epoch_lightcurve(epoch)
 
     def calibration(self) -> Path:
-        return self.sim() / "calibration" / "pmap_calibration.fits"
+        return SimulationLayout(self.sim()).calibration
 
     @property
     def depths(self) -> Path:
@@ -98,3 +101,50 @@ class Layout:
     @property
     def marker(self) -> Path:
         return self.root / MARKER
+
+
+@dataclass(frozen=True)
+class SimulationLayout:
+    """Where each file of a simulated challenge goes (``docs/contracts.md``): the folder
+    ``eclipsebench simulate --out DIR`` writes, and a run's ``DIR/simulation``::
+
+        DIR/config.toml                        the configuration simulated
+        DIR/truth.ecsv                         one row per epoch (written last)
+        DIR/lightcurves/epoch_NN.ecsv          the true L(t) and position per frame
+        DIR/calibration/pmap_calibration.fits  the KR/Pmap calibration-star set
+        DIR/.simstate/r<AORKEY>.npz            an AOR's per-frame truth, after its cubes
+        DIR/.simstate/epoch_NN.json            an epoch's truth row, after its light curve
+
+    The cubes' own paths are :func:`eclipsebench.io.bcd_write.bcd_path`'s.
+
+    Examples
+    --------
+    >>> SimulationLayout(Path("sim")).epoch_marker(3).as_posix()
+    'sim/.simstate/epoch_03.json'
+    """
+
+    root: Path
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "root", Path(self.root))
+
+    @property
+    def config(self) -> Path:
+        return self.root / "config.toml"
+
+    @property
+    def truth(self) -> Path:
+        return self.root / "truth.ecsv"
+
+    @property
+    def calibration(self) -> Path:
+        return self.root / "calibration" / "pmap_calibration.fits"
+
+    def epoch_lightcurve(self, epoch: int) -> Path:
+        return self.root / "lightcurves" / f"epoch_{epoch:02d}.ecsv"
+
+    def aor_state(self, aorkey: int) -> Path:
+        return self.root / STATE_DIR / f"r{aorkey}.npz"
+
+    def epoch_marker(self, epoch: int) -> Path:
+        return self.root / STATE_DIR / f"epoch_{epoch:02d}.json"

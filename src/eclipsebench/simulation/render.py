@@ -1,7 +1,7 @@
 """Render Fowler-sampled frames (subarray or full array) of a moving point source (paper Appendix A.2-A.3).
 
 Pure kernels on arrays: the orchestration (plans, files) lives in
-:mod:`eclipsebench.simulation.challenge`.
+:mod:`eclipsebench.simulation.aor` (one AOR) and :mod:`eclipsebench.simulation.stage` (the tasks).
 
 How a frame is made
 -------------------
