@@ -104,8 +104,12 @@ def _method_options(items: list[str]) -> dict[str, dict]:
 
 def run(args: argparse.Namespace) -> dict:
     # the simulator and every method: imported when the command runs, not for --help
+    from ..decorrelate.base import unknown_methods
     from ..trust.observation import trust_settings
     from ..trust.run import run_trust
+
+    if args.methods and (problem := unknown_methods(args.methods)):   # before the table
+        raise InputError(f"--methods: {problem}")
 
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))

@@ -454,6 +454,7 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         ``pmap`` that holds no readable map.
     """
     from ..decorrelate import available_methods
+    from ..decorrelate.base import unknown_methods
     from ..fit.astro_model import depth_limit_ppm
     from ..fit.target import system_of_table
     from ..io.pmap_files import find_pmap_path, pmap_files
@@ -475,11 +476,9 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         raise InputError(f"{depth_name}: {depth_ppm:g} ppm is beyond what a fit can return (a "
                          f"{reduce.event}'s depth is below {deepest:g} ppm, the bound of the "
                          "fit's parameter); expected a depth below it")
-    known = available_methods()
-    chosen = tuple(methods) if methods else known
-    for m in chosen:
-        if m not in known:
-            raise InputError(f"method {m!r}: unknown (known: {', '.join(known)})")
+    chosen = tuple(methods) if methods else available_methods()
+    if problem := unknown_methods(chosen):
+        raise InputError(f"methods: {problem}")
     if len(set(chosen)) != len(chosen):
         raise InputError("methods: a method is named twice")
     if pmap is not None and str(pmap) != "":   # a device or a FIFO: refused before the table
