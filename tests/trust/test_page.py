@@ -237,3 +237,14 @@ def test_the_stdout_columns_carry_units(answer):
     timed = next(i for i, line in enumerate(lines) if line.startswith("mid-time "))
     assert lines[timed + 1].split() == ["s"] * 6 + ["%"]
     assert any(line.startswith("caution       red: the real residuals") for line in lines)
+
+
+def test_an_api_run_s_page_shows_the_call_with_the_arguments_given():
+    from eclipsebench.api import _call_text, trust
+
+    given = {"table": Path("real1/epoch_01.fits"), "out": "t1", "twins": 10,
+             "methods": ["bliss"], "seed": 0, "config": object(),
+             "reduce_options": {"sampler": "leastsq"}}
+    assert _call_text("eb.trust", trust, given) == (
+        "eb.trust('real1/epoch_01.fits', 't1', twins=10, methods=['bliss'], config=<object>, "
+        "sampler='leastsq')")

@@ -246,8 +246,9 @@ def _body(summary: Mapping[str, Any], figures: Sequence[tuple[str, str, list[Pat
     ranking = summary.get("ranking") or {}
     freq = summary.get("recommended_frequency") or {}
     none = freq.get("none")
-    parts = [f"<p style='font-size:130%'><b>Quote: {esc(summary['quote']['text'])}</b></p>",
-             "<p>Ranking: " + esc(ranking.get("text", "")) + "</p>"]
+    parts = [f"<p style='font-size:130%'><b>Quote: {esc(summary['quote']['text'])}</b></p>"]
+    if ranking.get("resolved"):   # else the first caution says how many twins it needs
+        parts.append("<p>Ranking: " + esc(ranking.get("text", "")) + "</p>")
     warn = cautions(summary)
     if warn:
         parts.append("<div class='caution'><b>Cautions</b><ul>"
