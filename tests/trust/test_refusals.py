@@ -67,3 +67,18 @@ def test_a_name_near_no_method_gets_the_list_only():
     problem = unknown_methods(["zzz"])
     assert problem.startswith("unknown method 'zzz'; known: bliss") and "did you mean" not in problem
     assert unknown_methods(["bliss", "pld"]) is None
+
+
+def test_a_table_given_as_photometry_s_but_short_of_columns_names_them_all():
+    from astropy.table import Table
+
+    from eclipsebench.errors import InputError
+    from eclipsebench.trust.observation import observation_from_table
+
+    table = Table({"time_bmjd": [57000.0, 57000.1], "flux": [1.0, 1.0], "x": [15.0, 15.0],
+                   "y": [15.0, 15.0]})
+    with pytest.raises(InputError) as err:
+        observation_from_table(table, "lc.fits")
+    text = str(err.value)
+    assert "missing column(s) aorkey, expid, frame, background, flag" in text, text
+    assert "'eclipsebench photometry'" in text
