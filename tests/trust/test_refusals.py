@@ -10,7 +10,6 @@ from __future__ import annotations
 import pytest
 
 from eclipsebench.cli import main
-from eclipsebench.decorrelate.base import unknown_methods
 
 
 def _run(argv: list[str], capsys) -> tuple[int, str]:
@@ -64,6 +63,8 @@ def test_an_unknown_method_gets_a_did_you_mean_in_its_one_line(tmp_path, capsys,
 
 
 def test_a_name_near_no_method_gets_the_list_only():
+    from eclipsebench.decorrelate.base import unknown_methods
+
     problem = unknown_methods(["zzz"])
     assert problem.startswith("unknown method 'zzz'; known: bliss") and "did you mean" not in problem
     assert unknown_methods(["bliss", "pld"]) is None
