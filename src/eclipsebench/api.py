@@ -10,6 +10,7 @@ the depths.
 
 from __future__ import annotations
 
+import inspect
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
@@ -276,6 +277,27 @@ def score(depths: Table | str | os.PathLike | Mapping[str, Sequence], *,
                      methods=methods, seed=seed, n_bootstrap=n_bootstrap)
 
 
+def _call_text(name: str, func, given: Mapping[str, Any]) -> str:
+    """The call ``name(...)`` with the arguments given other than their defaults, as Python
+    text (an object other than a plain value is named by its type)."""
+    def shown(value: Any) -> str:
+        if isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        plain = (str, int, float, bool, type(None), list, tuple, dict)
+        return repr(value) if isinstance(value, plain) else f"<{type(value).__name__}>"
+
+    parts = []
+    for p in inspect.signature(func).parameters.values():
+        value = given.get(p.name, p.default)
+        if p.kind is inspect.Parameter.VAR_KEYWORD:
+            parts += [f"{k}={shown(v)}" for k, v in (value or {}).items()]
+        elif p.default is inspect.Parameter.empty:
+            parts.append(shown(value))
+        elif value is not p.default and value != p.default:
+            parts.append(f"{p.name}={shown(value)}")
+    return f"{name}({', '.join(parts)})"
+
+
 def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = None,
           twins: int = 50, methods: Sequence[str] | None = None, depth_ppm: float | None = None,
           seed: int = 0, config: Config | str | os.PathLike | None = None,
@@ -341,6 +363,7 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         ``recommended``, ``near_equals`` (the methods the twins cannot tell from
         it), ``n_twins``, ``twin_depth_ppm``.
     """
+    call = _call_text("eb.trust", trust, locals())   # shown on the page
     from .io.paths import check_output_path
     from .trust.run import run_trust, trust_settings
 
@@ -359,7 +382,8 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
                               time_format=time_format, time_options=times, readout=readout,
                               channel=channel)
     summary, _ = run_trust(settings, root,
-                           workers=cfg.run.workers if workers is None else workers)
+                           workers=cfg.run.workers if workers is None else workers,
+                           command=call)
     return summary
 
 

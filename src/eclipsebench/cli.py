@@ -225,6 +225,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``eclipsebench`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    args._argv = list(sys.argv[1:] if argv is None else argv)   # shown on a trust page
     if args.command is None:
         print(_usage_line(parser), file=sys.stderr)
         return 2

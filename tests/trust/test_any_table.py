@@ -90,7 +90,7 @@ def test_another_pipelines_table_is_twinned_with_pixel_methods_skipped(small, ca
     ecsv = Table.read(out / "trust.ecsv", format="ascii.ecsv")
     assert "recommended_frequency" in ecsv.colnames and ecsv["t_rmse_s"].unit == "s"
     page = (out / "report" / "index.html").read_text()
-    assert "Quote:" in page and "recommended in (bootstrap)" in page and "mid-event time" in page
+    assert "Quote:" in page and "recommended in (%)" in page and "mid-eclipse time" in page
     assert "Inferred" in page
     text = capsys.readouterr().out
     assert text.startswith("quote ") and "\nranking " in text and "inferred      flux_scale" in text

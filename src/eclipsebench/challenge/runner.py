@@ -38,6 +38,7 @@ from astropy.table import Table
 from ..astro.catalogue import system_for
 from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
+from ..decorrelate.base import unknown_methods
 from ..engine.cluster import ClusterOptions, SchedulerUnreachable, external_security
 from ..engine.folder import check_free_space, check_kind, claim, planet_input
 from ..engine.layout import Layout
@@ -65,10 +66,8 @@ def resolve_methods(cfg: Config) -> list[str]:
     known = list(available_methods())
     if not cfg.run.methods:
         return known
-    unknown = [m for m in cfg.run.methods if m not in known]
-    if unknown:
-        raise ConfigError("run.methods", f"unknown method(s) {', '.join(unknown)} "
-                                         f"(registered: {', '.join(known)})")
+    if problem := unknown_methods(cfg.run.methods):
+        raise ConfigError("run.methods", problem)
     return list(dict.fromkeys(cfg.run.methods))
 
 

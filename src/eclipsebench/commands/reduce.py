@@ -338,9 +338,10 @@ def run(args: argparse.Namespace) -> dict:
     paths = _table_paths(args.table)
     # The fitter pulls in every method (numba, scikit-learn, about 2 s): imported once the
     # table is found, not for `eclipsebench --help` or a misspelt path.
-    from ..decorrelate import get_method
+    from ..decorrelate.base import unknown_methods
 
-    get_method(args.method)  # "unknown method" (listing the known ones) before any path is made
+    if problem := unknown_methods([args.method]):   # before any path is made
+        raise InputError(f"--method: {problem}")
     if len(paths) > 1:
         return _run_joint(args, paths)
     from ..fit.reduce import (

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import shlex
 from dataclasses import replace
 from pathlib import Path
 
@@ -104,7 +105,11 @@ def _method_options(items: list[str]) -> dict[str, dict]:
 
 def run(args: argparse.Namespace) -> dict:
     # the simulator and every method: imported when the command runs, not for --help
+    from ..decorrelate.base import unknown_methods
     from ..trust.run import run_trust, trust_settings
+
+    if args.methods and (problem := unknown_methods(args.methods)):   # before the table
+        raise InputError(f"--methods: {problem}")
 
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))
@@ -125,7 +130,9 @@ def run(args: argparse.Namespace) -> dict:
                               time_options=time_options(args), readout=args.readout,
                               channel=args.channel, labels=_TABLE_LABELS,
                               depth_name="--depth")
-    summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers)
+    command = shlex.join(["eclipsebench", *getattr(args, "_argv", [])])   # for the page
+    summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers,
+                                command=command)
     return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
                                 "skipped": len(report.skipped), "wall_s": report.wall_s,
                                 "stage_seconds": report.stage_seconds()}}
@@ -156,6 +163,7 @@ def _twin_lines(twins: dict) -> list[str]:
 
 def format_text(result: dict) -> str:
     from ..trust.report import ranking_text
+    from ..trust.rows import DEPTH_COLUMNS, TIME_COLUMNS, cautions, method_rows, text_table
 
     lines = []
     if result.get("quote"):   # the line to quote first
@@ -164,22 +172,14 @@ def format_text(result: dict) -> str:
     lines += [f"{result['system']}: {result['n_twins']} twins with a "
              f"{result['twin_depth_ppm']:.1f} ppm {result['twins']['event']} "
              f"({result['profile']} profile, {result['sampler']})",
-             *_twin_lines(result.get("twins") or {}),
-             f"{'method':<10} {'depth':>8} {'honest':>7} {'bias':>7} {'SD':>6} {'RMSE':>6} "
-             f"{'<err>':>6} {'z_rms':>5} {'cov1':>5} {'cov2':>5}"]
-    for m, s in result["methods"].items():
-        lines.append(f"{m:<10} {s['depth_ppm']:8.1f} {s['honest_err_ppm']:7.1f} "
-                     f"{s['bias_ppm']:7.1f} {s['sd_ppm']:6.1f} {s['rmse_ppm']:6.1f} "
-                     f"{s['mean_err_ppm']:6.1f} {s['z_rms']:5.2f} {s['coverage_1sigma']:5.2f} "
-                     f"{s['coverage_2sigma']:5.2f}")
-    timed = {m: s for m, s in result["methods"].items() if "t_rmse_s" in s}
-    if timed:
-        lines.append(f"{'mid-time':<10} {'error':>7} {'honest':>7} {'bias':>7} {'RMSE':>6} "
-                     f"{'z_rms':>5} {'cov1':>5}   (seconds; twins whose fit freed it)")
-        for m, s in timed.items():
-            lines.append(f"{m:<10} {s['t_err_s']:7.1f} {s['t_honest_err_s']:7.1f} "
-                         f"{s['t_bias_s']:7.1f} {s['t_rmse_s']:6.1f} {s['t_z_rms']:5.2f} "
-                         f"{s['t_coverage_1sigma']:5.2f}")
+             *_twin_lines(result.get("twins") or {})]
+    head, units, rows = method_rows(result, DEPTH_COLUMNS)
+    lines += text_table(head, units, rows)
+    head, units, rows = method_rows(result, TIME_COLUMNS)
+    if rows:
+        lines.append(f"the {'transit' if result['twins']['event'] == 'transit' else 'eclipse'}"
+                     "'s mid-time, against the injected one (the twins whose fit freed it):")
+        lines += text_table(["mid-time", *head[1:]], units, rows)
     lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
     if result.get("near_equals"):
         from ..trust.score import DISTINGUISHABLE_AT
@@ -187,14 +187,7 @@ def format_text(result: dict) -> str:
         lines.append(f"near equals   {', '.join(result['near_equals'])}: mean squared error "
                      f"within {DISTINGUISHABLE_AT:g} paired standard errors of the recommended "
                      "method's (the twins cannot tell them apart)")
-    for m, s in result["methods"].items():
-        if s.get("redder_than_twins"):
-            lines.append(f"caution       {m}: the real residuals are redder than "
-                         f"{s['beta_red_twins_below']:.0%} of the twins' (beta_red "
-                         f"{s['beta_red_real']:.2f}, twins' median "
-                         f"{s['beta_red_twins_median']:.2f}): its RMSE may under-predict")
-    for m, why in result["skipped"].items():
-        lines.append(f"skipped       {m}: {why}")
+    lines += [f"caution       {c}" for c in cautions(result, ranking=False)]
     if result.get("source_table"):
         lines.append(f"table         {result['source_table']}, another pipeline's, completed as "
                      f"{result['table']}")

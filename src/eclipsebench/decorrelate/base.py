@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import difflib
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
@@ -54,8 +55,8 @@ from .record import FitterPolicy, MethodRecord, PaperProfile, heading_anchor
 
 __all__ = ["EpochData", "AtLeast", "MethodOptions", "MethodContext", "Systematics", "MethodRecord",
            "FitterPolicy", "PaperProfile", "register",
-           "get_method", "method_class", "available_methods", "parse_method_options",
-           "ENTRY_POINT_GROUP"]
+           "get_method", "method_class", "available_methods", "unknown_methods",
+           "parse_method_options", "ENTRY_POINT_GROUP"]
 
 #: The entry-point group through which other packages register methods.
 ENTRY_POINT_GROUP = "eclipsebench.methods"
@@ -732,8 +733,28 @@ def get_method(name: str) -> type[Systematics]:
     try:
         return _REGISTRY[name]
     except KeyError:
-        known = ", ".join(available_methods()) or "none"
-        raise InputError(f"method {name!r}: unknown method (known: {known})") from None
+        raise InputError(f"method: {unknown_methods([name])}") from None
+
+
+def unknown_methods(names) -> str | None:
+    """The problem with ``names`` that are no registered method, or None when all are.
+
+    One phrase for every caller's one line (``reduce --method``, ``trust
+    --methods``, ``run.methods``, ``[reduce.options]``): each unknown name
+    with the registered names closest to it (:func:`difflib.get_close_matches`)
+    and the whole list, e.g. ``unknown method 'pdl' (did you mean pld?); known: bliss,
+    ...`` (``tests/trust/test_refusals.py``).
+    """
+    known = available_methods()
+    unknown = [str(n) for n in dict.fromkeys(names) if n not in known]
+    if not unknown:
+        return None
+    parts = []
+    for name in unknown:
+        close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+        parts.append(f"{name!r}" + (f" (did you mean {' or '.join(close)}?)" if close else ""))
+    return (f"unknown method{'s' if len(parts) > 1 else ''} {', '.join(parts)}; known: "
+            f"{', '.join(known) or 'none'}")
 
 
 #: The public name of :func:`get_method` (``eb.method_class``).

@@ -156,7 +156,7 @@ def check_columns(table, source: str, *, radius_px: float | None = None,
     >>> check_columns(Table({"BJD": [1.0], "F": [1.0], "xc": [1.0], "yc": [1.0]}), "lc.csv")
     Traceback (most recent call last):
     ...
-    eclipsebench.errors.InputError: lc.csv: missing column(s) time_bmjd, flux, flux_err, x, y (the table has BJD, F, xc, yc); map them with columns flux=F,flux_err=NAME,x=xc,y=yc and time_column BJD time_format bjd (one of bmjd, bjd, mjd, jd)
+    eclipsebench.errors.InputError: lc.csv: missing column(s) time_bmjd, flux, flux_err, x, y (the table has BJD, F, xc, yc); map them with columns flux=F,flux_err=NAME,x=xc,y=yc and time_column BJD time_format bjd (one of bmjd, bjd, mjd, jd), or make a complete table from the BCDs with 'eclipsebench photometry'
     """
     labels = {**_ARGUMENTS, **dict(labels or {})}
     needed = [c for c in ("time_bmjd", "flux", "flux_err", "x", "y")
@@ -181,7 +181,8 @@ def check_columns(table, source: str, *, radius_px: float | None = None,
         + time_hint
     shown = ", ".join(table.colnames[:12]) + (" ..." if len(table.colnames) > 12 else "")
     raise InputError(f"{source}: missing column(s) {', '.join(missing)} (the table has "
-                     f"{shown}); {how}")
+                     f"{shown}); {how}, or make a complete table from the BCDs with "
+                     "'eclipsebench photometry'")
 
 
 def _stamp_from_pixel_columns(table, labels: Mapping[str, str]) -> dict[str, np.ndarray]:

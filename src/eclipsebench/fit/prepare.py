@@ -18,8 +18,8 @@ from astropy.table import Table
 
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..config.reduce import ReduceSection
-from ..decorrelate import available_methods, get_method
-from ..decorrelate.base import MethodOptions, Systematics, parse_method_options
+from ..decorrelate import get_method
+from ..decorrelate.base import MethodOptions, Systematics, parse_method_options, unknown_methods
 from ..errors import ConfigError, InputError
 from ..photometry.table import read_table
 from .astro_model import PHASE_CURVE_MODELS, AstroModel
@@ -171,12 +171,10 @@ def configured_method_options(options: ReduceSection) -> dict[str, MethodOptions
     >>> configured_method_options(replace(_DEFAULT_OPTIONS, options={"kr-data": {"k": 20}}))
     {'kr-data': KrDataOptions(k=20, use_noise_pixels=False)}
     """
-    known = available_methods()
     parsed: dict[str, MethodOptions] = {}
     for name, table in options.options.items():
-        if name not in known:
-            raise ConfigError(f"reduce.options.{name}",
-                              f"unknown method (known: {', '.join(known)})")
+        if problem := unknown_methods([name]):
+            raise ConfigError(f"reduce.options.{name}", problem)
         parsed[name] = parse_method_options(get_method(name), table,
                                             prefix=f"reduce.options.{name}")
     return parsed

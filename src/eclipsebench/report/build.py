@@ -19,6 +19,7 @@ from ..io.atomic import write_text
 from ..stats.compare import group_by_method
 from ..stats.ensemble import normalised_residuals
 from . import figures as F
+from .page import figure_html, html_table, notes_html, page_html, relative
 from .paper_tables import COMPARED_KEYS, TABLE4, comparison_rows
 from .tables import anova_lines, display_rows, write_tables
 
@@ -26,10 +27,6 @@ __all__ = ["build_report", "render_index"]
 
 #: Centroids drawn over all epochs (4000 per epoch for ten; a PDF of 400,000 is 8 MB).
 CENTROID_POINTS = 40_000
-
-
-def _rel(path: Path, root: Path) -> str:
-    return path.relative_to(root).as_posix()
 
 
 def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float | None = None,
@@ -252,43 +249,23 @@ def _with_units(head: list[str]) -> list[str]:
     return [f"{h} ({u})" if u else h for h, u in zip(head, units, strict=True)]
 
 
-def _html_table(rows: list[list[str]]) -> str:
-    esc = html.escape
-    thead = "".join(f"<th>{esc(str(c))}</th>" for c in rows[0])
-    tbody = "\n".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in r) + "</tr>"
-                      for r in rows[1:])
-    return f"<table><thead><tr>{thead}</tr></thead><tbody>\n{tbody}\n</tbody></table>"
-
-
 def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, list[Path]]],
                  tables: list[Path], skipped: list[str], root: Path,
                  notes: Mapping[str, object], profile: str | None = None) -> str:
     """The HTML page: the statistics table, links to the table files, every figure.
 
-    All links are relative to ``root`` so the folder can be moved or opened
-    offline; no scripts, no external resources. ``profile`` is the profile
+    Built from :mod:`eclipsebench.report.page` (all links relative to
+    ``root``, no scripts, no external resources). ``profile`` is the profile
     the figures show (named in the Figures heading).
     """
     esc = html.escape
-    parts = [
-        "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
-        f"<title>{esc(title)}</title>",
-        "<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
-        "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #bbb;"
-        "padding:2px 6px;text-align:right}td:first-child{text-align:left}"
-        "figure{margin:1.5em 0}img{max-width:100%;border:1px solid #ddd}"
-        "table.symbols td,table.symbols th{text-align:left}</style>",
-        "</head>", "<body>", f"<h1>{esc(title)}</h1>",
-    ]
-    if notes:
-        parts.append("<ul>" + "".join(f"<li><b>{esc(str(k))}</b>: {esc(str(v))}</li>"
-                                      for k, v in notes.items()) + "</ul>")
+    parts = [notes_html(notes)] if notes else []
     profiles = summary.get("profiles") or {summary.get("profile", "controlled"): summary}
     for name, stats in profiles.items():
         rows = display_rows(stats, pm=" ± ", minus="−", interval="{f} +{up}/−{down}")
         parts += [f"<h2>Eclipse depth statistics: {esc(name)} profile</h2>",
                   f"<p>{esc(_PROFILE_WORDS.get(name, ''))}</p>",
-                  _html_table([_with_units(rows[0]), *rows[1:]])]
+                  html_table([_with_units(rows[0]), *rows[1:]])]
         if name == next(iter(profiles)):
             parts.append(_symbols_html())
         parts += [f"<p>{esc(line)}</p>" for line in anova_lines(stats)]
@@ -297,17 +274,11 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
             head = ["method", "paper"] + [f"{k} {w}" for k in COMPARED_KEYS
                                           for w in ("ours", "Table 4")]
             parts += [f"<p>The {esc(name)} profile beside the paper's Table 4 (the simulated "
-                      "2015 challenge; for comparison only).</p>", _html_table([head, *rows])]
-    parts.append("<p>Tables: " + ", ".join(f'<a href="{esc(_rel(p, root))}">{esc(p.name)}</a>'
+                      "2015 challenge; for comparison only).</p>", html_table([head, *rows])]
+    parts.append("<p>Tables: " + ", ".join(f'<a href="{esc(relative(p, root))}">{esc(p.name)}</a>'
                                             for p in tables) + "</p>")
     parts.append("<h2>Figures" + (f" ({esc(profile)} profile)" if profile else "") + "</h2>")
-    for name, caption, files in figures:
-        png = next(p for p in files if p.suffix == ".png")
-        pdf = [p for p in files if p.suffix == ".pdf"]
-        link = f' (<a href="{esc(_rel(pdf[0], root))}">PDF</a>)' if pdf else ""
-        parts.append(f'<figure id="{esc(name)}"><img src="{esc(_rel(png, root))}" '
-                     f'alt="{esc(name)}"><figcaption>{esc(caption)}{link}</figcaption></figure>')
+    parts += [figure_html(name, caption, files, root) for name, caption, files in figures]
     if skipped:
         parts.append("<p>Not drawn: " + "; ".join(esc(s) for s in skipped) + ".</p>")
-    parts += ["</body>", "</html>", ""]
-    return "\n".join(parts)
+    return page_html(title, parts)

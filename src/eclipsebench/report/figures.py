@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 from ..io.atomic import atomic_path
 from ..stats.ensemble import GAUSS_1SIGMA, GAUSS_2SIGMA, pairwise_differences
 
-__all__ = ["save_figure", "bin_mean", "centroid_clouds", "photometry_vs_phase",
+__all__ = ["new_figure", "save_figure", "bin_mean", "centroid_clouds", "photometry_vs_phase",
            "decorrelated_lightcurves", "depths_per_epoch", "visit_differences",
            "method_differences", "repeatability_vs_reliability", "accuracy_vs_reliability",
            "accuracy_ratio_vs_bias", "coverage_per_method", "normalised_residual_histograms",
@@ -50,10 +50,15 @@ def _finish_grid(fig: Figure, axes, n_used: int, title: str, xlabel: str | None 
 MAX_LEGEND_EPOCHS = 20
 
 
-def _figure(width: float, height: float) -> Figure:
+def new_figure(width: float, height: float) -> Figure:
+    """An empty Figure of ``width`` x ``height`` inches on its own Agg canvas (constrained
+    layout): no pyplot, no backend chosen, nothing process-wide."""
     fig = Figure(figsize=(width, height), layout="constrained")
     FigureCanvasAgg(fig)
     return fig
+
+
+_figure = new_figure
 
 
 def _colors(n: int):
@@ -170,37 +175,55 @@ def photometry_vs_phase(epochs: Mapping[object, Mapping[str, np.ndarray]], *, bi
 def decorrelated_lightcurves(curves: Mapping[str, Mapping[str, np.ndarray]], *,
                              truth: tuple[np.ndarray, np.ndarray] | None = None,
                              points: int = LIGHTCURVE_POINTS,
-                             title: str = "Decorrelated light curves") -> Figure:
+                             title: str = "Decorrelated light curves", x: str = "phase",
+                             xlabel: str = "orbital phase", highlight: str | None = None,
+                             notes: Mapping[str, str] | None = None) -> Figure:
     """One panel per method: the decorrelated flux binned and the fitted model (Figs. 5-6).
 
     Parameters
     ----------
     curves : mapping
-        ``{method: {"phase", "flux_corrected", "astro_model"}}``.
+        ``{method: {x, "flux_corrected", "astro_model"}}``.
     truth : tuple, optional
-        ``(phase, L)``: the input light curve, drawn as a blue line.
+        ``(x, L)``: the input light curve, drawn as a blue line.
     points : int
         Binned points per panel: each curve is binned by its own factor, so a
         method whose light curve holds its bins (GP, SPCA) shows as many
         points as one that holds every frame.
     title : str
         The figure's title.
+    x, xlabel : str
+        The curves' key of the horizontal axis and its label (a trust page
+        draws hours from mid-eclipse).
+    highlight : str, optional
+        A method whose panel is framed and its fit drawn thicker (the
+        recommended one).
+    notes : mapping, optional
+        ``{method: text}`` added to a panel's label (its depth).
     """
     n = max(len(curves), 1)
     fig = _figure(7.0, 1.6 * n + 0.8)
     axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, sharey=True, squeeze=False)[:, 0])
     for ax, (method, c) in zip(axes, curves.items(), strict=False):
-        size = max(1, round(len(c["phase"]) / points))
-        ax.plot(bin_mean(c["phase"], size), bin_mean(c["flux_corrected"], size), ".",
-                ms=2, color="0.3")
-        ax.plot(c["phase"], c["astro_model"], "-", color="tab:red", lw=1, label="fit")
+        chosen = method == highlight
+        size = max(1, round(len(c[x]) / points))
+        ax.plot(bin_mean(c[x], size), bin_mean(c["flux_corrected"], size), ".",
+                ms=2, color="0.3", label=f"data, binned {size}x")
+        ax.plot(c[x], c["astro_model"], "-", color="tab:red", lw=2 if chosen else 1, label="fit")
         if truth is not None:
             ax.plot(truth[0], truth[1], "-", color="tab:blue", lw=1, label="input")
-        ax.text(0.01, 0.05, f"{method} ({len(c['phase'])} rows, binned {size}x)",
-                transform=ax.transAxes, fontsize=8)
+        extra = (notes or {}).get(method)
+        ax.text(0.01, 0.05, f"{method}{' (recommended)' if chosen else ''}"
+                + (f": {extra}" if extra else f" ({len(c[x])} rows, binned {size}x)"),
+                transform=ax.transAxes, fontsize=8, fontweight="bold" if chosen else "normal")
+        if chosen:
+            for side in ax.spines.values():
+                side.set_edgecolor("goldenrod")
+                side.set_linewidth(2.5)
         ax.set_ylabel("rel. flux", fontsize=8)
-    axes[0].legend(fontsize=7, loc="upper right")
-    axes[-1].set_xlabel("orbital phase")
+        ax.ticklabel_format(axis="y", useOffset=False)   # 1.002, not "+1" and 0.002
+    axes[0].legend(fontsize=7, loc="upper right", ncols=3)
+    axes[-1].set_xlabel(xlabel)
     axes[0].set_title(title)
     return fig
 
@@ -488,14 +511,17 @@ def coverage_per_method(summary: Mapping, *, title: str = "Coverage of the truth
 
 def normalised_residual_histograms(residuals: Mapping[str, np.ndarray], *, limit: float = 4.0,
                                    bin_width: float = 0.5,
-                                   title: str = "Normalised residuals (D - truth) / sigma"
+                                   title: str = "Normalised residuals (D - truth) / sigma",
+                                   counted: str = "epochs", xlabel: str = "(D - truth) / sigma"
                                    ) -> Figure:
     """Histograms of ``z = (D_i - truth) / sigma_i`` against the unit Gaussian.
 
     The first panel pools every method; then one panel per method. Each is
     a density (area 1) with the unit Gaussian density drawn over it; values
     beyond ``+-limit`` are counted in the outermost bins. The corner gives
-    the number of epochs and the RMS of z (1 for honest errors).
+    the number of epochs (``counted``: what a value is, twins on a trust
+    page) and the RMS of z (1 for honest errors). Every panel has the same
+    scales, so the panels compare at a glance.
 
     Parameters
     ----------
@@ -509,7 +535,8 @@ def normalised_residual_histograms(residuals: Mapping[str, np.ndarray], *, limit
     panels.update({m: np.asarray(z, float) for m, z in residuals.items()})
     rows, cols = _grid(len(panels))
     fig = _figure(*_grid_size(rows, cols, 2.9, 2.4))
-    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True).ravel())
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False, sharex=True, sharey=True)
+                         .ravel())
     edges = np.arange(-limit, limit + bin_width / 2, bin_width)
     grid = np.linspace(-limit, limit, 201)
     gauss = np.exp(-0.5 * grid**2) / math.sqrt(2.0 * math.pi)
@@ -519,8 +546,8 @@ def normalised_residual_histograms(residuals: Mapping[str, np.ndarray], *, limit
                     color="0.55" if name == "all methods" else "tab:blue", alpha=0.8)
         ax.plot(grid, gauss, "-", color="k", lw=1)
         rms = float(np.sqrt(np.mean(z**2))) if z.size else float("nan")
-        ax.text(0.02, 0.97, f"N = {z.size}\nrms = {rms:.2f}", transform=ax.transAxes, fontsize=7,
-                va="top")
+        ax.text(0.02, 0.97, f"N = {z.size} {counted}\nrms = {rms:.2f}", transform=ax.transAxes,
+                fontsize=7, va="top")
         ax.set_title(name, fontsize=9)
         ax.tick_params(labelsize=7)
-    return _finish_grid(fig, axes, len(panels), title, "(D - truth) / sigma", "density")
+    return _finish_grid(fig, axes, len(panels), title, xlabel, "density")

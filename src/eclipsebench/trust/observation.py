@@ -182,14 +182,14 @@ def observation_from_table(table, source: str = "the photometry table") -> Obser
     """
     missing = [c for c in _COLUMNS if c not in table.colnames and c not in _OPTIONAL]
     if missing:
-        raise InputError(f"{source}: no column {missing[0]} (trust needs a table made by "
-                         "'eclipsebench photometry': per-frame background in electrons, noise "
-                         "pixels and flags)")
+        raise InputError(f"{source}: missing column(s) {', '.join(missing)} (trust needs a "
+                         "table made by 'eclipsebench photometry': per-frame background in "
+                         "electrons, noise pixels and flags)")
     meta = dict(table.meta or {})
     absent = [k for k in _READOUT_KEYS if k not in meta]
     if absent:
-        raise InputError(f"{source}: metadata lacks {absent[0]} (trust needs the readout that "
-                         "'eclipsebench photometry' records; measure the BCDs again)")
+        raise InputError(f"{source}: metadata lacks {', '.join(absent)} (trust needs the readout "
+                         "that 'eclipsebench photometry' records; measure the BCDs again)")
     mode = ReadoutMode("observed", _meta_number(meta, "AFOWLNUM", source, int),
                        _meta_number(meta, "AWAITPER", source, int),
                        _meta_number(meta, "SAMPTIME", source),

@@ -1,13 +1,13 @@
-"""The answer of a trust run: ``trust.json``, ``trust.ecsv`` and an HTML page with figures.
+"""The answer of a trust run: ``trust.json``, ``trust.ecsv`` and the page.
 
 :func:`collect` reads the real and twin results of a trust folder;
 :func:`trust_summary` turns them into the answer (``eclipsebench.trust.score``);
-:func:`score_task` writes the three files (the engine's last task).
+:func:`score_task` writes the three files (the engine's last task), the page
+with :mod:`eclipsebench.trust.page`.
 """
 
 from __future__ import annotations
 
-import html
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -17,14 +17,11 @@ import numpy as np
 from astropy.table import Table
 
 from .. import __version__
-from ..io.atomic import atomic_path, write_json, write_text
-from ..photometry.binning import bin_indices, bin_values
+from ..io.atomic import atomic_path, write_json
 from ..photometry.table import read_table
+from .collect import collect
 from .layout import TrustLayout
 from .score import (
-    DISTINGUISHABLE_AT,
-    RECOMMEND_DRAWS,
-    REDDER_THAN,
     mse_excess_sigma,
     near_equals,
     observation_statistics,
@@ -47,46 +44,6 @@ ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "cove
 #: The mid-event time's columns of ``trust.ecsv`` (seconds), where the fits freed it.
 ECSV_TIME_COLUMNS = ("t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_z_rms",
                      "t_coverage_1sigma", "t_err_s", "t_honest_err_s")
-
-
-def _load(path: Path) -> dict[str, Any]:
-    return json.loads(Path(path).read_text())
-
-
-def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "eclipse"
-            ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
-    """Real results, twin ``(depths, errors, beta_red, twin numbers, mid-event times, their
-    errors)`` per method (times in BMJD_TDB and days), skipped methods, failed twins."""
-    when = "t_transit" if event == "transit" else "t_ecl"
-    layout = TrustLayout(Path(root))
-    real: dict = {}
-    twins: dict = {}
-    skipped: dict[str, str] = {}
-    failed: dict[str, int] = {}
-    for m in methods:
-        data = _load(layout.real(m))
-        if data.get("failed"):
-            skipped[m] = data["error"]
-            continue
-        real[m] = data
-        d, e, b, n, t, te = [], [], [], [], [], []
-        for i in range(1, n_twins + 1):
-            res = _load(layout.twin_result(m, i))
-            if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
-                failed[m] = failed.get(m, 0) + 1
-                continue
-            d.append(res["depth_ppm"])
-            e.append(res["depth_err_ppm"])
-            b.append(np.nan if res.get("beta_red") is None else res["beta_red"])
-            n.append(i)
-            t.append(np.nan if res.get(f"{when}_bmjd") is None else res[f"{when}_bmjd"])
-            te.append(np.nan if res.get(f"{when}_err_d") is None else res[f"{when}_err_d"])
-        if len(d) < 2:
-            skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
-            del real[m]
-            continue
-        twins[m] = (d, e, b, n, t, te)
-    return real, twins, skipped, failed
 
 
 def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: Mapping,
@@ -150,25 +107,6 @@ def table_provenance(meta: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _noise_pixels_text(twins: Mapping[str, Any]) -> str:
-    real = (twins.get("calibration") or {}).get("noise_pixels_real")
-    return ("no noise pixels in the table: not calibrated" if real is None
-            else f"median noise pixels {real:.2f} real")
-
-
-def _provenance_html(summary: Mapping[str, Any]) -> str:
-    esc = html.escape
-    parts = []
-    if summary.get("source_table"):
-        parts.append(f"<p>Another pipeline's table, {esc(summary['source_table'])}, completed "
-                     f"for the twins as {esc(summary['table'])}. Inferred:</p><ul>"
-                     + "".join(f"<li>{esc(k)}: {esc(str(v))}</li>"
-                               for k, v in (summary.get("inferred") or {}).items()) + "</ul>")
-    if summary.get("time_conversion"):
-        parts.append(f"<p>Times: {esc(summary['time_conversion'])}.</p>")
-    return "".join(parts)
-
-
 def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
     methods = list(summary["methods"])
     table = Table({"method": methods})
@@ -189,104 +127,6 @@ def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
         table.write(tmp, format="ascii.ecsv")
 
 
-def _pyplot():
-    """matplotlib's pyplot on the file backend (imported only when a page is drawn)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path: Path) -> None:
-    """``fig`` as a PNG at ``path``, written atomically (a link made meanwhile is refused)."""
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
-
-
-def _figure_depths(summary, twins, path: Path) -> None:
-    plt = _pyplot()
-    methods = list(summary["methods"])
-    fig, ax = plt.subplots(figsize=(max(5.0, 1.1 * len(methods) + 2), 4.0))
-    jitter = np.random.default_rng(0)   # positions only: the figure's, not the results'
-    for i, m in enumerate(methods):
-        d = np.asarray(twins[m][0])
-        ax.plot(i + 0.15 * jitter.uniform(-1, 1, d.size), d, ".", alpha=0.5, color="C0")
-        s = summary["methods"][m]
-        ax.errorbar(i + 0.35, s["depth_ppm"], yerr=s["honest_err_ppm"], fmt="s", color="C3",
-                    label="real observation (honest error)" if i == 0 else None)
-    ax.axhline(summary["twin_depth_ppm"], color="k", lw=1, label="depth injected in the twins")
-    ax.set_xticks(range(len(methods)), methods, rotation=30, ha="right")
-    ax.set_ylabel("eclipse depth (ppm)")
-    ax.set_title(f"{summary['n_twins']} twins per method ({summary['profile']} profile)")
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
-
-
-def _figure_z(summary, twins, path: Path) -> None:
-    plt = _pyplot()
-    methods = list(summary["methods"])
-    cols = min(4, len(methods))
-    rows = int(np.ceil(len(methods) / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 2.4 * rows), squeeze=False)
-    grid = np.linspace(-5, 5, 200)
-    for ax, m in zip(axes.ravel(), methods, strict=False):
-        d, e = (np.asarray(v) for v in twins[m][:2])
-        z = (d - summary["twin_depth_ppm"]) / e
-        ax.hist(np.clip(z, -5, 5), bins=np.linspace(-5, 5, 21), density=True, color="C0")
-        ax.plot(grid, np.exp(-0.5 * grid**2) / np.sqrt(2 * np.pi), "k-", lw=1)
-        ax.set_title(f"{m}: z_rms {summary['methods'][m]['z_rms']:.2f}", fontsize=9)
-        ax.set_xlabel("(D - D_true) / sigma")
-    for ax in axes.ravel()[len(methods):]:
-        ax.axis("off")
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
-
-
-def _binned(time, values, width_d: float):
-    """Mean time and median value of each ``width_d`` bin of at least 3 frames."""
-    bins = bin_indices(time, width_days=width_d)
-    centres, counts = bin_values(time, bins)
-    order = np.argsort(bins, kind="stable")
-    medians = np.array([np.median(v) for v in np.split(values[order], np.cumsum(
-        counts.astype(int))[:-1])])
-    keep = counts >= 3
-    return centres[keep], medians[keep]
-
-
-def _figure_twin(real_table, twin_table, path: Path) -> None:
-    plt = _pyplot()
-    fig, axes = plt.subplots(4, 1, figsize=(8.0, 8.0), sharex=True)
-    for t, label, color in ((real_table, "real", "k"), (twin_table, "twin 1", "C1")):
-        good = np.asarray(t["flag"]) == 0
-        time = np.asarray(t["time_bmjd"])[good]
-        for ax, col in zip(axes, ("flux", "x", "y", "noise_pixels"), strict=True):
-            if col not in t.colnames:   # another pipeline's table without noise pixels
-                continue
-            v = np.asarray(t[col], float)[good]
-            tb, vb = _binned(time, v / np.median(v) if col == "flux" else v, 5.0 / 1440)
-            ax.plot(tb, vb, ".", ms=3, color=color, label=label)
-    for ax, name in zip(axes, ("raw flux / median (5-min bins)", "x (px)", "y (px)",
-                               "noise pixels"), strict=True):
-        ax.set_ylabel(name, fontsize=8)
-    axes[0].legend(fontsize=8)
-    axes[-1].set_xlabel("BMJD_TDB")
-    axes[0].set_title("the real observation beside one twin")
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
-
-
-def _html_table(head: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
-    esc = html.escape
-    return ("<table><tr>" + "".join(f"<th>{esc(h)}</th>" for h in head) + "</tr>" + "".join(
-        "<tr>" + "".join(f"<td>{esc(c)}</td>" for c in r) + "</tr>" for r in rows) + "</table>")
-
-
 def ranking_text(summary: Mapping[str, Any]) -> str:
     """The ranking's verdict with the bootstrap frequencies, for stdout and the page."""
     freq = summary.get("recommended_frequency") or {}
@@ -296,87 +136,13 @@ def ranking_text(summary: Mapping[str, Any]) -> str:
                                          f"{shown}" if shown else "")
 
 
-def _none_text(summary: Mapping[str, Any]) -> str:
-    f = (summary.get("recommended_frequency") or {}).get("none")
-    return "n/a" if f is None else f"{100 * f:.0f} %"
+def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str,
+               command: str | None = None) -> None:
+    """Write the page (:func:`eclipsebench.trust.page.write_page`, showing ``command``),
+    ``trust.ecsv``, then ``trust.json`` (the engine's outputs, in order)."""
+    # the page's figures (matplotlib): imported only when a page is drawn
+    from .page import real_curves, write_page
 
-
-def _near_equals_text(summary: Mapping[str, Any]) -> str:
-    """The sentence naming the methods the twins cannot tell from the recommended one."""
-    near = summary.get("near_equals") or []
-    if not near:
-        return ""
-    return (f" The twins cannot tell {', '.join(near)} from it (mean squared error within "
-            f"{DISTINGUISHABLE_AT:g} paired standard errors): any of these.")
-
-
-def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
-    esc = html.escape
-    head = ["method", "depth (ppm)", "honest error (ppm)", "bias (ppm)", "SD (ppm)",
-            "RMSE (ppm)", "mean error (ppm)", "z_rms", "1-sigma coverage", "2-sigma coverage",
-            "recommended in (bootstrap)"]
-    rows = []
-    for m, s in summary["methods"].items():
-        lo, hi = s["coverage_1sigma_interval"]
-        rows.append([m, f"{s['depth_ppm']:.1f}", f"{s['honest_err_ppm']:.1f}",
-                     f"{s['bias_ppm']:.1f}", f"{s['sd_ppm']:.1f}", f"{s['rmse_ppm']:.1f}",
-                     f"{s['mean_err_ppm']:.1f}", f"{s['z_rms']:.2f}",
-                     f"{s['coverage_1sigma']:.2f} ({lo:.2f}-{hi:.2f})",
-                     f"{s['coverage_2sigma']:.2f}",
-                     f"{100 * s.get('recommended_frequency', float('nan')):.0f} %"])
-    table = _html_table(head, rows)
-    timed = [(m, s) for m, s in summary["methods"].items() if "t_rmse_s" in s]
-    timing = ("<h2>The mid-event time</h2><p>Over the twins whose fit freed it: the "
-              "injected time's bias, scatter and coverage, and an honest error on the real "
-              "time (its reported error times max(1, z_rms)).</p>" + _html_table(
-                  ["method", "real time (BMJD_TDB)", "error (s)", "honest error (s)",
-                   "bias (s)", "SD (s)", "RMSE (s)", "mean error (s)", "z_rms",
-                   "1-sigma coverage"],
-                  [[m, f"{s['t_event_bmjd']:.6f}", f"{s['t_err_s']:.1f}",
-                    f"{s['t_honest_err_s']:.1f}", f"{s['t_bias_s']:.1f}", f"{s['t_sd_s']:.1f}",
-                    f"{s['t_rmse_s']:.1f}", f"{s['t_mean_err_s']:.1f}", f"{s['t_z_rms']:.2f}",
-                    f"{s['t_coverage_1sigma']:.2f}"] for m, s in timed])
-              if timed else "")
-    skipped = "".join(f"<li>{esc(m)}: {esc(r)}</li>" for m, r in summary["skipped"].items())
-    like = summary.get("resemblance", {})
-    resemblance = "".join(
-        f"<tr><td>{esc(k)}</td><td>{v:.4g}</td><td>{like['twin_001'][k]:.4g}</td></tr>"
-        for k, v in like.get("real", {}).items())
-    tw = summary["twins"]
-    redder = [m for m, s in summary["methods"].items() if s.get("redder_than_twins")]
-    caution = (f"<p><b>Caution:</b> the real residuals of {esc(', '.join(redder))} are redder "
-               f"(beta_red) than {REDDER_THAN:.0%} of the twins': they hold correlated noise "
-               "the twins lack, so the twins' RMSE may under-predict the error.</p>"
-               if redder else "")
-    return (f"<!doctype html><html><head><meta charset='utf-8'><title>How far to trust "
-            f"{esc(summary['system'])}</title><style>body{{font-family:sans-serif;max-width:"
-            f"1100px;margin:auto}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd}}"
-            f"img{{max-width:100%}}</style></head><body>"
-            f"<h1>How far to trust the depth of {esc(summary['system'])}</h1>"
-            f"<p style='font-size:130%'><b>Quote: {esc(summary['quote']['text'])}</b></p>"
-            f"<p><b>{esc(ranking_text(summary))}</b></p>"
-            f"<p>{esc(summary['table'])}: {summary['n_twins']} twins with a "
-            f"{summary['twin_depth_ppm']:.1f} ppm {esc(str(tw['event']))} (the real depth of "
-            f"{esc(str(tw['from_method']))}), reduced like the real table ({esc(summary['profile'])}"
-            f" profile, sampler {esc(summary['sampler'])}). Recommended: <b>"
-            f"{esc(str(summary['recommended']))}</b> ({esc(summary['recommended_because'])})."
-            f"{esc(_near_equals_text(summary))}</p>"
-            f"{table}<p>Honest error: the reported error times max(1, z_rms). Recommended in: "
-            f"how often each method would be recommended over {RECOMMEND_DRAWS} bootstrap "
-            f"resamples of the twins (none: {_none_text(summary)}). Twins: motion "
-            f"within an exposure {tw['motion_rms_px']:.3f} px rms, the simulator's jitter with "
-            f"a peak of {tw['motion_peak_px']:.3f} px per 131-s block ({_noise_pixels_text(tw)});"
-            f" gain: "
-            f"{esc(tw['gain_model'])}.</p>" + _provenance_html(summary) + caution
-            + timing + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
-            + ("<h2>The real observation and twin 1</h2><table><tr><th>good frames</th>"
-               f"<th>real</th><th>twin 1</th></tr>{resemblance}</table>" if resemblance else "")
-            + "".join(f"<p><img src='{esc(f)}' alt='{esc(f)}'></p>" for f in figures)
-            + "</body></html>")
-
-
-def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -> None:
-    """Write the report, ``trust.ecsv``, then ``trust.json`` (the engine's outputs, in order)."""
     layout = TrustLayout(Path(root))
     recipe = json.loads(layout.recipe_json.read_text())
     real, twins, skipped, failed = collect(layout.root, methods, int(settings["n_twins"]),
@@ -388,15 +154,7 @@ def score_task(settings: Mapping[str, Any], methods: Sequence[str], root: str) -
     summary["resemblance"] = {"real": observation_statistics(real_table),
                               "twin_001": observation_statistics(twin)}
     summary.update(table_provenance(real_table.meta))
-    folder = layout.report.parent
-    folder.mkdir(parents=True, exist_ok=True)
-    figures = ["depths.png", "z_scores.png", "twin.png"]
-    if summary["methods"]:
-        _figure_depths(summary, twins, folder / figures[0])
-        _figure_z(summary, twins, folder / figures[1])
-    else:
-        figures = figures[2:]
-    _figure_twin(real_table, twin, folder / "twin.png")
-    write_text(layout.report, _html(summary, figures))
+    write_page(layout.report.parent, summary, twins=twins, curves=real_curves(layout, summary),
+               real_table=real_table, twin_table=twin, command=command)
     _ecsv(summary, layout.table)
     write_json(layout.result, summary)

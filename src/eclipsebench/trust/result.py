@@ -2,22 +2,28 @@
 
 :class:`TrustResult` is the dict :func:`eclipsebench.trust.run.run_trust`
 reads back (so ``json.dumps`` and the CLI's ``--json`` take it as it is),
-with a short text and HTML summary (:mod:`eclipsebench.fit.display`) and
-``to_table()``: one row per method with units.
+with a text and HTML summary (the line to quote, the per-method table and
+the cautions), ``to_table()`` (one row per method with units) and
+``plot()`` (a matplotlib Figure).
+
+The per-method table and the cautions are :mod:`eclipsebench.trust.rows`', the
+ones ``eclipsebench trust`` prints and the trust page shows.
 """
 
 from __future__ import annotations
 
+import html
 import json
+import math
 import os
 from pathlib import Path
-from typing import Any
 
 import astropy.units as u
 from astropy.table import QTable
 
 from ..errors import InputError
-from ..fit.display import html_repr, text_repr
+from ..report.page import html_table
+from .rows import cautions, method_rows, text_table
 
 __all__ = ["TrustResult", "read_trust"]
 
@@ -36,25 +42,55 @@ class TrustResult(dict):
     ``to_table()`` gives every method's statistics (the mid-event time's in s).
     """
 
-    def _fields(self) -> dict[str, Any]:
+    #: The trust folder this answer was read from (``read_trust``), for ``plot()``'s twins.
+    folder: Path | None = None
+
+    def _headline(self) -> str:
+        return (f"{self.get('system')}: {self.get('n_twins')} twins with a "
+                f"{float(self.get('twin_depth_ppm') or math.nan):.1f} ppm "
+                f"{(self.get('twins') or {}).get('event', 'eclipse')} ({self.get('profile')} "
+                f"profile, {self.get('sampler')})")
+
+    def _notes(self) -> list[tuple[str, str]]:
         best = self.get("recommended")
-        row = self.get("methods", {}).get(best, {}) if best else {}
-        return {"quote": (self.get("quote") or {}).get("text"),
-                "ranking": (self.get("ranking") or {}).get("text"),
-                "method": f"{best} (recommended)" if best else "none recommended",
-                "near_equals": ", ".join(self.get("near_equals") or []) or "none",
-                "system": self.get("system"), "profile": self.get("profile"),
-                "depth_ppm": row.get("depth_ppm"), "depth_err_ppm": row.get("honest_err_ppm"),
-                "twins": f"{self.get('n_twins')} at {self.get('twin_depth_ppm', float('nan')):.1f}"
-                         " ppm",
-                "methods": ", ".join(self.get("methods", {})) or "none",
-                "skipped": ", ".join(self.get("skipped", {})) or "none"}
+        near = self.get("near_equals") or []
+        return ([("quote", str((self.get("quote") or {}).get("text")))]
+                + [("recommended", f"{best}" + (f"; the twins cannot tell {', '.join(near)} "
+                                                "from it" if near else ""))]
+                + [("caution", c) for c in cautions(self)])
 
     def __repr__(self) -> str:
-        return text_repr("TrustResult", self._fields())
+        head, units, rows = method_rows(self)
+        return "\n".join([f"TrustResult: {self._headline()}",
+                          *(f"  {k:<11} {v}" for k, v in self._notes()[:2]),
+                          *text_table(head, units, rows, indent="  "),
+                          *(f"  {k:<11} {v}" for k, v in self._notes()[2:])])
 
     def _repr_html_(self) -> str:
-        return html_repr("TrustResult", self._fields())
+        esc = html.escape
+        head, units, rows = method_rows(self)
+        best = self.get("recommended")
+        chosen = [i for i, r in enumerate(rows) if r[0] == best]
+        notes = "".join(f"<li><b>{esc(k)}</b>: {esc(v)}</li>" for k, v in self._notes())
+        return (f"<div><b>TrustResult</b> {esc(self._headline())}<ul>{notes}</ul>"
+                + html_table([[f"{h} ({u})" if u else h for h, u in zip(head, units,
+                                                                         strict=True)],
+                              *rows], chosen=chosen) + "</div>")
+
+    def plot(self, *, twins: bool = True):
+        """A matplotlib Figure of the answer: per method the real depth with its honest and
+        reported errors, the twins' depths (where the trust folder is known, ``twins``), the
+        depth injected into them; the recommended method highlighted.
+
+        No backend is chosen and pyplot is not used: the Figure is shown by a
+        notebook as it is, or written with ``fig.savefig(path)``.
+        """
+        from .page import load_twins, twin_depths_figure  # matplotlib: only when drawn
+
+        depths = None
+        if twins and self.folder is not None and (Path(self.folder) / "twins").is_dir():
+            depths = {m: t[0] for m, t in load_twins(self.folder, self).items()}
+        return twin_depths_figure(self, depths)
 
     def to_table(self) -> QTable:
         """One row per scored method: the statistics, ppm columns with their unit."""
@@ -90,4 +126,6 @@ def read_trust(path: str | os.PathLike) -> TrustResult:
         raise InputError(f"{path}: not a readable trust.json ({type(exc).__name__})") from None
     if not isinstance(data, dict) or "methods" not in data:
         raise InputError(f"{path}: not a trust answer (no 'methods')")
-    return TrustResult(data)
+    result = TrustResult(data)
+    result.folder = path.parent
+    return result

@@ -274,9 +274,10 @@ def plan_real(settings: TrustSettings, layout: TrustLayout) -> list[Task]:
             for m in settings.methods]
 
 
-def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[str]
-               ) -> list[Task]:
-    """The recipe, every twin and every twin's reduction by the usable methods, the score."""
+def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[str],
+               command: str | None = None) -> list[Task]:
+    """The recipe, every twin and every twin's reduction by the usable methods, the score
+    (its page shows ``command``)."""
     first = usable[0]
     tasks = [Task("recipe", "recipe", recipe_task,
                   (settings, first, str(layout.real(first)), str(layout.recipe_npz),
@@ -300,7 +301,7 @@ def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[st
                                   (made, f"real/{m}"), check=partial(_json_ok, m),
                                   sources=settings.sources))
     tasks.append(Task("score", "score", score_task,
-                      (settings.describe(), list(usable), str(layout.root)),
+                      (settings.describe(), list(usable), str(layout.root), command),
                       (layout.report, layout.table, layout.result),
                       ("recipe", *results, *(f"real/{m}" for m in settings.methods)),
                       sources=settings.sources))
@@ -382,8 +383,10 @@ def _undo(made: Sequence[Path]) -> None:
 
 
 def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
-              scheduler: str | None = None) -> tuple[TrustResult, RunReport]:
-    """Run (or resume) a trust run in ``root``; return its answer and what ran.
+              scheduler: str | None = None, command: str | None = None
+              ) -> tuple[TrustResult, RunReport]:
+    """Run (or resume) a trust run in ``root``; return its answer and what ran (``command``:
+    the command line or call shown on the page).
 
     A folder is refused in one line, before anything is written, when it holds
     another kind of run, when an input (the table, the planet's elements, the
@@ -423,7 +426,7 @@ def run_trust(settings: TrustSettings, root: str | Path, *, workers: int = 1,
             if not usable:
                 raise InputError(f"{settings.table}: no method could reduce the real table ("
                                  + "; ".join(f"{m}: {r}" for m, r in skipped.items()) + ")")
-            tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable)
+            tasks = plan_real(settings, layout) + plan_twins(settings, layout, usable, command)
             check_outputs_inside(tasks, layout.root)
             report = run_tasks(tasks, workers=workers, scheduler=scheduler, root=layout.root)
         except InputError:
@@ -454,6 +457,7 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         ``pmap`` that holds no readable map.
     """
     from ..decorrelate import available_methods
+    from ..decorrelate.base import unknown_methods
     from ..fit.astro_model import depth_limit_ppm
     from ..fit.target import system_of_table
     from ..io.pmap_files import find_pmap_path, pmap_files
@@ -475,11 +479,9 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         raise InputError(f"{depth_name}: {depth_ppm:g} ppm is beyond what a fit can return (a "
                          f"{reduce.event}'s depth is below {deepest:g} ppm, the bound of the "
                          "fit's parameter); expected a depth below it")
-    known = available_methods()
-    chosen = tuple(methods) if methods else known
-    for m in chosen:
-        if m not in known:
-            raise InputError(f"method {m!r}: unknown (known: {', '.join(known)})")
+    chosen = tuple(methods) if methods else available_methods()
+    if problem := unknown_methods(chosen):
+        raise InputError(f"methods: {problem}")
     if len(set(chosen)) != len(chosen):
         raise InputError("methods: a method is named twice")
     if pmap is not None and str(pmap) != "":   # a device or a FIFO: refused before the table

@@ -1,0 +1,55 @@
+"""A trust folder's reductions read back: the real fits and the twins' depths, errors,
+``beta_red`` and mid-event times per method, with the methods skipped and the twins failed."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .layout import TrustLayout
+
+__all__ = ["collect"]
+
+
+def _load(path: Path) -> dict[str, Any]:
+    return json.loads(Path(path).read_text())
+
+
+def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "eclipse"
+            ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
+    """Real results, twin ``(depths, errors, beta_red, twin numbers, mid-event times, their
+    errors)`` per method (times in BMJD_TDB and days), skipped methods, failed twins."""
+    when = "t_transit" if event == "transit" else "t_ecl"
+    layout = TrustLayout(Path(root))
+    real: dict = {}
+    twins: dict = {}
+    skipped: dict[str, str] = {}
+    failed: dict[str, int] = {}
+    for m in methods:
+        data = _load(layout.real(m))
+        if data.get("failed"):
+            skipped[m] = data["error"]
+            continue
+        real[m] = data
+        d, e, b, n, t, te = [], [], [], [], [], []
+        for i in range(1, n_twins + 1):
+            res = _load(layout.twin_result(m, i))
+            if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
+                failed[m] = failed.get(m, 0) + 1
+                continue
+            d.append(res["depth_ppm"])
+            e.append(res["depth_err_ppm"])
+            b.append(np.nan if res.get("beta_red") is None else res["beta_red"])
+            n.append(i)
+            t.append(np.nan if res.get(f"{when}_bmjd") is None else res[f"{when}_bmjd"])
+            te.append(np.nan if res.get(f"{when}_err_d") is None else res[f"{when}_err_d"])
+        if len(d) < 2:
+            skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
+            del real[m]
+            continue
+        twins[m] = (d, e, b, n, t, te)
+    return real, twins, skipped, failed

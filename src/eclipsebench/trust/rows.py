@@ -1,0 +1,108 @@
+"""The answer of a trust run as rows of text: the per-method tables (depth and mid-event
+time, with their units) and the cautions, shared by ``eclipsebench trust``'s printout,
+:class:`~eclipsebench.trust.result.TrustResult`'s views and the trust page."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+__all__ = ["DEPTH_COLUMNS", "TIME_COLUMNS", "method_rows", "text_table", "cautions"]
+
+#: The per-method table of the depth: (heading, unit, key, scale, format). Coverage and the
+#: bootstrap's frequency are shown in per cent.
+DEPTH_COLUMNS = (
+    ("depth", "ppm", "depth_ppm", 1.0, "{:.1f}"),
+    ("honest err", "ppm", "honest_err_ppm", 1.0, "{:.1f}"),
+    ("reported err", "ppm", "depth_err_ppm", 1.0, "{:.1f}"),
+    ("bias", "ppm", "bias_ppm", 1.0, "{:.1f}"),
+    ("SD", "ppm", "sd_ppm", 1.0, "{:.1f}"),
+    ("RMSE", "ppm", "rmse_ppm", 1.0, "{:.1f}"),
+    ("mean err", "ppm", "mean_err_ppm", 1.0, "{:.1f}"),
+    ("z_rms", "", "z_rms", 1.0, "{:.2f}"),
+    ("1-sigma cov", "%", "coverage_1sigma", 100.0, "{:.0f}"),
+    ("2-sigma cov", "%", "coverage_2sigma", 100.0, "{:.0f}"),
+    ("recommended in", "%", "recommended_frequency", 100.0, "{:.0f}"),
+)
+#: The mid-event time's table (seconds against the injected time), where the fits freed it.
+TIME_COLUMNS = (
+    ("error", "s", "t_err_s", 1.0, "{:.1f}"),
+    ("honest err", "s", "t_honest_err_s", 1.0, "{:.1f}"),
+    ("bias", "s", "t_bias_s", 1.0, "{:.1f}"),
+    ("SD", "s", "t_sd_s", 1.0, "{:.1f}"),
+    ("RMSE", "s", "t_rmse_s", 1.0, "{:.1f}"),
+    ("mean err", "s", "t_mean_err_s", 1.0, "{:.1f}"),
+    ("z_rms", "", "t_z_rms", 1.0, "{:.2f}"),
+    ("1-sigma cov", "%", "t_coverage_1sigma", 100.0, "{:.0f}"),
+)
+
+
+def _cell(value: Any, scale: float, fmt: str) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return fmt.format(float(value) * scale)
+
+
+def method_rows(summary: Mapping[str, Any], columns: Sequence[tuple] = DEPTH_COLUMNS
+                ) -> tuple[list[str], list[str], list[list[str]]]:
+    """Headings, units and one row of text per method (the first cell its name).
+
+    A method is in the time's table (:data:`TIME_COLUMNS`) only where its
+    twins' fits freed the time.
+
+    Examples
+    --------
+    >>> head, units, rows = method_rows({"methods": {"pld": {"depth_ppm": 1801.72}}},
+    ...                                 DEPTH_COLUMNS[:1])
+    >>> head, units, rows
+    (['method', 'depth'], ['', 'ppm'], [['pld', '1801.7']])
+    """
+    timed = columns is TIME_COLUMNS
+    rows = [[m, *(_cell(s.get(key), scale, fmt) for _, _, key, scale, fmt in columns)]
+            for m, s in summary.get("methods", {}).items() if not timed or "t_rmse_s" in s]
+    return (["method", *(c[0] for c in columns)], ["", *(c[1] for c in columns)], rows)
+
+
+def text_table(head: Sequence[str], units: Sequence[str], rows: Sequence[Sequence[str]],
+               indent: str = "") -> list[str]:
+    """Fixed-width lines: the headings, their units beneath, then the rows.
+
+    Examples
+    --------
+    >>> print("\\n".join(text_table(["method", "depth"], ["", "ppm"], [["pld", "1801.7"]])))
+    method   depth
+               ppm
+    pld     1801.7
+    """
+    widths = [max(len(str(r[i])) for r in (head, units, *rows)) for i in range(len(head))]
+
+    def line(cells: Sequence[str]) -> str:
+        return (indent + "  ".join(str(c).ljust(w) if i == 0 else str(c).rjust(w)
+                                   for i, (c, w) in enumerate(zip(cells, widths, strict=True)))
+                ).rstrip()
+
+    return [line(head), line(units), *(line(r) for r in rows)]
+
+
+def cautions(summary: Mapping[str, Any], *, ranking: bool = True) -> list[str]:
+    """What to be careful of, one sentence each: too few twins to rank the methods (with
+    ``ranking``), no method recommended, real residuals redder than the twins', methods
+    skipped, twins a method failed to reduce."""
+    out = []
+    rank = summary.get("ranking") or {}
+    if ranking and rank.get("text") and not rank.get("resolved"):
+        out.append(str(rank["text"]))
+    if summary.get("methods") and summary.get("recommended") is None:
+        out.append("no method recommended: no method's 1-sigma coverage interval holds "
+                   "68.3 % (its reported errors are too small or too large for its twins)")
+    for m, s in summary.get("methods", {}).items():
+        if s.get("redder_than_twins"):
+            out.append(f"{m}: the real residuals are redder than {s['beta_red_twins_below']:.0%} "
+                       f"of the twins' (beta_red {s['beta_red_real']:.2f}, twins' median "
+                       f"{s['beta_red_twins_median']:.2f}): its RMSE may under-predict the error")
+        if s.get("n_twins_failed"):
+            out.append(f"{m}: {s['n_twins_failed']} twins not reduced (scored over the others)")
+    for m, why in (summary.get("skipped") or {}).items():
+        out.append(f"{m} skipped: {why}")
+    return out
