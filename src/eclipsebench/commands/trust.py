@@ -10,6 +10,7 @@ from ..config import load_config
 from ..config.base import parse_override
 from ..detector.constants import READOUT_MODES
 from ..errors import InputError
+from ..fit.names import EVENTS
 from ..limits import MAX_WORKERS
 from .options import (
     add_planet_options,
@@ -49,6 +50,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--methods", type=method_list, metavar="A,B,...", default=None,
                    help="methods to measure (default: every registered method); the first "
                         "one's real depth is injected unless --depth is given")
+    p.add_argument("--event", choices=EVENTS, default=None,
+                   help="the observation's event (default: [reduce] event, eclipse); "
+                        "phase-curve: a whole phase curve of several AORs (the table's aorkey), "
+                        "scored also on its amplitude and peak offset")
     p.add_argument("--depth", type=positive_float(), default=None, metavar="PPM",
                    help="depth injected into the twins (default: the first method's real depth)")
     p.add_argument("--profile", choices=("controlled", "paper"), default=None,
@@ -108,8 +113,8 @@ def run(args: argparse.Namespace) -> dict:
     from ..trust.run import run_trust
 
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
-    changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))
-               if v is not None}
+    changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler),
+                                 ("event", args.event)) if v is not None}
     section = replace(cfg.reduce, **changes)
     section.validate()
     out = check_output_path(Path(args.out), "--out", "folder")
@@ -181,6 +186,15 @@ def format_text(result: dict) -> str:
             lines.append(f"{m:<10} {s['t_err_s']:7.1f} {s['t_honest_err_s']:7.1f} "
                          f"{s['t_bias_s']:7.1f} {s['t_rmse_s']:6.1f} {s['t_z_rms']:5.2f} "
                          f"{s['t_coverage_1sigma']:5.2f}")
+    from ..trust.report import phase_rows
+
+    for name, unit, rows in phase_rows(result):
+        lines.append(f"{name.replace('_', ' '):<22} {'real':>7} {'error':>7} {'honest':>7} "
+                     f"{'bias':>7} {'RMSE':>6} {'z_rms':>5} {'cov1':>5} {'cov2':>5}   ({unit}; "
+                     f"injected {result[f'twin_{name}_{unit}']:.1f})")
+        for r in rows:
+            lines.append(f"{r[0]:<22} {r[1]:>7} {r[2]:>7} {r[3]:>7} {r[4]:>7} {r[6]:>6} "
+                         f"{r[8]:>5} {r[9]:>5} {r[10]:>5}")
     lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
     if result.get("near_equals"):
         from ..trust.score import DISTINGUISHABLE_AT

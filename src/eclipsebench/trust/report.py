@@ -23,11 +23,13 @@ from ..photometry.table import read_table
 from .layout import TrustLayout
 from .score import (
     DISTINGUISHABLE_AT,
+    PHASE_QUANTITIES,
     RECOMMEND_DRAWS,
     REDDER_THAN,
     mse_excess_sigma,
     near_equals,
     observation_statistics,
+    phase_score,
     quote,
     ranking_resolution,
     recommend,
@@ -38,6 +40,7 @@ from .score import (
 )
 
 __all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS", "ECSV_TIME_COLUMNS",
+           "ECSV_PHASE_COLUMNS", "phase_rows",
            "table_provenance", "ranking_text"]
 
 #: The per-method columns of ``trust.ecsv`` (ppm unless dimensionless).
@@ -48,15 +51,30 @@ ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "cove
 ECSV_TIME_COLUMNS = ("t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_z_rms",
                      "t_coverage_1sigma", "t_err_s", "t_honest_err_s")
 
+#: A whole phase curve's columns of ``trust.ecsv`` (its amplitude in ppm, its peak offset in
+#: deg), where the twins carry one; NaN where a method's fits give no error.
+ECSV_PHASE_COLUMNS = tuple(f"{name}_{stat}" for name, unit, _ in PHASE_QUANTITIES for stat in (
+    f"bias_{unit}", f"sd_{unit}", f"rmse_{unit}", f"mean_err_{unit}", "z_rms",
+    "coverage_1sigma", "coverage_2sigma", f"honest_err_{unit}")) + tuple(
+    k for name, unit, _ in PHASE_QUANTITIES for k in (f"{name}_{unit}", f"{name}_err_{unit}"))
+
 
 def _load(path: Path) -> dict[str, Any]:
     return json.loads(Path(path).read_text())
 
 
+#: A phase-curve result's keys that the twins' phase statistics read (value and error).
+_PHASE_KEYS = tuple(k for name, unit, _ in PHASE_QUANTITIES
+                    for k in (f"{name}_{unit}", f"{name}_err_{unit}"))
+
+
 def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "eclipse"
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
     """Real results, twin ``(depths, errors, beta_red, twin numbers, mid-event times, their
-    errors)`` per method (times in BMJD_TDB and days), skipped methods, failed twins."""
+    errors, phase quantities)`` per method (times in BMJD_TDB and days; the phase
+    quantities ``{key: values}`` with the keys of :data:`~eclipsebench.trust.score.
+    PHASE_QUANTITIES` and their errors, NaN where a result has none), skipped methods,
+    failed twins."""
     when = "t_transit" if event == "transit" else "t_ecl"
     layout = TrustLayout(Path(root))
     real: dict = {}
@@ -70,6 +88,7 @@ def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "ecli
             continue
         real[m] = data
         d, e, b, n, t, te = [], [], [], [], [], []
+        phase: dict[str, list[float]] = {k: [] for k in _PHASE_KEYS}
         for i in range(1, n_twins + 1):
             res = _load(layout.twin_result(m, i))
             if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
@@ -81,11 +100,13 @@ def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "ecli
             n.append(i)
             t.append(np.nan if res.get(f"{when}_bmjd") is None else res[f"{when}_bmjd"])
             te.append(np.nan if res.get(f"{when}_err_d") is None else res[f"{when}_err_d"])
+            for key in _PHASE_KEYS:
+                phase[key].append(np.nan if res.get(key) is None else res[key])
         if len(d) < 2:
             skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
             del real[m]
             continue
-        twins[m] = (d, e, b, n, t, te)
+        twins[m] = (d, e, b, n, t, te, phase)
     return real, twins, skipped, failed
 
 
@@ -121,13 +142,25 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
                               else real[m][f"{when}_err_d"])
         if timing is not None:
             s.update(timing)
+    phase_truth = {k: float(recipe[f"{name}_{unit}"]) for name, unit, _ in PHASE_QUANTITIES
+                   if (k := f"{name}_{unit}") in recipe}
+    if phase_truth:   # a whole phase curve: its amplitude and peak offset too
+        for m, s in scores.items():
+            for name, unit, angle in PHASE_QUANTITIES:
+                value, err = f"{name}_{unit}", f"{name}_err_{unit}"
+                found = phase_score(name, unit, twins[m][6][value], twins[m][6][err],
+                                    phase_truth[value], real[m].get(value), real[m].get(err),
+                                    angle=angle)
+                if found is not None:
+                    s.update(found)
     return {"quote": quote(scores, best), "methods": scores, "skipped": dict(skipped),
             "recommended": best, "recommended_frequency": frequency,
             "ranking": ranking_resolution(scores, resid, best, int(settings["n_twins"]),
                                           frequency),
             "recommended_because": why, "near_equals": near_equals(scores, resid, best),
             "n_twins": int(settings["n_twins"]),
-            "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],
+            "twin_depth_ppm": truth, **{f"twin_{k}": v for k, v in phase_truth.items()},
+            "system": settings["system"], "table": settings["table"],
             "seed": settings["seed"], "profile": settings["reduce"]["profile"],
             "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
                 "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
@@ -180,11 +213,20 @@ def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
         table[col] = [summary["methods"][m].get(col, np.nan) for m in methods]
         if col.endswith("_s"):
             table[col].unit = "s"
+    if any(f"twin_{name}_{unit}" in summary for name, unit, _ in PHASE_QUANTITIES):
+        for col in ECSV_PHASE_COLUMNS:
+            values = [summary["methods"][m].get(col) for m in methods]
+            table[col] = [np.nan if v is None else v for v in values]
+            for unit in ("ppm", "deg"):
+                if col.endswith(f"_{unit}"):
+                    table[col].unit = unit
     table.meta.update({"quote": summary["quote"]["text"],
                        "ranking": summary["ranking"]["text"],
                        "recommended": summary["recommended"], "n_twins": summary["n_twins"],
                        "twin_depth_ppm": summary["twin_depth_ppm"], "system": summary["system"],
                        "table": summary["table"]})
+    table.meta.update({f"twin_{n}_{u}": summary[f"twin_{n}_{u}"] for n, u, _ in PHASE_QUANTITIES
+                       if f"twin_{n}_{u}" in summary})
     with atomic_path(path) as tmp:
         table.write(tmp, format="ascii.ecsv")
 
@@ -310,6 +352,59 @@ def _near_equals_text(summary: Mapping[str, Any]) -> str:
             f"{DISTINGUISHABLE_AT:g} paired standard errors): any of these.")
 
 
+def _number(value: Any, fmt: str) -> str:
+    """``value`` formatted, or "none" where a fit gave none."""
+    return "none" if value is None else format(value, fmt)
+
+
+def phase_rows(summary: Mapping[str, Any]) -> list[tuple[str, str, list[list[str]]]]:
+    """A whole phase curve's statistics per quantity, for stdout and the page: ``(name,
+    unit, rows)``, each row a method's real value, error, honest error, bias, SD, RMSE,
+    mean error, z_rms and 1- and 2-sigma coverage as text ("none" where its fits gave no
+    error); empty for an eclipse or a transit."""
+    out = []
+    for name, unit, _ in PHASE_QUANTITIES:
+        if f"twin_{name}_{unit}" not in summary:
+            continue
+        rows = []
+        for m, s in summary["methods"].items():
+            if f"{name}_rmse_{unit}" not in s:
+                continue
+            rows.append([m, _number(s[f"{name}_{unit}"], ".1f"),
+                         _number(s[f"{name}_err_{unit}"], ".1f"),
+                         _number(s[f"{name}_honest_err_{unit}"], ".1f"),
+                         _number(s[f"{name}_bias_{unit}"], ".1f"),
+                         _number(s[f"{name}_sd_{unit}"], ".1f"),
+                         _number(s[f"{name}_rmse_{unit}"], ".1f"),
+                         _number(s[f"{name}_mean_err_{unit}"], ".1f"),
+                         _number(s[f"{name}_z_rms"], ".2f"),
+                         _number(s[f"{name}_coverage_1sigma"], ".2f"),
+                         _number(s[f"{name}_coverage_2sigma"], ".2f")])
+        out.append((name, unit, rows))
+    return out
+
+
+def _phase_html(summary: Mapping[str, Any]) -> str:
+    """The page's section on a whole phase curve's amplitude and peak offset ("" for an
+    eclipse or a transit)."""
+    parts = []
+    for name, unit, rows in phase_rows(summary):
+        what = name.replace("_", " ")
+        parts.append(f"<h3>{html.escape(what)} (injected {summary[f'twin_{name}_{unit}']:.1f} "
+                     f"{unit})</h3>" + _html_table(
+                         ["method", f"real ({unit})", f"error ({unit})",
+                          f"honest error ({unit})", f"bias ({unit})", f"SD ({unit})",
+                          f"RMSE ({unit})", f"mean error ({unit})", "z_rms",
+                          "1-sigma coverage", "2-sigma coverage"], rows))
+    if not parts:
+        return ""
+    return ("<h2>The phase curve</h2><p>The twins' phase-curve semi-amplitude and peak "
+            "(hotspot) offset, east positive, of their harmonic fits against the injected "
+            "ones (harmonic_summary of the real fit's harmonics): bias, scatter, coverage, "
+            "and an honest error on the real value (its reported error times max(1, "
+            "z_rms); none where the fits give no error).</p>" + "".join(parts))
+
+
 def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
     esc = html.escape
     head = ["method", "depth (ppm)", "honest error (ppm)", "bias (ppm)", "SD (ppm)",
@@ -337,6 +432,7 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
                     f"{s['t_rmse_s']:.1f}", f"{s['t_mean_err_s']:.1f}", f"{s['t_z_rms']:.2f}",
                     f"{s['t_coverage_1sigma']:.2f}"] for m, s in timed])
               if timed else "")
+    phase = _phase_html(summary)
     skipped = "".join(f"<li>{esc(m)}: {esc(r)}</li>" for m, r in summary["skipped"].items())
     like = summary.get("resemblance", {})
     resemblance = "".join(
@@ -368,7 +464,7 @@ def _html(summary: Mapping[str, Any], figures: Sequence[str]) -> str:
             f"a peak of {tw['motion_peak_px']:.3f} px per 131-s block ({_noise_pixels_text(tw)});"
             f" gain: "
             f"{esc(tw['gain_model'])}.</p>" + _provenance_html(summary) + caution
-            + timing + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
+            + timing + phase + (f"<h2>Skipped</h2><ul>{skipped}</ul>" if skipped else "")
             + ("<h2>The real observation and twin 1</h2><table><tr><th>good frames</th>"
                f"<th>real</th><th>twin 1</th></tr>{resemblance}</table>" if resemblance else "")
             + "".join(f"<p><img src='{esc(f)}' alt='{esc(f)}'></p>" for f in figures)
