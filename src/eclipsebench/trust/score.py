@@ -14,6 +14,11 @@ give (``docs/trust.md``):
 - the honest error of the real depth: its reported error times
   ``max(1, z_rms)``.
 
+The same statistics of any quantity come from :func:`error_score` (the
+mid-event time's in seconds, :func:`timing_score`; a whole phase curve's
+semi-amplitude in ppm and peak offset in deg, :func:`phase_score`, the
+offset's errors wrapped into [-180, 180) deg).
+
 The recommended method has the lowest RMSE among those whose 1-sigma
 coverage interval contains 68.3 %. Whether another such method is
 distinguishable from it is a paired test over the twins both reduced
@@ -63,8 +68,8 @@ REDDER_THAN = 0.95
 DISTINGUISHABLE_AT = 2.0
 
 
-def error_score(resid: Sequence[float], error: Sequence[float], *, unit: str = "ppm",
-                prefix: str = "") -> dict[str, Any]:
+def error_score(resid: Sequence[float] | np.ndarray, error: Sequence[float] | np.ndarray, *,
+                unit: str = "ppm", prefix: str = "") -> dict[str, Any]:
     """The twin statistics of one quantity from its errors against the truth (module
     docstring): ``resid`` the twins' values minus the injected one, ``error`` their reported
     errors, both in ``unit``; keys ``{prefix}n_twins``, ``{prefix}bias_{unit}``,
@@ -127,10 +132,10 @@ def phase_score(name: str, unit: str, values: Sequence[float], errors: Sequence[
 
     Examples
     --------
-    >>> s = phase_score("phase_offset", "deg", [179.0, -179.0, 177.0], [2.0] * 3, -179.0,
-    ...                 178.0, 2.0, angle=True)
+    >>> s = phase_score("phase_offset", "deg", [179.0, -179.0, -179.0, 179.0], [2.0] * 4, 180.0,
+    ...                 178.0, 2.0, angle=True)   # errors of -1, 1, 1, -1 deg across +-180
     >>> s["phase_offset_bias_deg"], s["phase_offset_rmse_deg"], s["phase_offset_honest_err_deg"]
-    (1.0, 2.0, 2.0)
+    (0.0, 1.0, 2.0)
     >>> s = phase_score("phase_amplitude", "ppm", [200.0, 210.0, 190.0], [float("nan")] * 3,
     ...                 200.0, 205.0, None)
     >>> s["phase_amplitude_z_rms"], s["phase_amplitude_no_error"]
@@ -159,13 +164,14 @@ def phase_score(name: str, unit: str, values: Sequence[float], errors: Sequence[
                f"{prefix}coverage_2sigma": None, f"{prefix}coverage_2sigma_interval": None,
                f"{prefix}no_error": f"{int((~has_err).sum())} of {resid.size} twins' fits gave "
                                     f"no error for {name}"}
-    good_real = real is not None and np.isfinite(real)
-    good_err = real_err is not None and np.isfinite(real_err) and real_err > 0
+    value = float(real) if real is not None and np.isfinite(real) else None
+    sigma = (float(real_err) if real_err is not None and np.isfinite(real_err) and real_err > 0
+             else None)
     z_rms = out[f"{prefix}z_rms"]
-    out.update({f"{name}_{unit}": float(real) if good_real else None,
-                f"{name}_err_{unit}": float(real_err) if good_err else None,
-                f"{prefix}honest_err_{unit}": (float(real_err) * max(1.0, z_rms)
-                                               if good_err and z_rms is not None else None)})
+    out.update({f"{name}_{unit}": value, f"{name}_err_{unit}": sigma,
+                f"{prefix}honest_err_{unit}": (sigma * max(1.0, z_rms)
+                                               if sigma is not None and z_rms is not None
+                                               else None)})
     return out
 
 
