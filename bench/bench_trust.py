@@ -35,14 +35,26 @@ Three parts (``--part``):
     the recommended method's actual errors are no worse than the median
     method's.
 
+``phase-curve``
+    The built-in ``xo3b-phase-curve`` challenge (one whole orbit, seed 2015;
+    ``--set SECTION.KEY=VALUE`` changes its configuration, e.g. a sparse
+    cadence for a quick run) simulated and measured, then ``trust --event
+    phase-curve`` on its table with ``--twins`` twins (default 50) and BLISS,
+    KR/Data and PLD (``--methods``), least squares: per method the depth,
+    phase amplitude and peak offset over the twins (bias, RMSE, z_rms,
+    coverage), the real fit's actual error against the simulator's truth in
+    units of the twin RMSE, the task seconds of the simulation and the
+    reductions and the CPU seconds of this process.
+
 Command (what BENCHMARKS.md quotes): ``python bench/bench_trust.py --part
 resemble --twins 4``, ``--part speed``, ``--part window --twins 10``,
-``--part predict --epochs 20 --twins 50``.
+``--part predict --epochs 20 --twins 50``, ``--part phase-curve --twins 50``.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import platform
@@ -59,6 +71,7 @@ ROOT = HERE.parent
 REAL = (ROOT / ".." / "shared" / "data" / "irac" / "real_xo3_eclipse1").resolve()
 SPEED_METHODS = ["bliss", "gp", "kr-data", "pld", "poly2", "segpoly"]
 PREDICT_METHODS = ["bliss", "pld", "kr-data"]
+PHASE_CURVE_METHODS = ["bliss", "kr-data", "pld"]
 
 
 def _real_table(work: Path) -> Path:
@@ -289,9 +302,84 @@ def predict(work: Path, n_epochs: int, n_twins: int, workers: int) -> None:
               f"difference {diff.mean():+.1f} +- {se:.1f} ppm (standard error over the epochs)")
 
 
+def phase_curve(work: Path, n_twins: int, workers: int, sets: list[str],
+                methods: list[str]) -> None:
+    from astropy.table import Table
+
+    import eclipsebench as eb
+    from eclipsebench.config import load_config
+    from eclipsebench.trust.run import make_settings, run_trust
+
+    c0 = time.process_time()
+    cfg = eb.load_config("xo3b-phase-curve", overrides=sets)
+    tag = "full" if not sets else "set-" + hashlib.sha256("\n".join(sets).encode()).hexdigest()[:8]
+    sim, phot = work / "phase_curve" / tag / "sim", work / "phase_curve" / tag / "phot"
+    t0 = time.perf_counter()
+    eb.simulate(sim, config=cfg, workers=workers, calibration=False)
+    if not (phot / "epoch_01.fits").is_file():
+        eb.measure(sim, phot, config=cfg)
+    made = time.perf_counter() - t0
+    truth = Table.read(sim / "truth.ecsv", format="ascii.ecsv")[0]
+    table = phot / "epoch_01.fits"
+    rcfg = load_config(None, ["reduce.sampler=\"leastsq\"", "reduce.event=\"phase-curve\""])
+    settings = make_settings(table, reduce=rcfg.reduce, system_section=rcfg.system,
+                             methods=methods, n_twins=n_twins)
+    out = work / "phase_curve" / tag / f"trust_{n_twins}"
+    t0 = time.perf_counter()
+    summary, report = run_trust(settings, out, workers=workers)
+    wall = time.perf_counter() - t0
+    stages = report.stage_seconds()
+    frames = len(Table.read(table))
+    print(f"xo3b-phase-curve ({' '.join(sets) or 'as built in'}): {frames} frames, simulated "
+          f"and measured in {made:.1f} s; trust --event phase-curve, {n_twins} twins x "
+          f"{len(methods)} methods, leastsq, {workers} workers: wall {wall:.1f} s, task "
+          f"seconds: simulation {stages.get('recipe', 0.0) + stages.get('twin', 0.0):.1f} "
+          f"(recipe {stages.get('recipe', 0.0):.1f}), reductions "
+          f"{stages.get('real', 0.0) + stages.get('twin-reduce', 0.0):.1f}, score "
+          f"{stages.get('score', 0.0):.1f}; CPU of this process {time.process_time() - c0:.1f} s")
+    print(f"simulator's truth: depth {truth['depth_ppm']:.1f} ppm (harmonic p(t_ecl) "
+          f"{truth['harmonic_depth_ppm']:.1f}), amplitude {truth['phase_amplitude_ppm']:.1f} ppm, "
+          f"offset {truth['phase_offset_deg']:+.1f} deg; injected in the twins (the first "
+          f"method's real fit): depth {summary['twin_depth_ppm']:.1f}, amplitude "
+          f"{summary['twin_phase_amplitude_ppm']:.1f}, offset "
+          f"{summary['twin_phase_offset_deg']:+.1f}")
+    print("| method | quantity | real | honest error | twins' bias | RMSE | z_rms | cov1 | cov2 "
+          "| real error / RMSE |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+
+    def cell(v, fmt=".1f"):
+        return "none" if v is None else format(v, fmt)
+
+    for m, s in summary["methods"].items():
+        for label, key, unit, true, angle in (
+                ("depth (ppm)", "", "ppm", float(truth["harmonic_depth_ppm"]), False),
+                ("amplitude (ppm)", "phase_amplitude_", "ppm",
+                 float(truth["phase_amplitude_ppm"]), False),
+                ("offset (deg)", "phase_offset_", "deg", float(truth["phase_offset_deg"]), True)):
+            value = s["depth_ppm" if not key else f"{key[:-1]}_{unit}"]
+            rmse = s.get(f"{key}rmse_{unit}")
+            if rmse is None:
+                continue
+            err = value - true
+            if angle:
+                err = (err + 180.0) % 360.0 - 180.0
+            honest = s["honest_err_ppm" if not key else f"{key}honest_err_{unit}"]
+            print(f"| {m} | {label} | {value:.1f} | {cell(honest)} | "
+                  f"{s[f'{key}bias_{unit}']:+.1f} | {rmse:.1f} | {cell(s[f'{key}z_rms'], '.2f')} "
+                  f"| {cell(s[f'{key}coverage_1sigma'], '.2f')} | "
+                  f"{cell(s[f'{key}coverage_2sigma'], '.2f')} | {err / rmse:+.2f} |")
+    print(f"recommended {summary['recommended']}; {summary['ranking']['text']}; skipped "
+          f"{summary['skipped']}")
+
+
 def main(argv: list[str]) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--part", choices=("resemble", "speed", "window", "table", "predict"), default="resemble")
+    p.add_argument("--part", choices=("resemble", "speed", "window", "table", "predict",
+                                      "phase-curve"), default="resemble")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                   help="phase-curve: a change to the xo3b-phase-curve configuration")
+    p.add_argument("--methods", default=",".join(PHASE_CURVE_METHODS),
+                   help="phase-curve: the methods")
     p.add_argument("--twins", type=int, default=None)
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--workers", type=int, default=2)
@@ -301,7 +389,7 @@ def main(argv: list[str]) -> int:
     work.mkdir(parents=True, exist_ok=True)
     print(f"# bench_trust --part {args.part}: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())},"
           f" {platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}")
-    if args.part != "predict" and not REAL.is_dir():
+    if args.part not in ("predict", "phase-curve") and not REAL.is_dir():
         print("../shared/data/irac/real_xo3_eclipse1 is absent: skipped")
         return 0
     if args.part == "resemble":
@@ -312,6 +400,8 @@ def main(argv: list[str]) -> int:
         window(work, args.twins or 10)
     elif args.part == "table":
         table(work, args.twins or 20, args.workers)
+    elif args.part == "phase-curve":
+        phase_curve(work, args.twins or 50, args.workers, args.sets, args.methods.split(","))
     else:
         predict(work, args.epochs, args.twins or 10, args.workers)
     return 0

@@ -351,7 +351,9 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
     channel : int, optional
         Another pipeline's IRAC channel (default: its ``CHANNEL``, else 2).
     **reduce_options
-        ``[reduce]`` values to change, e.g. ``sampler="leastsq"``, ``profile="paper"``.
+        ``[reduce]`` values to change, e.g. ``sampler="leastsq"``, ``profile="paper"``,
+        ``event="phase-curve"`` (a whole phase curve of several AORs, scored also on
+        its amplitude and peak offset: ``docs/trust.md``, "Whole phase curves").
 
     Returns
     -------

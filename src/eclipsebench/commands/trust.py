@@ -11,6 +11,7 @@ from ..config import load_config
 from ..config.base import parse_override
 from ..detector.constants import READOUT_MODES
 from ..errors import InputError
+from ..fit.names import EVENTS
 from ..limits import MAX_WORKERS
 from .options import (
     add_planet_options,
@@ -50,6 +51,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--methods", type=method_list, metavar="A,B,...", default=None,
                    help="methods to measure (default: every registered method); the first "
                         "one's real depth is injected unless --depth is given")
+    p.add_argument("--event", choices=EVENTS, default=None,
+                   help="the observation's event (default: [reduce] event, eclipse); "
+                        "phase-curve: a whole phase curve of several AORs (the table's aorkey), "
+                        "scored also on its amplitude and peak offset")
     p.add_argument("--depth", type=positive_float(), default=None, metavar="PPM",
                    help="depth injected into the twins (default: the first method's real depth)")
     p.add_argument("--profile", choices=("controlled", "paper"), default=None,
@@ -112,8 +117,8 @@ def run(args: argparse.Namespace) -> dict:
         raise InputError(f"--methods: {problem}")
 
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
-    changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler))
-               if v is not None}
+    changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler),
+                                 ("event", args.event)) if v is not None}
     section = replace(cfg.reduce, **changes)
     section.validate()
     out = check_output_path(Path(args.out), "--out", "folder")
@@ -163,7 +168,16 @@ def _twin_lines(twins: dict) -> list[str]:
 
 def format_text(result: dict) -> str:
     from ..trust.report import ranking_text
-    from ..trust.rows import DEPTH_COLUMNS, TIME_COLUMNS, cautions, method_rows, text_table
+    from ..trust.rows import (
+        DEPTH_COLUMNS,
+        PHASE_HEAD,
+        TIME_COLUMNS,
+        cautions,
+        method_rows,
+        phase_rows,
+        phase_units,
+        text_table,
+    )
 
     lines = []
     if result.get("quote"):   # the line to quote first
@@ -180,6 +194,10 @@ def format_text(result: dict) -> str:
         lines.append(f"the {'transit' if result['twins']['event'] == 'transit' else 'eclipse'}"
                      "'s mid-time, against the injected one (the twins whose fit freed it):")
         lines += text_table(["mid-time", *head[1:]], units, rows)
+    for name, unit, rows in phase_rows(result):
+        lines.append(f"the phase curve's {name.replace('_', ' ')}, against the injected "
+                     f"{result[f'twin_{name}_{unit}']:.1f} {unit}:")
+        lines += text_table([name.split("_")[-1], *PHASE_HEAD], ["", *phase_units(unit)], rows)
     lines.append(f"recommended   {result['recommended']} ({result['recommended_because']})")
     if result.get("near_equals"):
         from ..trust.score import DISTINGUISHABLE_AT

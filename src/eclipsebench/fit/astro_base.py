@@ -150,6 +150,10 @@ class AstroModel(ABC):
     phase_models: ClassVar[tuple[str, ...]] = PHASE_MODELS
     #: Each event's subclass, registered as it is defined (:meth:`__init_subclass__`).
     _event_classes: ClassVar[dict[str, type[AstroModel]]] = {}
+    #: Whether the event spans a whole orbit over several AORs: a flux offset per AOR after
+    #: the first (from the table's ``aorkey``) and a harmonic phase curve that
+    #: :meth:`phase_summary` summarises (a phase curve's; not an eclipse's or a transit's).
+    whole_orbit: ClassVar[bool] = False
     #: A phase curve's AORs in time order (:attr:`n_aor` offsets after the first); none
     #: for the other events.
     aor_keys: tuple = ()

@@ -1,5 +1,6 @@
 """A trust folder's reductions read back: the real fits and the twins' depths, errors,
-``beta_red`` and mid-event times per method, with the methods skipped and the twins failed."""
+``beta_red``, mid-event times and phase-curve quantities per method, with the methods skipped
+and the twins failed."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .layout import TrustLayout
+from .score import PHASE_QUANTITIES
 
 __all__ = ["collect"]
 
@@ -19,10 +21,18 @@ def _load(path: Path) -> dict[str, Any]:
     return json.loads(Path(path).read_text())
 
 
+#: A phase-curve result's keys that the twins' phase statistics read (value and error).
+_PHASE_KEYS = tuple(k for name, unit, _ in PHASE_QUANTITIES
+                    for k in (f"{name}_{unit}", f"{name}_err_{unit}"))
+
+
 def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "eclipse"
             ) -> tuple[dict, dict, dict[str, str], dict[str, int]]:
     """Real results, twin ``(depths, errors, beta_red, twin numbers, mid-event times, their
-    errors)`` per method (times in BMJD_TDB and days), skipped methods, failed twins."""
+    errors, phase quantities)`` per method (times in BMJD_TDB and days; the phase
+    quantities ``{key: values}`` with the keys of :data:`~eclipsebench.trust.score.
+    PHASE_QUANTITIES` and their errors, NaN where a result has none), skipped methods,
+    failed twins."""
     when = "t_transit" if event == "transit" else "t_ecl"
     layout = TrustLayout(Path(root))
     real: dict = {}
@@ -36,6 +46,7 @@ def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "ecli
             continue
         real[m] = data
         d, e, b, n, t, te = [], [], [], [], [], []
+        phase: dict[str, list[float]] = {k: [] for k in _PHASE_KEYS}
         for i in range(1, n_twins + 1):
             res = _load(layout.twin_result(m, i))
             if res.get("failed") or not np.isfinite(res.get("depth_err_ppm") or np.nan):
@@ -47,9 +58,11 @@ def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "ecli
             n.append(i)
             t.append(np.nan if res.get(f"{when}_bmjd") is None else res[f"{when}_bmjd"])
             te.append(np.nan if res.get(f"{when}_err_d") is None else res[f"{when}_err_d"])
+            for key in _PHASE_KEYS:
+                phase[key].append(np.nan if res.get(key) is None else res[key])
         if len(d) < 2:
             skipped[m] = f"{len(d)} of {n_twins} twins reduced: too few to score"
             del real[m]
             continue
-        twins[m] = (d, e, b, n, t, te)
+        twins[m] = (d, e, b, n, t, te, phase)
     return real, twins, skipped, failed

@@ -39,7 +39,8 @@ from ..errors import InputError
 
 __all__ = ["Observation", "observation_from_table", "MIN_GOOD_FRAMES", "complete_table",
            "needs_completion", "flux_scale_from_scatter", "SUBARRAY_CUBE_FRAMES",
-           "AOR_GAP_S", "completed_observation", "adopt_observation", "OBSERVATION_FILE"]
+           "AOR_GAP_S", "completed_observation", "adopt_observation", "OBSERVATION_FILE",
+           "check_several_aors"]
 
 #: Fewer good frames than this cannot be twinned (nor reduced with any confidence).
 MIN_GOOD_FRAMES = 100
@@ -223,6 +224,26 @@ def observation_from_table(table, source: str = "the photometry table") -> Obser
                          "mission's channels)")
     return obs
 
+
+def check_several_aors(table, obs: Observation, source: str) -> None:
+    """Refuse, in one line naming the table, a whole phase curve's table without the AORs
+    its fit needs: no column ``aorkey`` (another pipeline's table, whose AORs
+    :func:`complete_table` would infer from gaps, counts as none) or a single AOR.
+
+    A phase curve's fit gives every AOR after the first its own flux offset
+    (:mod:`eclipsebench.fit.astro_phase_curve`), so its twins are made only of
+    a table that names each frame's AOR, and of more than one.
+    """
+    inferred = json.loads(str((table.meta or {}).get("INFERRED") or "{}"))
+    if "aorkey" not in table.colnames or "cubes" in inferred:
+        raise InputError(f"{source}: no column aorkey: twins of a whole phase curve need each "
+                         "frame's AOR (its fit gives every AOR after the first a flux offset); "
+                         "expected a column aorkey naming at least 2 AORs")
+    keys = np.unique(obs.aorkey)
+    if keys.size < 2:
+        raise InputError(f"{source}: column aorkey: one AOR ({keys[0]}); a whole phase curve "
+                         "spans several, expected at least 2 (twin a single AOR with --event "
+                         "eclipse or transit)")
 
 
 # ----------------------------------------------------------------------------- any table

@@ -36,7 +36,15 @@ from ..report import figures as F
 from ..report.page import figure_html, html_table, notes_html, page_html
 from .collect import collect
 from .layout import TrustLayout
-from .rows import DEPTH_COLUMNS, TIME_COLUMNS, cautions, method_rows
+from .rows import (
+    DEPTH_COLUMNS,
+    PHASE_HEAD,
+    TIME_COLUMNS,
+    cautions,
+    method_rows,
+    phase_rows,
+    phase_units,
+)
 from .score import DISTINGUISHABLE_AT, RECOMMEND_DRAWS
 
 __all__ = ["write_page", "write_page_of_folder", "load_twins", "real_curves", "twin_depths_figure",
@@ -286,6 +294,20 @@ def _body(summary: Mapping[str, Any], figures: Sequence[tuple[str, str, list[Pat
                   "it, in seconds against the injected time: the bias, scatter and coverage, "
                   "and an honest error on the real time (its reported error times max(1, "
                   "z_rms)).</p>", _table_html(summary, TIME_COLUMNS)]
+    phase = phase_rows(summary)
+    if phase:
+        parts.append("<h2>The phase curve</h2><p>The twins' phase-curve semi-amplitude and peak "
+                     "(hotspot) offset, east positive, of their harmonic fits against the "
+                     "injected ones (harmonic_summary of the real fit's harmonics): bias, "
+                     "scatter, coverage, and an honest error on the real value (its reported "
+                     "error times max(1, z_rms); none where the fits give no error).</p>")
+    for name, unit, rows in phase:
+        chosen = [i for i, r in enumerate(rows) if r[0] == summary.get("recommended")]
+        parts += [f"<h3>{esc(name.replace('_', ' '))} (injected "
+                  f"{summary[f'twin_{name}_{unit}']:.1f} {esc(unit)})</h3>",
+                  html_table([["method", *(f"{h} ({u})" if u else h for h, u in
+                                           zip(PHASE_HEAD, phase_units(unit), strict=True))],
+                              *rows], chosen=chosen)]
     like = summary.get("resemblance") or {}
     if like.get("real"):
         parts += ["<h2>The real observation and twin 1</h2>", html_table(

@@ -5,7 +5,12 @@ The twins' L(t) is the reduction's own astrophysical model
 shape of the planet) evaluated at every real frame with the first method's
 fitted mid-time and phase-curve coefficients and a known depth: by default
 that fit's depth, or the one asked for. No ramp: a ramp is the detector's,
-and the twins' detector is the simulator's.
+and the twins' detector is the simulator's. A whole phase curve's L(t) is
+``T(t) + v(t) p(t)`` (:mod:`eclipsebench.fit.astro_phase_curve`) with the
+fit's ``rp_rs`` and harmonics and no AOR offsets (the repointing's steps are
+the detector's too); its injected amplitude and peak offset are that
+model's :func:`~eclipsebench.astro.phase_curves.harmonic_summary`
+(:func:`phase_truth`).
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from ..config.base import from_mapping
 from ..config.photometry import PhotometrySection
 from ..errors import InputError
 from ..fit.astro_model import AstroModel
+from ..fit.names import EVENTS as MODEL_EVENTS
 from ..instrument.prf import GainPolynomial
 from ..io.atomic import atomic_path, write_json
 from ..io.pmap_files import GriddedPmap, find_pmap_path, load_pmap
@@ -39,16 +45,42 @@ from .twin import (
     twin_table,
 )
 
-__all__ = ["twin_light_curve", "build_recipe", "twin_map", "twin_gain", "write_recipe",
+__all__ = ["twin_light_curve", "twin_truth", "phase_truth", "build_recipe", "twin_map", "twin_gain", "write_recipe",
            "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin", "with_real_noise"]
 
-#: The events a twin can carry (a whole phase curve is several AORs of its own kind).
-EVENTS = ("eclipse", "transit")
+#: The events a twin can carry: one eclipse or transit observation, or a whole phase curve
+#: of several AORs (the models of :mod:`eclipsebench.fit.astro_model`).
+EVENTS = MODEL_EVENTS
+
+
+def twin_truth(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any], depth_ppm: float,
+               event: str = "eclipse") -> tuple[AstroModel, np.ndarray]:
+    """The twins' astrophysical model at ``time_bmjd`` and its parameters: the real fit
+    ``fit`` (a result's ``to_dict()``) with the depth ``depth_ppm``.
+
+    The event's time, shape (a phase curve's ``rp_rs``) and phase coefficients are the
+    fit's; no ramp and, for a whole phase curve, no AOR offsets: they are the detector's
+    (the simulator makes the twins' systematics).
+    """
+    if event not in EVENTS:
+        raise InputError(f"event {event!r}: twins carry an eclipse, a transit or a whole "
+                         f"phase curve ({', '.join(EVENTS)})")
+    model = AstroModel.build(time_bmjd, system, phase=str(fit.get("phase", "flat")), event=event)
+    when = "t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"
+    size = np.sqrt(depth_ppm * 1e-6) if event == "transit" else depth_ppm * 1e-6
+    theta = model.initial(t_ecl_bmjd=float(fit[when]))
+    theta[0] = size
+    for i, name in enumerate(model.names[2:], start=2):
+        value = fit.get(name)
+        if isinstance(value, (int, float)) and np.isfinite(value):
+            theta[i] = float(value)
+    return model, theta
 
 
 def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
                      depth_ppm: float, event: str = "eclipse") -> np.ndarray:
-    """L(t) of the real fit ``fit`` (a result's ``to_dict()``) with the depth ``depth_ppm``.
+    """L(t) of the real fit ``fit`` (a result's ``to_dict()``) with the depth ``depth_ppm``
+    (:func:`twin_truth`).
 
     Examples
     --------
@@ -59,19 +91,32 @@ def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
     >>> round(float(lc.max() - lc.min()) * 1e6)
     1500
     """
-    if event not in EVENTS:
-        raise InputError(f"event {event!r}: twins carry an eclipse or a transit "
-                         f"({', '.join(EVENTS)})")
-    model = AstroModel.build(time_bmjd, system, phase=str(fit.get("phase", "flat")), event=event)
-    when = "t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"
-    size = np.sqrt(depth_ppm * 1e-6) if event == "transit" else depth_ppm * 1e-6
-    theta = model.initial(t_ecl_bmjd=float(fit[when]))
-    theta[0] = size
-    for i, name in enumerate(model.names[2:], start=2):
-        value = fit.get(name)
-        if isinstance(value, (int, float)) and np.isfinite(value):
-            theta[i] = float(value)
+    model, theta = twin_truth(time_bmjd, system, fit, depth_ppm, event)
     return np.asarray(model(theta), dtype=float)
+
+
+def phase_truth(model: AstroModel, theta: np.ndarray) -> dict[str, float]:
+    """A whole phase curve's injected amplitude and peak offset, as its fits report them
+    (:meth:`~eclipsebench.fit.astro_phase_curve.PhaseCurveModel.phase_summary`, that is
+    :func:`~eclipsebench.astro.phase_curves.harmonic_summary`); empty for an event that is
+    not a whole orbit.
+
+    Examples
+    --------
+    >>> from eclipsebench.astro.catalogue import get_system
+    >>> xo3 = get_system("XO-3b (2015 challenge)")
+    >>> t = np.linspace(57205.7, 57208.8, 2000)
+    >>> fit = {"phase": "harmonic1", "t_ecl_bmjd": 57205.80, "rp_rs": 0.09,
+    ...        "phase_a1": 2e-4, "phase_b1": 2e-4}
+    >>> truth = phase_truth(*twin_truth(t, xo3, fit, 1800.0, "phase-curve"))
+    >>> round(truth["phase_amplitude_ppm"], 3), round(truth["phase_offset_deg"], 3)
+    (282.843, -45.0)
+    """
+    if not model.whole_orbit:
+        return {}
+    summary = model.phase_summary(theta)
+    return {"phase_amplitude_ppm": 1e6 * float(summary["phase_amplitude"]),
+            "phase_offset_deg": float(summary["phase_offset_deg"])}
 
 
 def twin_map(obs: Observation, pmap: str | None) -> tuple[Path, GriddedPmap | None] | None:
@@ -137,7 +182,8 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     table = read_table(table_path)
     obs = observation_from_table(table, table_path)
     options = photometry_options(obs)
-    lc = twin_light_curve(obs.time_bmjd, system, fit, depth_ppm, event)
+    model, theta = twin_truth(obs.time_bmjd, system, fit, depth_ppm, event)
+    lc = np.asarray(model(theta), dtype=float)
     if np.isfinite(obs.noise_pixels[obs.good]).any():
         blur, peak, calibration = calibrate_motion(
             make_recipe(obs, lc, radius_px=options.radius_px), options)
@@ -160,7 +206,8 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
             "blur_px": blur, "sky_scatter": share, "background": background,
             "correlated_noise": None,
             "gain_model": gain_text, "gain": _gain_dict(gain), "gain_fit": gain_fit,
-            "n_frames": obs.n_frames, "n_good": int(obs.good.sum())}
+            "n_frames": obs.n_frames, "n_good": int(obs.good.sum()),
+            **phase_truth(model, theta)}
     return recipe, info
 
 

@@ -22,9 +22,11 @@ from ..photometry.table import read_table
 from .collect import collect
 from .layout import TrustLayout
 from .score import (
+    PHASE_QUANTITIES,
     mse_excess_sigma,
     near_equals,
     observation_statistics,
+    phase_score,
     quote,
     ranking_resolution,
     recommend,
@@ -34,8 +36,8 @@ from .score import (
     timing_score,
 )
 
-__all__ = ["collect", "trust_summary", "score_task", "ECSV_COLUMNS", "ECSV_TIME_COLUMNS",
-           "table_provenance", "ranking_text"]
+__all__ = ["trust_summary", "score_task", "ECSV_COLUMNS", "ECSV_TIME_COLUMNS",
+           "ECSV_PHASE_COLUMNS", "table_provenance", "ranking_text"]
 
 #: The per-method columns of ``trust.ecsv`` (ppm unless dimensionless).
 ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "coverage_1sigma",
@@ -44,6 +46,13 @@ ECSV_COLUMNS = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "z_rms", "cove
 #: The mid-event time's columns of ``trust.ecsv`` (seconds), where the fits freed it.
 ECSV_TIME_COLUMNS = ("t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_z_rms",
                      "t_coverage_1sigma", "t_err_s", "t_honest_err_s")
+
+#: A whole phase curve's columns of ``trust.ecsv`` (its amplitude in ppm, its peak offset in
+#: deg), where the twins carry one; NaN where a method's fits give no error.
+ECSV_PHASE_COLUMNS = tuple(f"{name}_{stat}" for name, unit, _ in PHASE_QUANTITIES for stat in (
+    f"bias_{unit}", f"sd_{unit}", f"rmse_{unit}", f"mean_err_{unit}", "z_rms",
+    "coverage_1sigma", "coverage_2sigma", f"honest_err_{unit}")) + tuple(
+    k for name, unit, _ in PHASE_QUANTITIES for k in (f"{name}_{unit}", f"{name}_err_{unit}"))
 
 
 def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: Mapping,
@@ -78,13 +87,25 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
                               else real[m][f"{when}_err_d"])
         if timing is not None:
             s.update(timing)
+    phase_truth = {k: float(recipe[f"{name}_{unit}"]) for name, unit, _ in PHASE_QUANTITIES
+                   if (k := f"{name}_{unit}") in recipe}
+    if phase_truth:   # a whole phase curve: its amplitude and peak offset too
+        for m, s in scores.items():
+            for name, unit, angle in PHASE_QUANTITIES:
+                value, err = f"{name}_{unit}", f"{name}_err_{unit}"
+                found = phase_score(name, unit, twins[m][6][value], twins[m][6][err],
+                                    phase_truth[value], real[m].get(value), real[m].get(err),
+                                    angle=angle)
+                if found is not None:
+                    s.update(found)
     return {"quote": quote(scores, best), "methods": scores, "skipped": dict(skipped),
             "recommended": best, "recommended_frequency": frequency,
             "ranking": ranking_resolution(scores, resid, best, int(settings["n_twins"]),
                                           frequency),
             "recommended_because": why, "near_equals": near_equals(scores, resid, best),
             "n_twins": int(settings["n_twins"]),
-            "twin_depth_ppm": truth, "system": settings["system"], "table": settings["table"],
+            "twin_depth_ppm": truth, **{f"twin_{k}": v for k, v in phase_truth.items()},
+            "system": settings["system"], "table": settings["table"],
             "seed": settings["seed"], "profile": settings["reduce"]["profile"],
             "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
                 "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
@@ -118,11 +139,20 @@ def _ecsv(summary: Mapping[str, Any], path: Path) -> None:
         table[col] = [summary["methods"][m].get(col, np.nan) for m in methods]
         if col.endswith("_s"):
             table[col].unit = "s"
+    if any(f"twin_{name}_{unit}" in summary for name, unit, _ in PHASE_QUANTITIES):
+        for col in ECSV_PHASE_COLUMNS:
+            values = [summary["methods"][m].get(col) for m in methods]
+            table[col] = [np.nan if v is None else v for v in values]
+            for unit in ("ppm", "deg"):
+                if col.endswith(f"_{unit}"):
+                    table[col].unit = unit
     table.meta.update({"quote": summary["quote"]["text"],
                        "ranking": summary["ranking"]["text"],
                        "recommended": summary["recommended"], "n_twins": summary["n_twins"],
                        "twin_depth_ppm": summary["twin_depth_ppm"], "system": summary["system"],
                        "table": summary["table"]})
+    table.meta.update({f"twin_{n}_{u}": summary[f"twin_{n}_{u}"] for n, u, _ in PHASE_QUANTITIES
+                       if f"twin_{n}_{u}" in summary})
     with atomic_path(path) as tmp:
         table.write(tmp, format="ascii.ecsv")
 

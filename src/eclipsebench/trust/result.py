@@ -33,6 +33,12 @@ _PPM = ("bias_ppm", "sd_ppm", "rmse_ppm", "mean_err_ppm", "depth_ppm", "depth_er
         "honest_err_ppm")
 _SECONDS = ("t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_err_s", "t_honest_err_s")
 
+#: A whole phase curve's statistics (``trust.ecsv``'s columns), where the twins carry one.
+_PHASE = tuple(f"phase_{name}_{stat}" for name, unit in (("amplitude", "ppm"), ("offset", "deg"))
+               for stat in (unit, f"err_{unit}", f"honest_err_{unit}", f"bias_{unit}",
+                            f"sd_{unit}", f"rmse_{unit}", f"mean_err_{unit}", "z_rms",
+                            "coverage_1sigma", "coverage_2sigma"))
+
 
 class TrustResult(dict):
     """``trust.json``'s content (a dict) with a notebook face.
@@ -104,6 +110,12 @@ class TrustResult(dict):
             values = [self["methods"][m].get(key, float("nan")) for m in methods]
             if any(v == v for v in values):
                 table[key] = u.Quantity(values, u.s)
+        for key in _PHASE:   # a whole phase curve's amplitude (ppm) and peak offset (deg)
+            values = [self["methods"][m].get(key) for m in methods]
+            if any(v is not None for v in values):
+                values = [float("nan") if v is None else v for v in values]
+                table[key] = (u.Quantity(values, _PPM_UNIT) if key.endswith("_ppm") else
+                              u.Quantity(values, u.deg) if key.endswith("_deg") else values)
         table.meta.update({"recommended": self.get("recommended"),
                            "twin_depth_ppm": self.get("twin_depth_ppm")})
         return table

@@ -8,7 +8,10 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["DEPTH_COLUMNS", "TIME_COLUMNS", "method_rows", "text_table", "cautions"]
+from .score import PHASE_QUANTITIES
+
+__all__ = ["DEPTH_COLUMNS", "TIME_COLUMNS", "PHASE_HEAD", "method_rows", "phase_rows", "phase_units", "text_table",
+           "cautions"]
 
 #: The per-method table of the depth: (heading, unit, key, scale, format). Coverage and the
 #: bootstrap's frequency are shown in per cent.
@@ -105,4 +108,51 @@ def cautions(summary: Mapping[str, Any], *, ranking: bool = True) -> list[str]:
             out.append(f"{m}: {s['n_twins_failed']} twins not reduced (scored over the others)")
     for m, why in (summary.get("skipped") or {}).items():
         out.append(f"{m} skipped: {why}")
+    return out
+
+
+#: The headings of :func:`phase_rows`' rows after the method (the unit is the quantity's,
+#: but for z_rms and the coverages, in per cent as in :data:`DEPTH_COLUMNS`).
+PHASE_HEAD = ("real", "error", "honest err", "bias", "SD", "RMSE", "mean err", "z_rms",
+              "1-sigma cov", "2-sigma cov")
+
+
+def _number(value: Any, fmt: str) -> str:
+    """``value`` formatted, or "none" where a fit gave none."""
+    return "none" if value is None else format(value, fmt)
+
+
+def _percent(fraction: Any) -> str:
+    return "none" if fraction is None else f"{100 * fraction:.0f}"
+
+
+def phase_units(unit: str) -> list[str]:
+    """The units beneath :data:`PHASE_HEAD` for a quantity in ``unit``."""
+    return [unit] * 7 + ["", "%", "%"]
+
+
+def phase_rows(summary: Mapping[str, Any]) -> list[tuple[str, str, list[list[str]]]]:
+    """A whole phase curve's statistics per quantity, for stdout and the page: ``(name,
+    unit, rows)``, each row a method's real value, error, honest error, bias, SD, RMSE,
+    mean error, z_rms and 1- and 2-sigma coverage as text ("none" where its fits gave no
+    error); empty for an eclipse or a transit."""
+    out = []
+    for name, unit, _ in PHASE_QUANTITIES:
+        if f"twin_{name}_{unit}" not in summary:
+            continue
+        rows = []
+        for m, s in summary["methods"].items():
+            if f"{name}_rmse_{unit}" not in s:
+                continue
+            rows.append([m, _number(s[f"{name}_{unit}"], ".1f"),
+                         _number(s[f"{name}_err_{unit}"], ".1f"),
+                         _number(s[f"{name}_honest_err_{unit}"], ".1f"),
+                         _number(s[f"{name}_bias_{unit}"], ".1f"),
+                         _number(s[f"{name}_sd_{unit}"], ".1f"),
+                         _number(s[f"{name}_rmse_{unit}"], ".1f"),
+                         _number(s[f"{name}_mean_err_{unit}"], ".1f"),
+                         _number(s[f"{name}_z_rms"], ".2f"),
+                         _percent(s[f"{name}_coverage_1sigma"]),
+                         _percent(s[f"{name}_coverage_2sigma"])])
+        out.append((name, unit, rows))
     return out

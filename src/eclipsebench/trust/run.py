@@ -453,15 +453,16 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         twin count outside 10-10,000, a depth that is not finite and positive or
         not below what a fit can return (named ``depth_name``,
         :func:`~eclipsebench.fit.astro_model.depth_limit_ppm`),
-        an unknown method, a whole phase curve, a table naming no planet, or a
-        ``pmap`` that holds no readable map.
+        an unknown method, a whole phase curve (``reduce.event``) of a table
+        without the column ``aorkey`` or with one AOR, a table naming no planet, or
+        a ``pmap`` that holds no readable map.
     """
     from ..decorrelate import available_methods
     from ..decorrelate.base import unknown_methods
-    from ..fit.astro_model import depth_limit_ppm
+    from ..fit.astro_model import AstroModel, depth_limit_ppm
     from ..fit.target import system_of_table
     from ..io.pmap_files import find_pmap_path, pmap_files
-    from .observation import observation_from_table
+    from .observation import check_several_aors, observation_from_table
     from .recipe import EVENTS, twin_map
 
     if isinstance(n_twins, bool) or not isinstance(n_twins, int) \
@@ -473,7 +474,7 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         raise InputError(f"{depth_name}: expected a finite depth > 0 in ppm, got {depth_ppm!r}")
     if reduce.event not in EVENTS:
         raise InputError(f"event {reduce.event!r}: twins are made of one eclipse or transit "
-                         f"observation ({', '.join(EVENTS)})")
+                         f"observation or a whole phase curve ({', '.join(EVENTS)})")
     deepest = depth_limit_ppm(reduce.event)
     if depth_ppm is not None and depth_ppm >= deepest:
         raise InputError(f"{depth_name}: {depth_ppm:g} ppm is beyond what a fit can return (a "
@@ -491,6 +492,8 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         raise InputError(f"{path}: no such photometry table")
     data = read_table(path)
     obs = observation_from_table(data, str(path))
+    if AstroModel.event_class(reduce.event).whole_orbit:   # an offset per AOR: the AORs named
+        check_several_aors(data, obs, str(path))
     twin_map(obs, pmap)   # a bad --pmap stops here
     planet = system_of_table(data.meta, system=system, section=system_section,
                              source=str(path), hint=hint)

@@ -14,6 +14,11 @@ give (``docs/trust.md``):
 - the honest error of the real depth: its reported error times
   ``max(1, z_rms)``.
 
+The same statistics of any quantity come from :func:`error_score` (the
+mid-event time's in seconds, :func:`timing_score`; a whole phase curve's
+semi-amplitude in ppm and peak offset in deg, :func:`phase_score`, the
+offset's errors wrapped into [-180, 180) deg).
+
 The recommended method has the lowest RMSE among those whose 1-sigma
 coverage interval contains 68.3 %. Whether another such method is
 distinguishable from it is a paired test over the twins both reduced
@@ -44,7 +49,7 @@ from ..stats.ensemble import GAUSS_1SIGMA, binomial_interval, coverage
 __all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "REDDER_THAN",
            "observation_statistics", "mse_excess_sigma", "near_equals", "DISTINGUISHABLE_AT",
            "recommendation_frequency", "ranking_resolution", "RECOMMEND_DRAWS", "RESOLVED_AT",
-           "timing_score",
+           "timing_score", "error_score", "phase_score", "PHASE_QUANTITIES",
            "quote"]
 
 #: Bootstrap resamples of the twins behind the recommendation frequencies.
@@ -63,9 +68,37 @@ REDDER_THAN = 0.95
 DISTINGUISHABLE_AT = 2.0
 
 
+def error_score(resid: Sequence[float] | np.ndarray, error: Sequence[float] | np.ndarray, *,
+                unit: str = "ppm", prefix: str = "") -> dict[str, Any]:
+    """The twin statistics of one quantity from its errors against the truth (module
+    docstring): ``resid`` the twins' values minus the injected one, ``error`` their reported
+    errors, both in ``unit``; keys ``{prefix}n_twins``, ``{prefix}bias_{unit}``,
+    ``{prefix}sd_{unit}``, ``{prefix}rmse_{unit}``, ``{prefix}mean_err_{unit}``,
+    ``{prefix}z_rms``, ``{prefix}coverage_1sigma`` and ``_2sigma`` (+ ``_interval``).
+
+    Examples
+    --------
+    >>> s = error_score([10.0, -10.0, 20.0, -20.0], [20.0] * 4, unit="deg", prefix="offset_")
+    >>> s["offset_bias_deg"], round(s["offset_rmse_deg"], 2), s["offset_coverage_1sigma"]
+    (0.0, 15.81, 1.0)
+    """
+    r = np.asarray(resid, float)
+    e = np.asarray(error, float)
+    z = r / e
+    c1, c1_lo, c1_hi = coverage(r, e, 0.0, 1.0)
+    c2, c2_lo, c2_hi = coverage(r, e, 0.0, 2.0)
+    return {f"{prefix}n_twins": int(r.size), f"{prefix}bias_{unit}": float(r.mean()),
+            f"{prefix}sd_{unit}": float(r.std(ddof=1)) if r.size > 1 else float("nan"),
+            f"{prefix}rmse_{unit}": float(np.sqrt(np.mean(r**2))),
+            f"{prefix}mean_err_{unit}": float(e.mean()),
+            f"{prefix}z_rms": float(np.sqrt(np.mean(z**2))),
+            f"{prefix}coverage_1sigma": c1, f"{prefix}coverage_1sigma_interval": [c1_lo, c1_hi],
+            f"{prefix}coverage_2sigma": c2, f"{prefix}coverage_2sigma_interval": [c2_lo, c2_hi]}
+
+
 def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_ppm: float
                  ) -> dict[str, Any]:
-    """The twin statistics of one method (module docstring).
+    """The twin statistics of one method's depth (:func:`error_score`).
 
     Examples
     --------
@@ -73,18 +106,73 @@ def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_p
     >>> s["bias_ppm"], round(s["rmse_ppm"], 2), round(s["z_rms"], 3)
     (0.0, 15.81, 0.791)
     """
-    d = np.asarray(depth_ppm, float)
-    e = np.asarray(error_ppm, float)
-    resid = d - float(truth_ppm)
-    z = resid / e
-    c1, c1_lo, c1_hi = coverage(d, e, truth_ppm, 1.0)
-    c2, c2_lo, c2_hi = coverage(d, e, truth_ppm, 2.0)
-    return {"n_twins": int(d.size), "bias_ppm": float(resid.mean()),
-            "sd_ppm": float(resid.std(ddof=1)) if d.size > 1 else float("nan"),
-            "rmse_ppm": float(np.sqrt(np.mean(resid**2))), "mean_err_ppm": float(e.mean()),
-            "z_rms": float(np.sqrt(np.mean(z**2))),
-            "coverage_1sigma": c1, "coverage_1sigma_interval": [c1_lo, c1_hi],
-            "coverage_2sigma": c2, "coverage_2sigma_interval": [c2_lo, c2_hi]}
+    return error_score(np.asarray(depth_ppm, float) - float(truth_ppm), error_ppm)
+
+
+#: A whole phase curve's quantities scored over the twins besides the depth: ``(name, unit,
+#: angle)``, the keys of a phase-curve result (``{name}_{unit}``, ``{name}_err_{unit}``) and
+#: of the twins' truth; an angle's errors are wrapped into [-180, 180) deg.
+PHASE_QUANTITIES = (("phase_amplitude", "ppm", False), ("phase_offset", "deg", True))
+
+
+def phase_score(name: str, unit: str, values: Sequence[float], errors: Sequence[float],
+                truth: float, real: float | None, real_err: float | None, *,
+                angle: bool = False) -> dict[str, Any] | None:
+    """A whole phase curve's amplitude or peak offset over the twins, and an honest error.
+
+    ``values``, ``errors``: the twins' fitted ``name`` and reported errors
+    (``unit``); ``truth`` the injected value (:func:`eclipsebench.trust.recipe.phase_truth`),
+    ``real`` and ``real_err`` the real fit's. The twins with a finite value count
+    (None with fewer than 3). Their errors against the truth (an ``angle``'s
+    wrapped into [-180, 180) deg) give :func:`error_score` with prefix ``{name}_``,
+    and the real value's honest error ``{name}_honest_err_{unit}``, its error times
+    ``max(1, z_rms)``. Where a twin's fit gave no error (not finite and > 0) only the
+    bias, SD and RMSE are given: ``{name}_no_error`` says how many lacked one, and the
+    error statistics and the honest error are None (none is invented).
+
+    Examples
+    --------
+    >>> s = phase_score("phase_offset", "deg", [179.0, -179.0, -179.0, 179.0], [2.0] * 4, 180.0,
+    ...                 178.0, 2.0, angle=True)   # errors of -1, 1, 1, -1 deg across +-180
+    >>> s["phase_offset_bias_deg"], s["phase_offset_rmse_deg"], s["phase_offset_honest_err_deg"]
+    (0.0, 1.0, 2.0)
+    >>> s = phase_score("phase_amplitude", "ppm", [200.0, 210.0, 190.0], [float("nan")] * 3,
+    ...                 200.0, 205.0, None)
+    >>> s["phase_amplitude_z_rms"], s["phase_amplitude_no_error"]
+    (None, "3 of 3 twins' fits gave no error for phase_amplitude")
+    """
+    v = np.asarray(values, float)
+    e = np.asarray(errors, float)
+    ok = np.isfinite(v)
+    if ok.sum() < 3:
+        return None
+    resid = v[ok] - float(truth)
+    if angle:
+        resid = (resid + 180.0) % 360.0 - 180.0
+    err = e[ok]
+    has_err = np.isfinite(err) & (err > 0)
+    prefix = f"{name}_"
+    if has_err.all():
+        out = error_score(resid, err, unit=unit, prefix=prefix)
+    else:
+        out = {f"{prefix}n_twins": int(resid.size),
+               f"{prefix}bias_{unit}": float(resid.mean()),
+               f"{prefix}sd_{unit}": float(resid.std(ddof=1)),
+               f"{prefix}rmse_{unit}": float(np.sqrt(np.mean(resid**2))),
+               f"{prefix}mean_err_{unit}": None, f"{prefix}z_rms": None,
+               f"{prefix}coverage_1sigma": None, f"{prefix}coverage_1sigma_interval": None,
+               f"{prefix}coverage_2sigma": None, f"{prefix}coverage_2sigma_interval": None,
+               f"{prefix}no_error": f"{int((~has_err).sum())} of {resid.size} twins' fits gave "
+                                    f"no error for {name}"}
+    value = float(real) if real is not None and np.isfinite(real) else None
+    sigma = (float(real_err) if real_err is not None and np.isfinite(real_err) and real_err > 0
+             else None)
+    z_rms = out[f"{prefix}z_rms"]
+    out.update({f"{name}_{unit}": value, f"{name}_err_{unit}": sigma,
+                f"{prefix}honest_err_{unit}": (sigma * max(1.0, z_rms)
+                                               if sigma is not None and z_rms is not None
+                                               else None)})
+    return out
 
 
 def recommend(scores: Mapping[str, Mapping[str, Any]]) -> tuple[str | None, str]:
@@ -327,15 +415,14 @@ def timing_score(t_bmjd: Sequence[float], t_err_d: Sequence[float], truth_bmjd: 
     if ok.sum() < 3:
         return None
     seconds = 86400.0
-    score = method_score(t[ok] * seconds, e[ok] * seconds, float(truth_bmjd) * seconds)
+    score = error_score(t[ok] * seconds - float(truth_bmjd) * seconds, e[ok] * seconds,
+                        unit="s", prefix="t_")
     err_s = float(real_t_err_d) * seconds
-    return {"t_n_twins": score["n_twins"], "t_bias_s": score["bias_ppm"],
-            "t_sd_s": score["sd_ppm"], "t_rmse_s": score["rmse_ppm"],
-            "t_mean_err_s": score["mean_err_ppm"], "t_z_rms": score["z_rms"],
-            "t_coverage_1sigma": score["coverage_1sigma"],
-            "t_coverage_1sigma_interval": score["coverage_1sigma_interval"],
+    kept = ("t_n_twins", "t_bias_s", "t_sd_s", "t_rmse_s", "t_mean_err_s", "t_z_rms",
+            "t_coverage_1sigma", "t_coverage_1sigma_interval")
+    return {**{k: score[k] for k in kept},
             "t_event_bmjd": float(real_t_bmjd), "t_err_s": err_s,
-            "t_honest_err_s": err_s * max(1.0, score["z_rms"])}
+            "t_honest_err_s": err_s * max(1.0, score["t_z_rms"])}
 
 
 def quote(scores: Mapping[str, Mapping[str, Any]], best: str | None) -> dict[str, Any]:
