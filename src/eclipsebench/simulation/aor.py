@@ -27,7 +27,7 @@ from ..progress import progress
 from ..seeding import rng
 from .from_config import draw_epoch_pointing, frame_model_from_config, light_curve_of, target_of
 from .plan import SECONDS_PER_DAY, AORPlan, EpochPlan
-from .render import render_frames, stamp_origin, tick_moments
+from .render import render_cube
 from .star import StarImager, make_star_imager, prf_label
 
 __all__ = ['simulate_aor']
@@ -91,7 +91,6 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
     sky_e = star.sky_e_per_px(sim.background_e_per_px, sim.flux_aperture_e,
                               sim.background_reference)
     bg_per_tick = sky_e / model.ticks_per_exposure
-    ny, nx = model.shape
     fluxconv, gain = fluxconv_of(cfg), gain_of(cfg)
 
     truth: dict[str, list[Any]] = {k: [] for k in ("time_bmjd", "flux_true", "x_true", "y_true", "expid", "frame",
@@ -107,22 +106,14 @@ def simulate_aor(cfg: Config, plan: EpochPlan, aor_index: int, out_dir: str | Pa
             dx, dy = frame_windows(pointing.offsets_grid, _grid_index(starts, dt_s), n_grid)
         else:
             dx = dy = np.zeros((nf, n_grid))
-        x_off, y_off, moments = tick_moments(dx, dy, model)
-        x_f = aor.x0_px + x_off
-        y_f = aor.y0_px + y_off
         t_mid_s = starts + tick_mid
         time_bmjd = plan.to_bmjd(t_mid_s)
         flux_true = np.asarray(lc(time_bmjd), dtype=float)
         bg = bg_per_tick * (1.0 + sim.background_slope_per_day * t_mid_s / SECONDS_PER_DAY)
-        sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]),
-                                model.stamp_px, model.shape)
-        basis = star.taylor_basis(x_f, y_f, int(sx0[0]), int(sy0[0]), model.stamp_px)
-        wings = star.image(float(x_f.mean()), float(y_f.mean()), (ny, nx))
         expid = c
-        frames_e, expected_e = render_frames(
-            model=model, moments=moments, basis=basis, stamp_x0=int(sx0[0]),
-            stamp_y0=int(sy0[0]), wings=wings, star_e_per_tick=flux_per_tick * flux_true,
-            background_e_per_tick=bg,
+        frames_e, expected_e, x_f, y_f = render_cube(
+            model=model, star=star, x_px=aor.x0_px, y_px=aor.y0_px, dx=dx, dy=dy,
+            star_e_per_tick=flux_per_tick * flux_true, background_e_per_tick=bg,
             rng_photon=rng(seed, "simulate", plan.epoch, aor.aorkey, expid, "photon"),
             rng_read=rng(seed, "simulate", plan.epoch, aor.aorkey, expid, "read"))
         bcd = electrons_to_mjysr(frames_e, fluxconv=fluxconv, gain=gain,

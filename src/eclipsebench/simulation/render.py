@@ -45,6 +45,7 @@ Noise (physical model)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -54,7 +55,8 @@ from ..errors import InputError
 
 __all__ = ["FrameModel", "tick_moments", "weight_groups", "read_intervals",
            "star_group_charges", "fowler_uniform",
-           "expected_fowler", "render_frames", "stamp_origin", "N_MOMENTS", "NOISE_MODELS"]
+           "expected_fowler", "render_frames", "render_cube", "stamp_origin", "N_MOMENTS",
+           "NOISE_MODELS"]
 
 N_MOMENTS = 6  # 1, dx, dy, dx^2, dx dy, dy^2
 #: ``simulation.noise_model`` values the renderer knows
@@ -368,3 +370,47 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     read_sd = model.read_noise_e * model.noise_factor
     frames += rng_read.standard_normal(size=frames.shape) * (read_sd * np.sqrt(2.0 / mode.fowler))
     return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
+
+
+def render_cube(*, model: FrameModel, star: Any, x_px, y_px, dx: np.ndarray, dy: np.ndarray,
+                star_e_per_tick: np.ndarray, background_e_per_tick: np.ndarray,
+                rng_photon: np.random.Generator, rng_read: np.random.Generator
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One cube's frames of a star at ``(x_px, y_px)`` moving by ``(dx, dy)`` within each
+    exposure: the step the challenge simulator (:mod:`.aor`) and the trust twins
+    (:mod:`eclipsebench.trust.twin`) share.
+
+    The tick moments of the motion (:func:`tick_moments`), the stamp about the
+    cube's mean position (:func:`stamp_origin`), the star's Taylor basis there and
+    its wings over ``model.shape`` (``star``: a
+    :class:`~eclipsebench.simulation.star.StarImager`), then :func:`render_frames`.
+
+    Parameters
+    ----------
+    model : FrameModel
+    star : StarImager
+    x_px, y_px : float or ndarray, shape (n_frames,)
+        Each frame's mean position (0-based pixels of ``model.shape``).
+    dx, dy : ndarray, shape (n_frames, model.grid_samples_per_frame)
+        The offsets within each exposure.
+    star_e_per_tick, background_e_per_tick, rng_photon, rng_read
+        As :func:`render_frames`.
+
+    Returns
+    -------
+    frames_e, expected_e : ndarray, shape (n_frames, ny, nx)
+    x_f, y_f : ndarray, shape (n_frames,)
+        Each frame's Fowler-weighted mean position.
+    """
+    x_off, y_off, moments = tick_moments(dx, dy, model)
+    x_f = x_px + x_off
+    y_f = y_px + y_off
+    sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]), model.stamp_px,
+                            model.shape)
+    basis = star.taylor_basis(x_f, y_f, int(sx0[0]), int(sy0[0]), model.stamp_px)
+    wings = star.image(float(x_f.mean()), float(y_f.mean()), model.shape)
+    frames_e, expected_e = render_frames(
+        model=model, moments=moments, basis=basis, stamp_x0=int(sx0[0]), stamp_y0=int(sy0[0]),
+        wings=wings, star_e_per_tick=star_e_per_tick, background_e_per_tick=background_e_per_tick,
+        rng_photon=rng_photon, rng_read=rng_read)
+    return frames_e, expected_e, x_f, y_f

@@ -59,7 +59,7 @@ from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
 from ..simulation.plan import SECONDS_PER_DAY
-from ..simulation.render import FrameModel, render_frames, stamp_origin, tick_moments
+from ..simulation.render import FrameModel, render_cube, tick_moments
 from ..simulation.star import StarImager
 from .noise import add_correlated
 from .observation import Observation
@@ -379,17 +379,11 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
         dx = dy = np.zeros((rows.size, model.grid_samples_per_frame))
     else:
         dx, dy = motion
-    x_off, y_off, moments = tick_moments(dx, dy, model)
-    x_f, y_f = x_track[rows] - x0 + x_off, y_track[rows] - y0 + y_off
-    sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]), model.stamp_px,
-                            model.shape)
-    basis = star.taylor_basis(x_f, y_f, int(sx0[0]), int(sy0[0]), model.stamp_px)
-    wings = star.image(float(x_f.mean()), float(y_f.mean()), model.shape)
     ticks = model.ticks_per_exposure
     per_tick = star.electrons_per_unit(recipe.flux_aperture_e) / ticks
-    frames, _ = render_frames(
-        model=model, moments=moments, basis=basis, stamp_x0=int(sx0[0]), stamp_y0=int(sy0[0]),
-        wings=wings, star_e_per_tick=per_tick * recipe.light_curve[rows],
+    frames, _, _, _ = render_cube(
+        model=model, star=star, x_px=x_track[rows] - x0, y_px=y_track[rows] - y0, dx=dx, dy=dy,
+        star_e_per_tick=per_tick * recipe.light_curve[rows],
         background_e_per_tick=recipe.sky_e_per_px[rows] / ticks,
         rng_photon=rng(seed, *key, "photon"), rng_read=rng(seed, *key, "read"))
     return frames
