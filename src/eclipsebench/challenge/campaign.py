@@ -53,7 +53,7 @@ from ..errors import DataError, InputError
 from ..fit import reduce as fit_reduce
 from ..fit.names import EVENTS, TIME_AT, TIME_FORMATS, TIME_SCALES
 from ..fit.target import names_a_system, system_of_table
-from ..io.atomic import atomic_path, write_json
+from ..io.atomic import atomic_path, write_json, write_text
 from ..io.bcd_read import BCD_NAME, find_bcd_files, group_epochs, read_bcd_header
 from ..io.digest import file_sha256, value_sha256
 from ..io.paths import check_links_inside, check_output_path
@@ -463,7 +463,8 @@ def _channels(epochs: Sequence[EpochInput]) -> dict[int, int | None]:
 def _event_of(cfg: Config, epoch: EpochInput) -> Config:
     if epoch.event is None or epoch.event == cfg.reduce.event:
         return cfg
-    return replace(cfg, reduce=replace(cfg.reduce, event=epoch.event))
+    event: Any = epoch.event   # checked against EVENTS when the epoch was read
+    return replace(cfg, reduce=replace(cfg.reduce, event=event))
 
 
 def _joint_name(method: str, group: str) -> str:
@@ -602,6 +603,9 @@ def campaign_stats_task(cfg: Config, root: str, methods: list[str], epochs: list
                              stem=f"table3_{profile}_{group}",
                              caption=f"{planet}: eclipse depth statistics ({profile} profile, "
                                      f"{group})")
+            entry["depths"] = [{"method": str(r["method"]), "epoch": int(r["epoch"]),
+                                "depth_ppm": float(r["depth_ppm"]),
+                                "error_ppm": float(r["error_ppm"])} for r in rows]
             entry["failures"] = [f for f in failures if f["epoch"] in members]
             by_group[group] = entry
         profiles[profile] = {"channels": by_group}
@@ -661,7 +665,7 @@ def _guard(layout: Layout, text: str) -> None:
             raise InputError(f"{layout.root}: holds a campaign with different settings or "
                              f"epochs (see {SETTINGS_FILE}); use another --out or remove it")
         return
-    write_json(path, json.loads(text))
+    write_text(path, text)
 
 
 def _input_bytes(epochs: Sequence[EpochInput]) -> int:
