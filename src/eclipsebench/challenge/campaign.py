@@ -322,20 +322,27 @@ def campaign_planet(epochs: Sequence[EpochInput], section: Any) -> PlanetSystem:
 
 
 # ----------------------------------------------------------------------------- the tasks
-def standard_table(epoch: EpochInput, system: PlanetSystem) -> Table:
+def standard_table(epoch: EpochInput, system: PlanetSystem,
+                   labels: Mapping[str, str] | None = None) -> Table:
     """An epoch's table with the package's columns and BMJD_TDB times (``reduce``'s reading,
     :func:`eclipsebench.fit.data.standardise_table` and
-    :func:`~eclipsebench.fit.data.check_columns`)."""
+    :func:`~eclipsebench.fit.data.check_columns`); ``labels`` name the options in errors
+    (the command line's ``--time-scale`` ...), which name the table."""
     from ..fit.data import check_columns, standardise_table
 
     path = epoch.paths[0]
     table = read_table(path)
     table.meta.setdefault("FILENAME", str(path))
     opts = epoch.table
-    out = standardise_table(table, columns=dict(opts.columns), time_column=opts.time_column,
-                            time_format=opts.time_format, target=system,
-                            **opts.time_options())
-    check_columns(out, str(path))
+    try:
+        out = standardise_table(table, columns=dict(opts.columns),
+                                time_column=opts.time_column, time_format=opts.time_format,
+                                target=system, labels=labels, **opts.time_options())
+    except InputError as exc:
+        message = str(exc)
+        raise InputError(message if message.startswith(str(path)) else f"{path}: {message}"
+                         ) from None
+    check_columns(out, str(path), labels=labels)
     return out
 
 
@@ -354,8 +361,9 @@ def photometry_of_epoch(epoch: EpochInput, system: PlanetSystem,
         root = Path(os.path.commonpath([str(Path(p).resolve()) for p in epoch.paths]))
         root = root if root.is_dir() else root.parent
         table = process_epoch(groups[0], options, input_root=root)
-        table.meta["TIMECONV"] = ("BCD headers: BMJD_OBS (the archive's barycentric time) "
-                                  "per frame, BMJD_TDB at mid-exposure")
+        table.meta["TIMECONV"] = ("BCD headers: BMJD_OBS (barycentric, UTC unless the header "
+                                  "says TDB) and each frame's offset -> BMJD_TDB at "
+                                  "mid-exposure")
     table.meta["EPOCH"] = int(epoch.number)
     table.meta["SOURCE"] = ", ".join(str(p) for p in epoch.paths)
     if epoch.channel is not None:
@@ -680,7 +688,8 @@ def _input_bytes(epochs: Sequence[EpochInput]) -> int:
 
 def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[EpochInput], *,
                  workers: int | None = None, scheduler: str | None = None,
-                 cluster: ClusterOptions | None = None) -> tuple[dict, RunReport]:
+                 cluster: ClusterOptions | None = None,
+                 labels: Mapping[str, str] | None = None) -> tuple[dict, RunReport]:
     """Run (or resume) a campaign in ``root``; return its summary and what ran.
 
     Parameters
@@ -695,6 +704,8 @@ def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[Epo
         :func:`epochs_from_inputs` or :func:`read_campaign_file`.
     workers, scheduler, cluster
         As :func:`eclipsebench.challenge.runner.run_challenge`.
+    labels : mapping, optional
+        How errors name the table options (the command line's ``--time-scale`` ...).
 
     Raises
     ------
@@ -715,7 +726,7 @@ def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[Epo
         cfg = replace(cfg, system=replace(cfg.system, name=system.name))
     for e in epochs:   # columns, time scale: every table checked before any write
         if e.kind == "table":
-            standard_table(e, system)
+            standard_table(e, system, labels)
     channels = _channels(epochs)
     tasks = build_campaign_tasks(cfg, layout.root, epochs, system, channels)
     inputs = _inputs(epochs, system)

@@ -12,7 +12,7 @@ from ..fit.names import EVENTS
 from ..io.paths import check_output_path
 from ..limits import MAX_WORKERS
 from .options import add_planet_options, method_list, planet_overrides, positive_int
-from .reduce import _column_map, add_table_options
+from .reduce import _TABLE_LABELS, _column_map, add_table_options
 from .run import _profile_list, _scheduler, add_cluster_options
 
 NAME = "campaign"
@@ -106,7 +106,8 @@ def run(args: argparse.Namespace) -> dict:
     else:
         epochs = epochs_from_inputs(args.inputs, table=table, channel=args.channel)
     cfg = _config(args)
-    summary, report = run_campaign(cfg, out, epochs, scheduler=_scheduler(args),
+    labels = None if args.file else _TABLE_LABELS
+    summary, report = run_campaign(cfg, out, epochs, scheduler=_scheduler(args), labels=labels,
                                    cluster=ClusterOptions(
         dashboard=args.dashboard, connect_timeout_s=args.connect_timeout,
         tls_ca_file=args.tls_ca_file, tls_cert=args.tls_cert, tls_key=args.tls_key))
