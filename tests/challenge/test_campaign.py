@@ -94,6 +94,28 @@ def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
 
+def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, monkeypatch):
+    """Ctrl-C at the first joint fit: the rerun does only the joint fits and the statistics."""
+    import eclipsebench.challenge.campaign as campaign
+
+    _, _, tables, camp_root, _, _ = tiny
+    real = campaign.joint_task
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(campaign, "joint_task", interrupted)
+    root = tmp_path / "c"
+    with pytest.raises(KeyboardInterrupt):
+        run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables), workers=1)
+    assert not (root / "summary.json").exists() and not (root / "run.lock").exists()
+    monkeypatch.setattr(campaign, "joint_task", real)
+    _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
+                             workers=1)
+    assert sorted(report.ran) == ["joint/bliss_ch2", "joint/pld_ch2", "stats"]
+    assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
+
+
 def test_two_workers_give_the_same_bytes(tiny, tmp_path):
     _, _, tables, camp_root, _, _ = tiny
     _, report = run_campaign(load_config(None, CAMPAIGN), tmp_path / "c2",
