@@ -259,7 +259,7 @@ def campaign(inputs: Sequence[str | os.PathLike] | str | os.PathLike, out: str |
              channel: int | None = None, columns: Mapping[str, str] | None = None,
              time_column: str | None = None, time_format: str | None = None,
              time_scale: str | None = None, time_at: str | None = None,
-             observer: str | None = None, workers: int | None = None,
+             observer: str | None = None, twins: int = 0, workers: int | None = None,
              scheduler: str | None = None) -> tuple[dict, RunReport]:
     """Many real observations of one planet, end to end (``eclipsebench campaign``).
 
@@ -279,6 +279,9 @@ def campaign(inputs: Sequence[str | os.PathLike] | str | os.PathLike, out: str |
         ``run.methods`` and ``reduce.event``.
     channel, columns, time_column, time_format, time_scale, time_at, observer : optional
         How to read the tables given as ``inputs`` (``eb.reduce``'s names).
+    twins : int
+        Digital twins per epoch (0: none; 10 or more): each epoch's ``trust``
+        run, and the statistics a second time with the honest errors.
     workers, scheduler : optional
         As :func:`run_challenge`.
 
@@ -308,7 +311,7 @@ def campaign(inputs: Sequence[str | os.PathLike] | str | os.PathLike, out: str |
     else:
         items = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
         epochs = epochs_from_inputs(items, table=table, channel=channel)
-    return _run_campaign(cfg, out, epochs, workers=workers, scheduler=scheduler)
+    return _run_campaign(cfg, out, epochs, workers=workers, scheduler=scheduler, twins=twins)
 
 
 def score(depths: Table | str | os.PathLike | Mapping[str, Sequence], *,

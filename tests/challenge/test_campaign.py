@@ -16,6 +16,8 @@ from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.photometry.table import read_photometry, write_photometry
 
+from ..conftest import simulate_eclipse_epoch
+
 # The tiny challenge of tests/challenge/test_runner.py, least squares, one profile.
 TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
         "simulation.subsamples=1", "simulation.calibration_frames=2000",
@@ -114,6 +116,41 @@ def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, m
                              workers=1)
     assert sorted(report.ran) == ["joint/bliss_ch2", "joint/pld_ch2", "stats"]
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
+
+
+#: Two small simulated eclipses (tests/trust's observation), a day apart in their lead.
+TWIN_SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
+             "observation.main_cubes=80", "observation.cube_interval_s=220.0",
+             "simulation.subsamples=2"]
+
+
+def test_twins_give_table3_with_the_honest_errors_beside_the_reported(tmp_path, capsys):
+    """``--twins 10``: each epoch's trust run, and Table 3 again with its honest errors."""
+    tables = [str(simulate_eclipse_epoch(tmp_path / f"e{k}", TWIN_SETS, lead))
+              for k, lead in ((1, 0.12), (2, 0.10))]
+    capsys.readouterr()   # what simulate and photometry printed
+    out = tmp_path / "c"
+    code = main(["campaign", *tables, "--out", str(out), "--methods", "poly2", "--profiles",
+                 "controlled", "--sampler", "leastsq", "--twins", "10", "--workers", "1",
+                 "--set", "run.bootstrap=50", "--json", "--quiet"])
+    assert code == 0, capsys.readouterr().err
+    summary = json.loads(capsys.readouterr().out)
+    group = summary["profiles"]["controlled"]["channels"]["ch2"]
+    honest = group["honest"]
+    for e in (1, 2):
+        trust = json.loads((out / "twins" / f"epoch_{e:02d}" / "trust.json").read_text())
+        assert trust["n_twins"] == 10
+        assert summary["twins"][str(e)]["methods"]["poly2"]["honest_err_ppm"] == \
+            trust["methods"]["poly2"]["honest_err_ppm"]
+    reported = {d["epoch"]: d for d in group["depths"]}
+    for d in honest["depths"]:
+        assert d["depth_ppm"] == reported[d["epoch"]]["depth_ppm"]
+        assert d["error_ppm"] == summary["twins"][str(d["epoch"])]["methods"]["poly2"][
+            "honest_err_ppm"]
+    w = 1 / np.array([d["error_ppm"] for d in honest["depths"]]) ** 2
+    mean = np.sum(w * [d["depth_ppm"] for d in honest["depths"]]) / np.sum(w)
+    assert honest["methods"]["poly2"]["D_mean"] == pytest.approx(mean)
+    assert (out / "tables" / "table3_controlled_ch2_honest.tex").is_file()
 
 
 def test_two_workers_give_the_same_bytes(tiny, tmp_path):

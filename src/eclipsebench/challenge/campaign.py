@@ -22,9 +22,10 @@ task                                writes                                      
 and :func:`run_campaign` runs them on the engine with ``run``'s folder protocol
 (the marker with every input by content, the lock, the settings guard, the
 free-space check) and ``run``'s resume rule (the engine's stamps and
-:func:`.reduce_stage.result_ok`). Twins of each epoch (``--twins``) are not a
-stage yet: the hook is :func:`build_campaign_tasks`, where a planner of
-``trust`` tasks per epoch would be composed beside the reduce stage.
+:func:`.reduce_stage.result_ok`). With ``twins`` (``--twins N``) each epoch also gets
+``twins/epoch_NN``: the trust run of its table (:func:`eclipsebench.trust.run.run_trust`,
+in ``twins/epoch_NN/``, its answer copied to ``twins/epoch_NN.json``), and the
+statistics are computed a second time with each method's honest error.
 """
 
 from __future__ import annotations
@@ -157,7 +158,8 @@ def classify_input(path: str | os.PathLike[str], channel: int | None = None) -> 
     """
     p = Path(path)
     if not p.exists():
-        raise InputError(f"{p}: no such file or folder (expected {_NEITHER[8:]})")
+        raise InputError(f"{p}: no such file or folder (expected an AOR folder, a BCD file or "
+                         "a photometry table)")
     if p.is_dir():
         try:
             find_bcd_files(p, channel)
@@ -377,6 +379,26 @@ def photometry_task(epoch: EpochInput, system: PlanetSystem, options: Photometry
     write_photometry(photometry_of_epoch(epoch, system, options), out_path)
 
 
+def twins_task(cfg: Config, table_path: str, system: PlanetSystem, methods: list[str],
+               n_twins: int, trust_dir: str, out_path: str) -> None:
+    """The digital twins of one epoch: ``trust`` on its table (in this process, one worker),
+    in ``trust_dir``; its answer (``trust.json``) copied to ``out_path``."""
+    from ..trust.observation import trust_settings
+    from ..trust.run import run_trust
+
+    settings = trust_settings(table_path, trust_dir, reduce=cfg.reduce, system=system,
+                              system_section=cfg.system, methods=methods, n_twins=n_twins,
+                              seed=cfg.challenge.seed)
+    result, _ = run_trust(settings, trust_dir, workers=1)
+    write_json(Path(out_path), json_safe(dict(result)))
+
+
+def twins_ok(path: Path) -> bool:
+    """Resume check of a twins task: the answer parses and has its methods."""
+    data = json.loads(Path(path).read_text())
+    return isinstance(data, dict) and isinstance(data.get("methods"), dict)
+
+
 def table_ok(path: Path) -> bool:
     """Resume check of an epoch's table: it reads and has the columns every fit needs."""
     table = read_table(path)
@@ -480,9 +502,10 @@ def _joint_name(method: str, group: str) -> str:
 
 
 def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochInput],
-                         system: PlanetSystem, channels: Mapping[int, int | None]
-                         ) -> list[Task]:
-    """Every task of a campaign, in submission order (module docstring)."""
+                         system: PlanetSystem, channels: Mapping[int, int | None],
+                         twins: int = 0) -> list[Task]:
+    """Every task of a campaign, in submission order (module docstring); ``twins`` > 0 adds
+    each epoch's trust run."""
     layout = Layout(Path(root))
     methods = resolve_methods(cfg)
     numbers = [e.number for e in epochs]
@@ -516,15 +539,24 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
                               (out,), tuple(photometry_key(n) for n in members),
                               check=lambda p, m=m: joint_ok(m, p)))
             joints[group][m] = str(out)
+    twin_files: dict[str, str] = {}
+    for e in epochs if twins else ():
+        out = layout.root / "twins" / f"epoch_{e.number:02d}.json"
+        tasks.append(Task(f"twins/epoch_{e.number:02d}", "twins", twins_task,
+                          (_event_of(cfg, e), str(layout.photometry(e.number)), system, methods,
+                           twins, str(out.with_suffix("")), str(out)),
+                          (out,), (photometry_key(e.number),), check=twins_ok))
+        twin_files[str(e.number)] = str(out)
     results = [reduce_key(m, n, profile=p) for p in cfg.run.profiles for n in numbers
                for m in methods]
     outputs = (*(layout.depths_of(p) for p in cfg.run.profiles), layout.summary)
     tasks.append(Task("stats", "stats", campaign_stats_task,
                       (cfg, str(layout.root), methods, [e.to_dict() for e in epochs],
                        {str(k): v for k, v in channels.items()}, joints, system.name,
-                       summary_config(cfg)),
+                       summary_config(cfg), twin_files),
                       outputs, tuple(results) + tuple(t.key for t in tasks
-                                                      if t.stage in ("joint", "photometry")),
+                                                      if t.stage in ("joint", "photometry",
+                                                                     "twins")),
                       check=campaign_summary_ok))
     return tasks
 
@@ -574,11 +606,51 @@ def _photon_limit(cfg: Config, layout: Layout, members: list[int],
         **readout_of(cfg))
 
 
+def honest_depths(depths: Table, twin_files: Mapping[str, str]) -> Table:
+    """The depth table with each error replaced by the twins' honest error of that method
+    and epoch (``trust.json``'s ``honest_err_ppm``); rows without one are left out."""
+    honest = {}
+    for epoch, path in twin_files.items():
+        for m, s in json.loads(Path(path).read_text()).get("methods", {}).items():
+            if isinstance(s, dict) and isinstance(s.get("honest_err_ppm"), (int, float)) \
+                    and s["honest_err_ppm"] > 0:
+                honest[(m, int(epoch))] = float(s["honest_err_ppm"])
+    keep = [(str(r["method"]), int(r["epoch"])) in honest for r in depths]
+    out = depths[np.asarray(keep, dtype=bool)]
+    out["error_ppm"] = [honest[(str(r["method"]), int(r["epoch"]))] for r in out]
+    return out
+
+
+def _table3(cfg: Config, layout: Layout, rows: Table, methods: list[str], members: list[int],
+            stem: str, caption: str) -> dict[str, Any]:
+    """Table 3 of one depth table (one profile, one channel): ``stats.summary.summarize``, the
+    photon limit, the combined depth, the AASTeX table."""
+    counts = {m: int(np.sum(rows["method"] == m)) for m in methods}
+    scored = [m for m in methods if counts[m] >= MIN_EPOCHS]
+    entry: dict[str, Any] = {"epochs": members, "method_names": scored,
+                             "methods_excluded": [m for m in methods if m not in scored]}
+    if scored:
+        used = rows[np.isin(np.asarray(rows["method"]), scored)]
+        pl = _photon_limit(cfg, layout, members, float(np.mean(used["depth_ppm"])))
+        sigma = None if pl is None else pl["sigma_phot_ppm"]
+        entry.update(summarize(rows, sigma_phot_ppm=sigma, methods=scored,
+                               seed=cfg.challenge.seed, n_bootstrap=cfg.run.bootstrap))
+        entry["photon_limit"] = pl
+        entry["combined"] = combined_depth(entry["methods"])
+        write_tables(json_safe(entry), layout.root / "tables", stem=stem, caption=caption)
+    entry["depths"] = [{"method": str(r["method"]), "epoch": int(r["epoch"]),
+                        "depth_ppm": float(r["depth_ppm"]),
+                        "error_ppm": float(r["error_ppm"])} for r in rows]
+    return entry
+
+
 def campaign_stats_task(cfg: Config, root: str, methods: list[str], epochs: list[dict],
                         channels: dict[str, int | None], joints: dict[str, dict[str, str]],
-                        planet: str, config_mapping: dict) -> None:
-    """Depth tables, the paper's Table 3 statistics per profile and channel, the joint and
-    combined depths; ``summary.json`` last."""
+                        planet: str, config_mapping: dict,
+                        twin_files: Mapping[str, str] | None = None) -> None:
+    """Depth tables, the paper's Table 3 statistics per profile and channel (a second time
+    with the twins' honest errors, when twins ran), the joint and combined depths;
+    ``summary.json`` last."""
     layout = Layout(Path(root))
     numbers = [int(e["number"]) for e in epochs]
     groups: dict[str, list[int]] = {}
@@ -594,27 +666,15 @@ def campaign_stats_task(cfg: Config, root: str, methods: list[str], epochs: list
         by_group = {}
         for group, members in groups.items():
             rows = depths[np.isin(np.asarray(depths["epoch"]), members)]
-            counts = {m: int(np.sum(rows["method"] == m)) for m in methods}
-            scored = [m for m in methods if counts[m] >= MIN_EPOCHS]
-            entry: dict[str, Any] = {"epochs": members, "method_names": scored,
-                                     "methods_excluded": [m for m in methods
-                                                          if m not in scored]}
-            if scored:
-                used = rows[np.isin(np.asarray(rows["method"]), scored)]
-                pl = _photon_limit(cfg, layout, members, float(np.mean(used["depth_ppm"])))
-                sigma = None if pl is None else pl["sigma_phot_ppm"]
-                entry.update(summarize(rows, sigma_phot_ppm=sigma, methods=scored,
-                                       seed=cfg.challenge.seed, n_bootstrap=cfg.run.bootstrap))
-                entry["photon_limit"] = pl
-                entry["combined"] = combined_depth(entry["methods"])
-                write_tables(json_safe(entry), layout.root / "tables",
-                             stem=f"table3_{profile}_{group}",
-                             caption=f"{planet}: eclipse depth statistics ({profile} profile, "
-                                     f"{group})")
-            entry["depths"] = [{"method": str(r["method"]), "epoch": int(r["epoch"]),
-                                "depth_ppm": float(r["depth_ppm"]),
-                                "error_ppm": float(r["error_ppm"])} for r in rows]
+            entry = _table3(cfg, layout, rows, methods, members, f"table3_{profile}_{group}",
+                            f"{planet}: eclipse depth statistics ({profile} profile, {group})")
             entry["failures"] = [f for f in failures if f["epoch"] in members]
+            if twin_files and profile == "controlled":
+                entry["honest"] = _table3(
+                    cfg, layout, honest_depths(rows, twin_files), methods, members,
+                    f"table3_{profile}_{group}_honest",
+                    f"{planet}: eclipse depth statistics with the twins' honest errors "
+                    f"({profile} profile, {group})")
             by_group[group] = entry
         profiles[profile] = {"channels": by_group}
     if not any(g.get("methods") for p in profiles.values() for g in p["channels"].values()):
@@ -630,8 +690,19 @@ def campaign_stats_task(cfg: Config, root: str, methods: list[str], epochs: list
     summary = {"kind": CAMPAIGN_KIND, "planet": planet, "seed": cfg.challenge.seed,
                "event": cfg.reduce.event, "epochs": records, "methods_run": methods,
                "profiles": profiles, "joint": joint, "config": config_mapping,
+               "twins": {e: _twins_answer(p, layout.root) for e, p in
+                         (twin_files or {}).items()},
                "eclipsebench_version": __version__}
     write_json(layout.summary, json_safe(summary))
+
+
+def _twins_answer(path: str, root: Path) -> dict[str, Any]:
+    """An epoch's trust answer for the summary, its table named relative to the run folder
+    (the same bytes wherever the folder is)."""
+    answer = json.loads(Path(path).read_text())
+    if isinstance(answer.get("table"), str) and Path(answer["table"]).is_absolute():
+        answer["table"] = os.path.relpath(answer["table"], root)
+    return answer
 
 
 def campaign_summary_ok(*paths: Path) -> bool:
@@ -660,9 +731,12 @@ def _inputs(epochs: Sequence[EpochInput], system: PlanetSystem) -> dict[str, Inp
     return out
 
 
-def _settings(cfg: Config, epochs: Sequence[EpochInput]) -> str:
-    return json.dumps({"config": summary_config(cfg), "epochs": [e.to_dict() for e in epochs]},
-                      indent=1, sort_keys=True, default=str) + "\n"
+def _settings(cfg: Config, epochs: Sequence[EpochInput], twins: int = 0) -> str:
+    settings: dict[str, Any] = {"config": summary_config(cfg),
+                                "epochs": [e.to_dict() for e in epochs]}
+    if twins:
+        settings["twins"] = twins
+    return json.dumps(settings, indent=1, sort_keys=True, default=str) + "\n"
 
 
 def _guard(layout: Layout, text: str) -> None:
@@ -689,7 +763,8 @@ def _input_bytes(epochs: Sequence[EpochInput]) -> int:
 def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[EpochInput], *,
                  workers: int | None = None, scheduler: str | None = None,
                  cluster: ClusterOptions | None = None,
-                 labels: Mapping[str, str] | None = None) -> tuple[dict, RunReport]:
+                 labels: Mapping[str, str] | None = None,
+                 twins: int = 0) -> tuple[dict, RunReport]:
     """Run (or resume) a campaign in ``root``; return its summary and what ran.
 
     Parameters
@@ -706,6 +781,10 @@ def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[Epo
         As :func:`eclipsebench.challenge.runner.run_challenge`.
     labels : mapping, optional
         How errors name the table options (the command line's ``--time-scale`` ...).
+    twins : int
+        Digital twins per epoch (0: none; else at least
+        :data:`eclipsebench.trust.run.MIN_TWINS`): each epoch's trust run, and the
+        statistics a second time with the honest errors.
 
     Raises
     ------
@@ -728,7 +807,13 @@ def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[Epo
         if e.kind == "table":
             standard_table(e, system, labels)
     channels = _channels(epochs)
-    tasks = build_campaign_tasks(cfg, layout.root, epochs, system, channels)
+    if twins:
+        from ..trust.run import MAX_TWINS, MIN_TWINS
+
+        if not MIN_TWINS <= twins <= MAX_TWINS:
+            raise InputError(f"--twins {twins}: expected {MIN_TWINS} to {MAX_TWINS} twins per "
+                             "epoch (0: none)")
+    tasks = build_campaign_tasks(cfg, layout.root, epochs, system, channels, twins)
     inputs = _inputs(epochs, system)
     sources = tuple(i.sha256 for i in inputs.values())
     tasks = [replace(t, sources=sources) for t in tasks]
@@ -744,7 +829,7 @@ def run_campaign(cfg: Config, root: str | os.PathLike[str], epochs: Sequence[Epo
     with run_lock(layout.lock):
         fresh = not (layout.root / SETTINGS_FILE).exists()
         claim(layout.root, CAMPAIGN_KIND, inputs, legacy_ok=False)
-        _guard(layout, _settings(cfg, epochs))
+        _guard(layout, _settings(cfg, epochs, twins))
         try:
             report = run_tasks(tasks, workers=cfg.run.workers if workers is None else workers,
                                scheduler=scheduler or None, cluster=cluster, root=layout.root)

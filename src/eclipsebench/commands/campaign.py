@@ -53,6 +53,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                          "--columns flux=raw_flux,x=xcent (repeatable)")
     p.add_argument("--seed", type=positive_int(minimum=0), metavar="N",
                    help="the one seed (challenge.seed)")
+    p.add_argument("--twins", type=positive_int(minimum=0), default=0, metavar="N",
+                   help="digital twins of each epoch (trust as a stage, docs/trust.md; 10 or "
+                        "more): the Table 3 statistics a second time with each method's "
+                        "honest error (default 0: none)")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=positive_int(maximum=MAX_WORKERS), metavar="N",
                    help="Dask worker processes of a local cluster; 1 runs in this process")
@@ -108,6 +112,7 @@ def run(args: argparse.Namespace) -> dict:
     cfg = _config(args)
     labels = None if args.file else _TABLE_LABELS
     summary, report = run_campaign(cfg, out, epochs, scheduler=_scheduler(args), labels=labels,
+                                   twins=args.twins,
                                    cluster=ClusterOptions(
         dashboard=args.dashboard, connect_timeout_s=args.connect_timeout,
         tls_ca_file=args.tls_ca_file, tls_cert=args.tls_cert, tls_key=args.tls_key))
@@ -143,6 +148,10 @@ def format_text(result: dict) -> str:
                     f"{d['epoch']}: {d['depth_ppm']:.1f} +- {d['error_ppm']:.1f}")
             for m, items in per_epoch.items():
                 lines.append(f"  {m} per epoch (ppm): " + "; ".join(items))
+            h = stats.get("honest")
+            if h and h.get("methods"):
+                lines.append(f"{profile} profile, {group}, with the twins' honest errors:")
+                lines.append(format_text_table(h))
             c = stats.get("combined")
             if c:
                 lines.append(f"  combined across {len(c['methods'])} methods: "
