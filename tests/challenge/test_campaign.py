@@ -10,7 +10,12 @@ import numpy as np
 import pytest
 from astropy.table import Table
 
-from eclipsebench.challenge.campaign import combined_depth, epochs_from_inputs, run_campaign
+from eclipsebench.challenge.campaign import (
+    combined_depth,
+    epochs_from_inputs,
+    read_campaign_file,
+    run_campaign,
+)
 from eclipsebench.challenge.runner import Layout, run_challenge
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
@@ -71,6 +76,30 @@ def test_a_campaign_gives_run_s_depths_and_table3_statistics(tiny):
     assert combined["sigma_sys_ppm"] == pytest.approx(np.std(d, ddof=1))
     assert (camp_root / "tables" / "table3_controlled_ch2.tex").is_file()
     assert all("none" in e["time_conversion"] for e in camp["epochs"])
+
+
+def test_a_campaign_file_of_aor_folders_measures_them_as_run_does(tiny, tmp_path):
+    """Each epoch's Pre and Main AOR folders, named in a campaign file: the photometry of
+    the run, the time conversion named."""
+    run_root = tiny[0]
+    aors = sorted(p.name for p in (run_root / "simulation").glob("r*") if p.is_dir())
+    assert len(aors) == 4
+    sim = run_root / "simulation"
+    (tmp_path / "campaign.toml").write_text(
+        "".join(f'[[epoch]]\ninputs = ["{sim / a}", "{sim / b}"]\n\n'
+                for a, b in (aors[:2], aors[2:])))
+    cfg = load_config(None, ['run.methods=["pld"]', "run.bootstrap=50",
+                             'run.profiles=["controlled"]', 'reduce.sampler="leastsq"'])
+    summary, _ = run_campaign(cfg, tmp_path / "c",
+                              read_campaign_file(tmp_path / "campaign.toml"), workers=1)
+    for e in (1, 2):
+        ours = read_photometry(Layout(tmp_path / "c").photometry(e))
+        theirs = read_photometry(Layout(run_root).photometry(e))
+        for col in ("time_bmjd", "flux", "x", "y", "background"):
+            assert np.array_equal(np.asarray(ours[col]), np.asarray(theirs[col])), (e, col)
+    assert all(e["time_conversion"].startswith("BCD headers") for e in summary["epochs"])
+    assert summary["planet"] == "XO-3b" and summary["epochs"][0]["kind"] == "bcd"
+    assert len(summary["profiles"]["controlled"]["channels"]["ch2"]["depths"]) == 2
 
 
 def test_combined_depth_adds_the_methods_spread():
