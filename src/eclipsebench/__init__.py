@@ -3,6 +3,7 @@
 ``import eclipsebench as eb`` gives the public API (``docs/api.md``):
 :func:`eb.load_config`, :func:`eb.simulate`, :func:`eb.measure`,
 :func:`eb.reduce`, :func:`eb.score`, :func:`eb.trust`, :func:`eb.run_challenge`,
+:func:`eb.campaign`,
 :func:`eb.methods`, :func:`eb.method_class`, :func:`eb.read_result`,
 :func:`eb.read_photometry`, and the base classes
 :class:`eb.Systematics`, :class:`eb.MethodOptions`, :class:`eb.MethodContext`.
@@ -18,7 +19,8 @@ __version__ = "0.2.0"
 #: Public name -> the module that defines it.
 _PUBLIC = {
     "load_config": "api", "methods": "api", "method_class": "api", "measure": "api",
-    "reduce": "api", "simulate": "api", "run_challenge": "api", "score": "api", "trust": "api",
+    "reduce": "api", "simulate": "api", "run_challenge": "api", "campaign": "api",
+    "score": "api", "trust": "api",
     "Systematics": "decorrelate.base", "MethodOptions": "decorrelate.base",
     "MethodContext": "decorrelate.base", "EpochData": "decorrelate.base",
     "EpochResult": "fit.result", "InputError": "errors",

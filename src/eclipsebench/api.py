@@ -21,6 +21,8 @@ from astropy.table import Table
 from astropy.time import Time
 
 from .astro.catalogue import as_system, system_for
+from .challenge.campaign import TableOptions, epochs_from_inputs, read_campaign_file
+from .challenge.campaign import run_campaign as _run_campaign
 from .challenge.runner import run_challenge as _run_challenge
 from .config import Config
 from .config import load_config as _load_config
@@ -39,7 +41,7 @@ from .stats.summary import summarize
 from .trust.result import TrustResult
 
 __all__ = ["load_config", "methods", "method_class", "measure", "reduce", "simulate",
-           "run_challenge", "score", "trust", "read_result", "read_photometry"]
+           "run_challenge", "campaign", "score", "trust", "read_result", "read_photometry"]
 
 
 def load_config(path: str | os.PathLike | None = None, overrides: Sequence[str] = (),
@@ -250,6 +252,67 @@ def run_challenge(out: str | os.PathLike, *, config: Config | str | os.PathLike 
     content of ``out/summary.json``) and what ran.
     """
     return _run_challenge(_config(config), out, workers=workers, scheduler=scheduler)
+
+
+def campaign(inputs: Sequence[str | os.PathLike] | str | os.PathLike, out: str | os.PathLike,
+             *, system: str | None = None, config: Config | str | os.PathLike | None = None,
+             methods: Sequence[str] | None = None, event: str | None = None,
+             channel: int | None = None, columns: Mapping[str, str] | None = None,
+             time_column: str | None = None, time_format: str | None = None,
+             time_scale: str | None = None, time_at: str | None = None,
+             observer: str | None = None, twins: int = 0, workers: int | None = None,
+             scheduler: str | None = None) -> tuple[dict, RunReport]:
+    """Many real observations of one planet, end to end (``eclipsebench campaign``).
+
+    Parameters
+    ----------
+    inputs : sequence of path, or path
+        One epoch per item (a photometry table, an AOR folder or a BCD file), or
+        the path of a TOML campaign file (``docs/campaign.md``).
+    out : path
+        The run folder (rerunning resumes it).
+    system : str, optional
+        The planet (default: the one the data name).
+    config : Config or path, optional
+        ``[reduce]``, ``[system]``, ``[photometry]`` and ``[run]`` (methods,
+        profiles, bootstrap); ``challenge.seed`` is the one seed.
+    methods, event : optional
+        ``run.methods`` and ``reduce.event``.
+    channel, columns, time_column, time_format, time_scale, time_at, observer : optional
+        How to read the tables given as ``inputs`` (``eb.reduce``'s names).
+    twins : int
+        Digital twins per epoch (0: none; 10 or more): each epoch's ``trust``
+        run, and the statistics a second time with the honest errors.
+    workers, scheduler : optional
+        As :func:`run_challenge`.
+
+    Returns
+    -------
+    (dict, RunReport)
+        The content of ``out/summary.json`` and what ran.
+    """
+    cfg = _config(config)
+    changes: dict[str, Any] = {}
+    if system is not None:
+        cfg = replace(cfg, system=replace(cfg.system, name=system, planet={}))
+    if methods is not None:
+        cfg = replace(cfg, run=replace(cfg.run, methods=tuple(methods)))
+    if event is not None:
+        changes["event"] = event
+    if changes:
+        cfg = replace(cfg, reduce=replace(cfg.reduce, **changes))
+        cfg.reduce.validate()
+    table = TableOptions(tuple(sorted((columns or {}).items())), time_column, time_format,
+                         time_scale, time_at, observer)
+    if isinstance(inputs, (str, os.PathLike)) and Path(inputs).suffix.lower() == ".toml":
+        if table.given() or channel is not None:
+            raise InputError("campaign: a campaign file names each epoch's table options and "
+                             "channel itself")
+        epochs = read_campaign_file(inputs)
+    else:
+        items = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
+        epochs = epochs_from_inputs(items, table=table, channel=channel)
+    return _run_campaign(cfg, out, epochs, workers=workers, scheduler=scheduler, twins=twins)
 
 
 def score(depths: Table | str | os.PathLike | Mapping[str, Sequence], *,

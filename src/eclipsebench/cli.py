@@ -48,6 +48,7 @@ from .progress import configure
 # Listed in the order ``--help`` shows them.
 COMMAND_MODULES = (
     "run",
+    "campaign",
     "simulate",
     "photometry",
     "reduce",

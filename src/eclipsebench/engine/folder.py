@@ -1,6 +1,6 @@
 """One kind of run per folder, and the content of the inputs the folder was made from.
 
-Every runner (``run``, ``trust``) keeps, beside its own settings file, a marker
+Every runner (``run``, ``trust``, ``campaign``) keeps, beside its own settings file, a marker
 ``DIR/eclipsebench.json``::
 
     {"kind": "trust",
@@ -48,7 +48,8 @@ MARKER = "eclipsebench.json"
 #: The one lock file of every runner.
 LOCK = "run.lock"
 #: Settings files of each kind, which mark a folder made before :data:`MARKER` existed.
-_SETTINGS = {"run_config.toml": "run", "trust_config.json": "trust"}
+_SETTINGS = {"run_config.toml": "run", "trust_config.json": "trust",
+             "campaign_config.json": "campaign"}
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@
     DIR/results[_flat]/<method>/epoch_NN.json (+ .lc.ecsv)   one reduction per epoch x method
                                            (the controlled profile)
     DIR/results_paper/<method>/epoch_NN.json (+ .lc.ecsv)    the same in the paper profile
+    DIR/joint/<method>[_chN].json          a campaign's joint fit of every epoch (one depth)
     DIR/depths.ecsv                        method, epoch, depth_ppm, error_ppm (controlled)
     DIR/depths_paper.ecsv                  the same in the paper profile
     DIR/summary.json                       statistics + photon limits + truth + seed + config
@@ -69,6 +70,12 @@ class Layout:
 
     def calibration(self) -> Path:
         return SimulationLayout(self.sim()).calibration
+
+    def joint(self, name: str) -> Path:
+        """A campaign's joint fit of one method over its epochs (``name``: the method, with
+        ``_chN`` when the campaign has several channels)."""
+        check_name("method", name)
+        return self.root / "joint" / f"{name}.json"
 
     @property
     def depths(self) -> Path:

@@ -1,0 +1,294 @@
+"""``eclipsebench campaign`` (issue 38, item 1): the same depths and Table 3 statistics as
+``run`` on a run's photometry tables, resume, 1 vs 2 workers, bad input, real K2-141b."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+from astropy.table import Table
+
+from eclipsebench.challenge.campaign import (
+    combined_depth,
+    epochs_from_inputs,
+    read_campaign_file,
+    run_campaign,
+)
+from eclipsebench.challenge.runner import Layout, run_challenge
+from eclipsebench.cli import main
+from eclipsebench.config import load_config
+from eclipsebench.photometry.table import read_photometry, write_photometry
+
+from ..conftest import simulate_eclipse_epoch
+
+# The tiny challenge of tests/challenge/test_runner.py, least squares, one profile.
+TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
+        "simulation.subsamples=1", "simulation.calibration_frames=2000",
+        'run.methods=["pld", "bliss"]', "run.bootstrap=50", "run.report=false",
+        "run.empirical_photon_limit=false", 'run.profiles=["controlled"]',
+        'reduce.sampler="leastsq"']
+# What a campaign reads of the configuration (no simulation, no truth).
+CAMPAIGN = ['run.methods=["pld", "bliss"]', "run.bootstrap=50", 'run.profiles=["controlled"]',
+            'reduce.sampler="leastsq"']
+#: Table 3's columns (no truth): equal to run's, to the bit.
+TABLE3 = ("N", "D_mean", "sigma_mean", "SD", "sigma_orig", "f_dis", "f_dis_raw", "f_dis_lo",
+          "f_dis_hi", "sigma_tot", "R", "R_lo", "R_hi", "mean_ppm", "chi2", "closest_match",
+          "closest_match_mean_ppm", "closest_match_sd_ppm")
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """A tiny run, then a campaign over its photometry tables only (one worker)."""
+    run_root = tmp_path_factory.mktemp("run")
+    summary, _ = run_challenge(load_config(None, TINY), run_root, workers=1)
+    tables = [str(Layout(run_root).photometry(e)) for e in (1, 2)]
+    camp_root = tmp_path_factory.mktemp("campaign") / "c"
+    camp, report = run_campaign(load_config(None, CAMPAIGN), camp_root,
+                                epochs_from_inputs(tables), workers=1)
+    return run_root, summary, tables, camp_root, camp, report
+
+
+def test_a_campaign_gives_run_s_depths_and_table3_statistics(tiny):
+    run_root, summary, _, camp_root, camp, report = tiny
+    assert {k.split("/")[0] for k in report.ran} == {"photometry", "reduce", "joint", "stats"}
+    ran = Table.read(Layout(run_root).depths, format="ascii.ecsv")
+    got = Table.read(Layout(camp_root).depths, format="ascii.ecsv")
+    assert [(r["method"], r["epoch"], r["depth_ppm"], r["error_ppm"]) for r in ran] == \
+        [(r["method"], r["epoch"], r["depth_ppm"], r["error_ppm"]) for r in got]
+    group = camp["profiles"]["controlled"]["channels"]["ch2"]
+    for m in ("pld", "bliss"):
+        for key in TABLE3:
+            assert group["methods"][m][key] == summary["methods"][m][key], (m, key)
+        # r: the photon limit at the mean measured depth (run's is at the true depth)
+        s = group["methods"][m]
+        assert s["r"] == pytest.approx(group["photon_limit"]["sigma_phot_ppm"] / s["SD"])
+        assert s["bias"] is None and s["RMSE"] is None    # no truth in a campaign
+    assert group["ttest"] == summary["ttest"] and group["anova"] == summary["anova"]
+    for m in ("pld", "bliss"):
+        joint = camp["joint"]["ch2"][m]
+        assert joint["epochs"] == [1, 2] and np.isfinite(joint["depth_ppm"])
+        assert joint["depth_err_ppm"] > 0
+    combined = group["combined"]
+    d = [group["methods"][m]["D_mean"] for m in ("pld", "bliss")]
+    assert combined["depth_ppm"] == pytest.approx(np.mean(d))
+    assert combined["sigma_sys_ppm"] == pytest.approx(np.std(d, ddof=1))
+    assert (camp_root / "tables" / "table3_controlled_ch2.tex").is_file()
+    assert all("none" in e["time_conversion"] for e in camp["epochs"])
+
+
+def test_a_campaign_file_of_aor_folders_measures_them_as_run_does(tiny, tmp_path):
+    """Each epoch's Pre and Main AOR folders, named in a campaign file: the photometry of
+    the run, the time conversion named."""
+    run_root = tiny[0]
+    aors = sorted(p.name for p in (run_root / "simulation").glob("r*") if p.is_dir())
+    assert len(aors) == 4
+    sim = run_root / "simulation"
+    (tmp_path / "campaign.toml").write_text(
+        "".join(f'[[epoch]]\ninputs = ["{sim / a}", "{sim / b}"]\n\n'
+                for a, b in (aors[:2], aors[2:])))
+    cfg = load_config(None, ['run.methods=["pld"]', "run.bootstrap=50",
+                             'run.profiles=["controlled"]', 'reduce.sampler="leastsq"'])
+    summary, _ = run_campaign(cfg, tmp_path / "c",
+                              read_campaign_file(tmp_path / "campaign.toml"), workers=1)
+    for e in (1, 2):
+        ours = read_photometry(Layout(tmp_path / "c").photometry(e))
+        theirs = read_photometry(Layout(run_root).photometry(e))
+        for col in ("time_bmjd", "flux", "x", "y", "background"):
+            assert np.array_equal(np.asarray(ours[col]), np.asarray(theirs[col])), (e, col)
+    assert all(e["time_conversion"].startswith("BCD headers") for e in summary["epochs"])
+    assert summary["planet"] == "XO-3b" and summary["epochs"][0]["kind"] == "bcd"
+    assert len(summary["profiles"]["controlled"]["channels"]["ch2"]["depths"]) == 2
+
+
+def test_combined_depth_adds_the_methods_spread():
+    per = {"a": {"D_mean": 100.0, "sigma_tot": 30.0}, "b": {"D_mean": 140.0, "sigma_tot": 40.0}}
+    c = combined_depth(per)
+    assert c["depth_ppm"] == 120.0 and c["sigma_stat_ppm"] == 35.0
+    assert c["sigma_sys_ppm"] == pytest.approx(40.0 / 2**0.5)
+    assert c["error_ppm"] == pytest.approx((35.0**2 + 800.0) ** 0.5)
+    assert combined_depth({"a": per["a"]}) is None
+
+
+def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
+    """A result lost and a joint fit cut short: only they (and the stats) are redone."""
+    _, _, tables, camp_root, _, _ = tiny
+    root = tmp_path / "c"
+    shutil.copytree(camp_root, root)
+    (root / "results" / "pld" / "epoch_02.json").unlink()
+    joint = root / "joint" / "bliss_ch2.json"
+    joint.write_text(joint.read_text()[:40])
+    _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
+                             workers=1)
+    assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/pld/epoch_02", "stats"]
+    assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
+
+
+def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, monkeypatch):
+    """Ctrl-C at the first joint fit: the rerun does only the joint fits and the statistics."""
+    import eclipsebench.challenge.campaign as campaign
+
+    _, _, tables, camp_root, _, _ = tiny
+    real = campaign.joint_task
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(campaign, "joint_task", interrupted)
+    root = tmp_path / "c"
+    with pytest.raises(KeyboardInterrupt):
+        run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables), workers=1)
+    assert not (root / "summary.json").exists() and not (root / "run.lock").exists()
+    monkeypatch.setattr(campaign, "joint_task", real)
+    _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
+                             workers=1)
+    assert sorted(report.ran) == ["joint/bliss_ch2", "joint/pld_ch2", "stats"]
+    assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
+
+
+#: Two small simulated eclipses (tests/trust's observation), a day apart in their lead.
+TWIN_SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
+             "observation.main_cubes=80", "observation.cube_interval_s=220.0",
+             "simulation.subsamples=2"]
+
+
+def test_twins_give_table3_with_the_honest_errors_beside_the_reported(tmp_path, capsys):
+    """``--twins 10``: each epoch's trust run, and Table 3 again with its honest errors."""
+    tables = [str(simulate_eclipse_epoch(tmp_path / f"e{k}", TWIN_SETS, lead))
+              for k, lead in ((1, 0.12), (2, 0.10))]
+    capsys.readouterr()   # what simulate and photometry printed
+    out = tmp_path / "c"
+    code = main(["campaign", *tables, "--out", str(out), "--methods", "poly2", "--profiles",
+                 "controlled", "--sampler", "leastsq", "--twins", "10", "--workers", "1",
+                 "--set", "run.bootstrap=50", "--json", "--quiet"])
+    assert code == 0, capsys.readouterr().err
+    summary = json.loads(capsys.readouterr().out)
+    group = summary["profiles"]["controlled"]["channels"]["ch2"]
+    honest = group["honest"]
+    for e in (1, 2):
+        trust = json.loads((out / "twins" / f"epoch_{e:02d}" / "trust.json").read_text())
+        assert trust["n_twins"] == 10
+        assert summary["twins"][str(e)]["methods"]["poly2"]["honest_err_ppm"] == \
+            trust["methods"]["poly2"]["honest_err_ppm"]
+    reported = {d["epoch"]: d for d in group["depths"]}
+    for d in honest["depths"]:
+        assert d["depth_ppm"] == reported[d["epoch"]]["depth_ppm"]
+        assert d["error_ppm"] == summary["twins"][str(d["epoch"])]["methods"]["poly2"][
+            "honest_err_ppm"]
+    w = 1 / np.array([d["error_ppm"] for d in honest["depths"]]) ** 2
+    mean = np.sum(w * [d["depth_ppm"] for d in honest["depths"]]) / np.sum(w)
+    assert honest["methods"]["poly2"]["D_mean"] == pytest.approx(mean)
+    assert (out / "tables" / "table3_controlled_ch2_honest.tex").is_file()
+
+
+def test_two_workers_give_the_same_bytes(tiny, tmp_path):
+    _, _, tables, camp_root, _, _ = tiny
+    _, report = run_campaign(load_config(None, CAMPAIGN), tmp_path / "c2",
+                             epochs_from_inputs(tables), workers=2)
+    assert report.executor.startswith("dask")
+    for name in ("summary.json", "depths.ecsv", "joint/pld_ch2.json", "joint/bliss_ch2.json"):
+        assert (tmp_path / "c2" / name).read_bytes() == (camp_root / name).read_bytes(), name
+
+
+def test_another_campaign_into_the_folder_is_refused(tiny, capsys):
+    _, _, tables, camp_root, _, _ = tiny
+    code = main(["campaign", tables[1], tables[0], "--out", str(camp_root), "--methods",
+                 "pld,bliss", "--profiles", "controlled", "--sampler", "leastsq", "--quiet",
+                 "--set", "run.bootstrap=50"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "use another --out" in err
+
+
+def _refused(capsys, tmp_path, *argv):
+    out = tmp_path / "out"
+    code = main(["campaign", *argv, "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
+    return err
+
+
+def test_an_input_that_is_neither_folder_bcd_nor_table_exits_2(tiny, tmp_path, capsys):
+    notes = tmp_path / "notes.txt"
+    notes.write_text("hello\n")
+    err = _refused(capsys, tmp_path, tiny[2][0], str(notes))
+    assert str(notes) in err and "neither an AOR folder" in err
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert "neither an AOR folder" in _refused(capsys, tmp_path, tiny[2][0], str(empty))
+
+
+def test_epochs_of_two_planets_exit_2(tiny, tmp_path, capsys):
+    other = read_photometry(tiny[2][1])
+    other.meta["SYSTEM"] = "HD 189733b"
+    path = tmp_path / "hd189733.fits"
+    write_photometry(other, path)
+    err = _refused(capsys, tmp_path, tiny[2][0], str(path))
+    assert "HD 189733b" in err and "XO-3b" in err and "one planet" in err
+
+
+def test_a_table_whose_time_scale_cannot_be_told_exits_2(tiny, tmp_path, capsys):
+    paths = []
+    for k, src in enumerate(tiny[2], start=1):
+        t = read_photometry(src)
+        csv = Table({"jd": np.asarray(t["time_bmjd"]) + 2400000.5, "flux": t["flux"],
+                     "flux_err": t["flux_err"], "x": t["x"], "y": t["y"]})
+        paths.append(tmp_path / f"visit{k}.csv")
+        csv.write(paths[-1], format="ascii.csv")
+    err = _refused(capsys, tmp_path, *map(str, paths), "--time-column", "jd", "--time-format",
+                   "jd", "--observer", "geocentre", "--system", "XO-3b")
+    assert "--time-scale" in err and "scale" in err
+
+
+# ------------------------------------------------------------------ real data: K2-141b
+#: K2-141b as a user catalogue row (it is not in the built-in catalogue). Values of
+#: Malavolta et al. 2018 (AJ 155, 107) as recalled, not re-read in this session; a/R* and
+#: Rp/R* derived from a = 0.00716 au, Rp = 1.51 R_earth, R* = 0.681 R_sun.
+K2_141 = """["K2-141b"]
+period_days = 0.2803244
+t_transit_bjd = 2457744.07160
+ecc = 0.0
+omega_deg = 90.0
+inc_deg = 86.3
+a_rs = 2.261
+rp_rs = 0.02033
+teff_star_k = 4599.0
+r_star_rsun = 0.681
+ra_deg = 350.91654
+dec_deg = -1.18928
+"""
+
+
+@pytest.mark.shared_data
+def test_the_real_k2_141b_campaign_runs_end_to_end(shared_irac, tmp_path, capsys):
+    """Three visits of another pipeline's CSVs as they are (JD_UTC at frame end)."""
+    catalogue = tmp_path / "k2141.toml"
+    catalogue.write_text(K2_141)
+    folder = shared_irac / "real_k2141_ch2_csv"
+    csvs = sorted(str(p) for p in folder.glob("k2141_ch2_*.csv"))
+    assert len(csvs) == 3
+    out = tmp_path / "k2141"
+    code = main(["campaign", *csvs, "--out", str(out), "--catalogue", str(catalogue),
+                 "--system", "K2-141b", "--event", "phase-curve", "--sampler", "leastsq",
+                 "--methods", "poly2", "--profiles", "controlled", "--channel", "2",
+                 "--columns", "flux=raw_flux,flux_err=err,x=xcent,y=ycent",
+                 "--time-column", "time", "--time-format", "jd", "--time-scale", "utc",
+                 "--time-at", "end", "--observer", "geocentre", "--workers", "1", "--json",
+                 "--quiet"])
+    assert code == 0, capsys.readouterr().err
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["planet"] == "K2-141b" and summary["event"] == "phase-curve"
+    for e in summary["epochs"]:
+        assert e["time_conversion"].startswith("time: JD_UTC at frame end")
+    group = summary["profiles"]["controlled"]["channels"]["ch2"]
+    assert [d["epoch"] for d in group["depths"]] == [1, 2, 3]
+    assert all(np.isfinite(d["depth_ppm"]) and d["error_ppm"] > 0 for d in group["depths"])
+    for d in group["depths"]:
+        res = json.loads((out / "results" / "poly2" / f"epoch_{d['epoch']:02d}.json").read_text())
+        assert res["time_conversion"].startswith("time: JD_UTC at frame end")
+    joint = summary["joint"]["ch2"]["poly2"]
+    assert joint["epochs"] == [1, 2, 3] and joint["depth_err_ppm"] > 0
+    assert joint["n_points"] == sum(len(Table.read(p, format="ascii.csv")) for p in csvs)
