@@ -102,8 +102,8 @@ def test_twins_of_a_whole_phase_curve_score_its_depth_amplitude_and_offset(phase
     assert str(ecsv["phase_amplitude_rmse_ppm"].unit) == "ppm"
     assert str(ecsv["phase_offset_bias_deg"].unit) == "deg"
     assert ecsv.meta["twin_phase_offset_deg"] == pytest.approx(truth_off)
-    assert f"(ppm; injected {truth_amp:.1f})" in stdout
-    assert f"(deg; injected {truth_off:.1f})" in stdout
+    assert f"phase amplitude, against the injected {truth_amp:.1f} ppm:" in stdout
+    assert f"phase offset, against the injected {truth_off:.1f} deg:" in stdout
     assert f"{s['phase_offset_rmse_deg']:.1f}" in stdout
     page = (out / "report" / "index.html").read_text()
     assert "The phase curve" in page and f"{s['phase_amplitude_rmse_ppm']:.1f}" in page
