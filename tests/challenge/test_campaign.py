@@ -244,9 +244,10 @@ def test_a_table_whose_time_scale_cannot_be_told_exits_2(tiny, tmp_path, capsys)
 
 
 # ------------------------------------------------------------------ real data: K2-141b
-#: K2-141b as a user catalogue row (it is not in the built-in catalogue). Values of
-#: Malavolta et al. 2018 (AJ 155, 107) as recalled, not re-read in this session; a/R* and
-#: Rp/R* derived from a = 0.00716 au, Rp = 1.51 R_earth, R* = 0.681 R_sun.
+#: K2-141b as a user catalogue row (it is not in the built-in catalogue): Malavolta et al.
+#: 2018 (AJ 155, 107); P, T0 and i as PyORBIT's documentation quotes them from that paper;
+#: a/R* and Rp/R* derived from a = 0.00716 au, Rp = 1.51 R_earth, R* = 0.681 R_sun
+#: (docs/campaign.md).
 K2_141 = """["K2-141b"]
 period_days = 0.2803244
 t_transit_bjd = 2457744.07160
