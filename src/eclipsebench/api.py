@@ -230,7 +230,7 @@ def reduce(table: Table | str | os.PathLike | Sequence[Table | str | os.PathLike
     """
     joint = isinstance(table, (list, tuple))
     section, how = _reduce_inputs(locals(), controlled=joint)
-    if joint:
+    if isinstance(table, (list, tuple)):
         if epoch is not None:
             raise InputError("epoch: a joint fit takes each table's EPOCH")
         return reduce_joint(list(table), method, options=section, **how)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 from ..astro.catalogue import system_for
 from ..config import Config, load_config
@@ -30,6 +31,9 @@ from .options import (
 )
 from .reduce_text import format_text as format_text  # the CLI prints with it
 from .table_options import TABLE_LABELS, add_table_options, table_keywords, table_paths
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..fit.result import EpochResult
 
 NAME = "reduce"
 HELP = ("Fit one epoch's photometry table with one decorrelation method and the shared "
@@ -189,7 +193,9 @@ def run(args: argparse.Namespace) -> dict:
         check_plot_path(args.plot, "--plot")
     cfg = _config(args)
     keywords = _keywords(args, cfg)
-    result = reduce(str(table_path), args.method, epoch=args.epoch, **keywords)
+    # one table: an EpochResult (a list of them is the joint fit's JointResult)
+    result = cast("EpochResult", reduce(str(table_path), args.method, epoch=args.epoch,
+                                        **keywords))
     summary = result.to_dict()
     if args.compare_phases:   # the controlled settings: the team's options only in the paper fit
         summary["phase_models"] = compare_phases(str(table_path), args.method, epoch=args.epoch,
