@@ -2,7 +2,7 @@
 
 ``import eclipsebench as eb`` gives the public API (``docs/api.md``):
 :func:`eb.load_config`, :func:`eb.simulate`, :func:`eb.measure`,
-:func:`eb.reduce`, :func:`eb.score`, :func:`eb.trust`, :func:`eb.run_challenge`,
+:func:`eb.reduce`, :func:`eb.compare_phases`, :func:`eb.score`, :func:`eb.trust`, :func:`eb.run_challenge`,
 :func:`eb.campaign`,
 :func:`eb.methods`, :func:`eb.method_class`, :func:`eb.read_result`,
 :func:`eb.read_photometry`, and the base classes
@@ -20,7 +20,7 @@ __version__ = "0.2.0"
 _PUBLIC = {
     "load_config": "api", "methods": "api", "method_class": "api", "measure": "api",
     "reduce": "api", "simulate": "api", "run_challenge": "api", "campaign": "api",
-    "score": "api", "trust": "api",
+    "score": "api", "trust": "api", "compare_phases": "api",
     "Systematics": "decorrelate.base", "MethodOptions": "decorrelate.base",
     "MethodContext": "decorrelate.base", "EpochData": "decorrelate.base",
     "EpochResult": "fit.result", "InputError": "errors",

@@ -20,7 +20,6 @@ from typing import Any
 from astropy.table import Table
 from astropy.time import Time
 
-from .astro.catalogue import as_system, system_for
 from .challenge.campaign import TableOptions, epochs_from_inputs, read_campaign_file
 from .challenge.campaign import run_campaign as _run_campaign
 from .challenge.runner import run_challenge as _run_challenge
@@ -29,9 +28,18 @@ from .config import load_config as _load_config
 from .decorrelate.base import MethodOptions, Systematics, available_methods, get_method
 from .engine import RunReport
 from .errors import InputError
-from .fit.reduce import EpochResult, reduce_epoch
+from .fit.error_rule import check_reported_error
+from .fit.reduce import (
+    EpochResult,
+    JointResult,
+    PhaseSelection,
+    configured_method_options,
+    reduce_epoch,
+    reduce_joint,
+    resolve_method_options,
+    select_phase_model,
+)
 from .fit.result import read_result as _read_result
-from .fit.target import names_a_system
 from .photometry.pipeline import photometry_tables, replace_options
 from .photometry.table import read_photometry as _read_photometry
 from .photometry.table import write_photometry
@@ -40,7 +48,8 @@ from .stats.depth_table import check_depth_table, read_depth_table
 from .stats.summary import summarize
 from .trust.result import TrustResult
 
-__all__ = ["load_config", "methods", "method_class", "measure", "reduce", "simulate",
+__all__ = ["load_config", "methods", "method_class", "measure", "reduce", "compare_phases",
+           "simulate",
            "run_challenge", "campaign", "score", "trust", "read_result", "read_photometry"]
 
 
@@ -135,22 +144,31 @@ def measure(input_dir: str | os.PathLike, out: str | os.PathLike | None = None, 
     return tables
 
 
-def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
-           seed: int = 0, options: Mapping[str, Any] | MethodOptions | None = None,
+def reduce(table: Table | str | os.PathLike | Sequence[Table | str | os.PathLike], method: str,
+           *, system: Any = None, seed: int = 0,
+           options: Mapping[str, Any] | MethodOptions | None = None,
            config: Config | str | os.PathLike | None = None, epoch: int | None = None,
            resources: Mapping[str, Any] | None = None,
            columns: Mapping[str, str] | None = None, time_column: str | None = None,
            time_format: str | None = None, time_scale: str | None = None,
            time_at: str | None = None, observer: Any = None,
-           **reduce_options: Any) -> EpochResult:
+           labels: Mapping[str, str] | None = None,
+           **reduce_options: Any) -> EpochResult | JointResult:
     """Fit one epoch with one method and the shared eclipse + phase-curve model.
+
+    ``eclipsebench reduce`` is this function: the same checks, the same
+    refusals (a table without the columns a fit needs, with the likely ones
+    named; tables of two planets in a joint fit; a zero or non-finite error),
+    the same result.
 
     Parameters
     ----------
-    table : astropy.table.Table or path
+    table : astropy.table.Table or path, or a list or tuple of them
         One epoch's photometry table (from :func:`measure`, or a FITS, ECSV or
         CSV file, also from another pipeline: ``docs/photometry.md``, "Photometry
-        from other pipelines").
+        from other pipelines"). A list or tuple of tables is fitted jointly
+        with one depth (each epoch its own time, phase and systematics; least
+        squares): a :class:`~eclipsebench.fit.result.JointResult`.
     method : str
         A name from :func:`methods`.
     system : str, mapping or PlanetSystem, optional
@@ -190,29 +208,81 @@ def reduce(table: Table | str | os.PathLike, method: str, *, system: Any = None,
     observer : "geocentre" or (x_km, y_km, z_km, mjd_utc), optional
         Where jd/mjd times were taken: for Spitzer ``SPTZR_X, SPTZR_Y,
         SPTZR_Z, MJD_OBS`` of a BCD header of the observation.
+    labels : mapping, optional
+        How errors name the table's arguments and the planet (default: these
+        keywords; the command line gives its options, ``{"columns": "--columns",
+        "system": "--system NAME", ...}``).
     **reduce_options
         ``[reduce]`` values to change, e.g. ``phase="linear"``, ``sampler="mcmc"``.
 
     Returns
     -------
-    EpochResult
+    EpochResult or JointResult
         ``depth_ppm``, ``depth_err_ppm``, every error estimate, the decorrelated
-        light curve; ``to_dict()`` is the result file's content.
+        light curve (one epoch); ``to_dict()`` is the result file's content.
+
+    Raises
+    ------
+    InputError
+        One line naming the table or the argument: missing columns, no planet,
+        an eclipse outside the data, tables of two planets, a zero or
+        non-finite depth error, an unknown method or option.
     """
-    cfg = _config(config)
+    joint = isinstance(table, (list, tuple))
+    section, how = _reduce_inputs(locals(), controlled=joint)
+    if isinstance(table, (list, tuple)):
+        if epoch is not None:
+            raise InputError("epoch: a joint fit takes each table's EPOCH")
+        return reduce_joint(list(table), method, options=section, **how)
+    result = reduce_epoch(table, method, options=section, epoch=epoch, **how)
+    source = (os.fspath(table) if isinstance(table, (str, os.PathLike))
+              else str((getattr(table, "meta", None) or {}).get("FILENAME",
+                                                               "the photometry table")))
+    check_reported_error(result.depth_ppm, result.depth_err_ppm, method=method, source=source)
+    return result
+
+
+def compare_phases(table: Table | str | os.PathLike, method: str, *, system: Any = None,
+                   seed: int = 0, options: Mapping[str, Any] | MethodOptions | None = None,
+                   config: Config | str | os.PathLike | None = None, epoch: int | None = None,
+                   resources: Mapping[str, Any] | None = None,
+                   columns: Mapping[str, str] | None = None, time_column: str | None = None,
+                   time_format: str | None = None, time_scale: str | None = None,
+                   time_at: str | None = None, observer: Any = None,
+                   labels: Mapping[str, str] | None = None,
+                   **reduce_options: Any) -> PhaseSelection:
+    """Fit every phase-curve model to one epoch, with BIC and AIC for each (paper Section 4.2).
+
+    The arguments are :func:`reduce`'s (one table); each model is fitted by
+    least squares with the controlled settings (``eclipsebench reduce
+    --compare-phases``). ``to_dict()`` gives the rows, ``best_bic``,
+    ``best_aic`` and the ``bracket`` of models between them.
+    """
+    section, how = _reduce_inputs(locals(), controlled=True)
+    return select_phase_model(table, method, options=section, epoch=epoch, **how)
+
+
+def _reduce_inputs(given: Mapping[str, Any], *, controlled: bool) -> tuple[Any, dict[str, Any]]:
+    """The ``[reduce]`` section and the fit's keywords from :func:`reduce`'s arguments.
+
+    The method's options are parsed once here (every ``[reduce.options.<method>]``
+    table checked, the team's in the paper profile unless ``controlled``, then
+    ``options``) and passed down as its options dataclass.
+    """
+    cfg = _config(given["config"])
     section = cfg.reduce
-    if reduce_options:
-        section = replace(section, **reduce_options)
+    if given["reduce_options"]:
+        section = replace(section, **given["reduce_options"])
         section.validate()
-    if system is not None:
-        system = as_system(system, cfg.system.catalogue or None)
-    elif names_a_system(cfg.system):
-        system = system_for(cfg.system)
-    times = {k: v for k, v in (("time_scale", time_scale), ("time_at", time_at),
-                                ("observer", observer)) if v is not None}
-    return reduce_epoch(table, method, options=section, system=system, seed=seed, epoch=epoch,
-                        method_options=options, resources=resources, columns=columns,
-                        time_column=time_column, time_format=time_format, time_options=times)
+    method_options = resolve_method_options(
+        given["method"], section, given["options"], configured=configured_method_options(section),
+        profile="controlled" if controlled else section.profile)
+    times = {k: given[k] for k in ("time_scale", "time_at", "observer") if given[k] is not None}
+    return section, {"system": given["system"], "seed": given["seed"],
+                     "method_options": method_options, "resources": given["resources"],
+                     "columns": given["columns"], "time_column": given["time_column"],
+                     "time_format": given["time_format"], "time_options": times,
+                     "system_section": cfg.system, "labels": given["labels"]}
 
 
 def simulate(out: str | os.PathLike, *, config: Config | str | os.PathLike | None = None,

@@ -24,7 +24,6 @@ import argparse
 import contextlib
 import importlib
 import json
-import math
 import os
 import signal
 import sys
@@ -43,6 +42,7 @@ from .errors import (
     raise_pending_interrupt,
 )
 from .io.paths import missing_folders, remove_empty_folders
+from .io.plain import json_safe
 from .progress import configure
 
 # Listed in the order ``--help`` shows them.
@@ -106,20 +106,6 @@ def build_parser() -> argparse.ArgumentParser:
                        help="show the full traceback of an internal error")
         p.set_defaults(_module=module)
     return parser
-
-
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if hasattr(obj, "item") and callable(obj.item) and getattr(obj, "ndim", 1) == 0:
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if hasattr(obj, "tolist"):
-        return _jsonable(obj.tolist())
-    return obj
 
 
 def _format_default(result: dict) -> str:
@@ -266,7 +252,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if result is None:
         return 0
     if args.json:
-        text = json.dumps(_jsonable(result), sort_keys=False)
+        text = json.dumps(json_safe(result), sort_keys=False)
     else:
         text = getattr(module, "format_text", _format_default)(result)
     try:

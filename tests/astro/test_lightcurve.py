@@ -15,9 +15,9 @@ from eclipsebench.astro.catalogue import get_system
 from eclipsebench.astro.lightcurve import light_curve_from_config, light_curve_function
 from eclipsebench.astro.thermal import ThermalModel, planck_lambda
 from eclipsebench.cli import main
-from eclipsebench.commands.lightcurve import challenge_epoch_times_bmjd
 from eclipsebench.config.system import CHALLENGE_SYSTEM, SystemSection
 from eclipsebench.errors import InputError
+from eclipsebench.simulation.from_config import challenge_epoch_times_bmjd
 
 XO3B = get_system("XO-3b")                   # Wong et al. 2014 elements
 XO3B_2015 = get_system(CHALLENGE_SYSTEM)     # the 2015 challenge's (Winn et al. 2008)

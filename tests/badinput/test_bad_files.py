@@ -174,13 +174,14 @@ def test_a_full_disk_names_the_file_and_leaves_nothing(command, tmp_path, cli, b
 
 
 def _fake_reduce(monkeypatch):
-    """reduce_epoch returning a tiny result (the fit itself is not what is tested)."""
+    """reduce_epoch returning a tiny result (the fit itself is not what is tested), where
+    ``eclipsebench reduce`` reaches it: through ``eb.reduce``."""
     import types
 
     import numpy as np
     from astropy.table import Table
 
-    import eclipsebench.fit.reduce as fit_reduce
+    import eclipsebench.api as fit_reduce
 
     def reduce_epoch(*args, **kwargs):
         return types.SimpleNamespace(

@@ -110,3 +110,27 @@ def test_run_refuses_bad_method_options_before_any_work(tmp_path, capsys, toml, 
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and key in err
     assert not out.exists()
+
+
+def test_one_option_grammar_for_reduce_and_trust(table_file, tmp_path, capsys):
+    """Issue 39: ``--option [METHOD.]KEY=VALUE`` for every command; ``reduce`` runs one
+    method, so METHOD may be left out there, and must be that method when given."""
+    from eclipsebench.commands.options import method_options
+
+    assert method_options(["kr-data.k=3"], method="kr-data") == \
+        method_options(["k=3"], method="kr-data") == {"kr-data": {"k": 3}}
+    out = tmp_path / "r.json"
+    for option in ("kr-data.k=3", "k=3"):   # the same fit either way
+        assert main(["reduce", str(table_file), "--method", "kr-data", "--sampler", "leastsq",
+                     "--prayer-bead", "0", "--option", option, "--out", str(out)]) == 0
+        assert json.loads(out.read_text())["options"]["k"] == 3
+    capsys.readouterr()
+    assert main(["reduce", str(table_file), "--method", "poly2", "--option", "kr-data.k=3",
+                 "--out", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "names method 'kr-data', not --method 'poly2'" in err
+    assert main(["trust", str(table_file), "--out", str(tmp_path / "t"), "--option", "k=3",
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--option 'k=3': expected METHOD.KEY=VALUE" in err
+    assert not (tmp_path / "p.json").exists() and not (tmp_path / "t").exists()

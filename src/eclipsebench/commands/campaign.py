@@ -12,8 +12,8 @@ from ..fit.names import EVENTS
 from ..io.paths import check_output_path
 from ..limits import MAX_WORKERS
 from .options import add_planet_options, method_list, planet_overrides, positive_int
-from .reduce import _TABLE_LABELS, _column_map, add_table_options
 from .run import _profile_list, _scheduler, add_cluster_options
+from .table_options import TABLE_LABELS, add_table_options, column_map
 
 NAME = "campaign"
 HELP = ("Reduce many real observations of one planet (photometry tables of any pipeline, or "
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> dict:
                                                         "epoch, or --file CAMPAIGN.toml)")
     out = Path(args.out)
     check_output_path(out, "--out", "folder")
-    table = TableOptions(tuple(sorted(_column_map(args.columns).items())), args.time_column,
+    table = TableOptions(tuple(sorted(column_map(args.columns).items())), args.time_column,
                          args.time_format, args.time_scale, args.time_at, args.observer)
     if args.file:
         if table.given() or args.channel is not None:
@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> dict:
     else:
         epochs = epochs_from_inputs(args.inputs, table=table, channel=args.channel)
     cfg = _config(args)
-    labels = None if args.file else _TABLE_LABELS
+    labels = None if args.file else TABLE_LABELS
     summary, report = run_campaign(cfg, out, epochs, scheduler=_scheduler(args), labels=labels,
                                    twins=args.twins,
                                    cluster=ClusterOptions(

@@ -10,13 +10,12 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from ..astro.catalogue import system_for
 from ..astro.times import BMJD_OFFSET, EPOCH10_START_BMJD
-from ..config import Config
 from ..config.system import CHALLENGE_SYSTEM, SystemSection
 from ..errors import InputError
 from ..io.atomic import atomic_path
 from ..io.paths import check_plot_path
+from .lightcurve_text import format_text as format_text  # the CLI prints with it
 from .options import (
     add_planet_options,
     check_output_path,
@@ -83,44 +82,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         f"(default: {PHASE_BIAS_EPOCH}, the epoch of the paper's figure)")
 
 
-def challenge_epoch_times_bmjd(epoch: int, cfg: Config | None = None) -> np.ndarray:
-    """Mid-frame times (BMJD_TDB) of every frame of one epoch of a challenge.
-
-    The frames the simulator renders for that epoch (both AORs, Table 2's
-    start times; :func:`eclipsebench.simulation.plan.plan_epoch`), each at
-    the centre of its Fowler weights, where the simulator evaluates L(t).
-
-    Parameters
-    ----------
-    epoch : int
-        1 to ``cfg.challenge.epochs``.
-    cfg : Config, optional
-        Default: the built-in challenge.
-
-    Examples
-    --------
-    >>> t = challenge_epoch_times_bmjd(10)
-    >>> t.size, round(float(t[0]), 4), round(float(t[-1] - t[0]) * 24, 2)
-    (15616, 57234.3406, 8.85)
-    """
-    import numpy as np
-
-    from ..simulation.plan import epoch_start_times_bmjd, plan_epoch
-
-    cfg = cfg if cfg is not None else Config()
-    if not 1 <= epoch <= cfg.challenge.epochs:
-        raise InputError(f"--epoch: expected an epoch of the challenge, 1-{cfg.challenge.epochs}, "
-                         f"got {epoch}")
-    obs = cfg.observation
-    period = system_for(cfg.system).period_days
-    start = float(epoch_start_times_bmjd(obs.start_times_jd, epoch, period)[epoch - 1])
-    plan = plan_epoch(obs, epoch, start, cfg.challenge.seed)
-    # as simulate_aor: time_bmjd at the centre of the Fowler weights, (2 FN + WT + 1)/2 ticks
-    tick_mid_s = 0.5 * (2 * obs.fowler + obs.wait + 1) * obs.sample_time_s
-    return np.concatenate([plan.to_bmjd(a.frame_starts_s().ravel() + tick_mid_s)
-                           for a in plan.aors])
-
-
 def _fixed_depth_ppm(args: argparse.Namespace, system) -> float:
     """``--fix-depth``, else the challenge's fixed depth for the challenge's planet only: a
     real planet's depth is its own thermal model's (its elements, star and albedo)."""
@@ -141,6 +102,7 @@ def _run_phase_bias(args: argparse.Namespace) -> dict:
     """Section 4.2: the depth bias of each phase model on one challenge epoch's noiseless L(t)."""
     from ..astro.bias import phase_model_bias
     from ..astro.lightcurve import light_curve_function
+    from ..simulation.from_config import challenge_epoch_times_bmjd
 
     for name in ("start", "hours", "cadence_s", "out", "plot"):
         if getattr(args, name) is not None:
@@ -148,7 +110,7 @@ def _run_phase_bias(args: argparse.Namespace) -> dict:
             raise InputError(f"{option}: not with --phase-bias (the frames are those of the "
                              "challenge epoch; choose it with --epoch)")
     epoch = PHASE_BIAS_EPOCH if args.epoch is None else args.epoch
-    time = challenge_epoch_times_bmjd(epoch)
+    time = challenge_epoch_times_bmjd(epoch, label="--epoch")
     system = planet_from_args(args, args.system)
     lc = light_curve_function(system, fix_depth_ppm=_fixed_depth_ppm(args, system),
                               **_light_curve_options(args))
@@ -271,34 +233,3 @@ def _plot(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=path.rsplit(".", 1)[-1] if "." in path else "png", dpi=120)
-
-
-def format_text(result: dict) -> str:
-    if "phase_bias_ppm" in result:
-        return _format_phase_bias(result)
-    lines = [
-        f"system                {result['system']}",
-        f"eclipse depth         {result['eclipse_depth_ppm']:.1f} ppm"
-        + (" (fixed)" if result["depth_fixed"] else ""),
-        f"model depth           {result['model_depth_ppm']:.1f} ppm "
-        f"(tau_rad = {result['options']['tau_rad_days']:g} d); "
-        f"instantaneous re-radiation {result['model_depth_instantaneous_ppm']:.1f} ppm",
-        f"transit / eclipse     BJD {result['t_transit_bjd']:.5f} / {result['t_eclipse_bjd']:.5f}",
-        f"samples               {result['n_samples']} from BMJD {result['start_bmjd']:.5f} "
-        f"to {result['stop_bmjd']:.5f}",
-    ]
-    if "out_file" in result:
-        lines.append(f"written               {result['out_file']}")
-    if "plot_file" in result:
-        lines.append(f"plot                  {result['plot_file']}")
-    return "\n".join(lines)
-
-
-def _format_phase_bias(result: dict) -> str:
-    lines = [f"{result['system']}, challenge epoch {result['epoch']}: {result['n_frames']} frames "
-             f"from BMJD {result['start_bmjd']:.4f}, mid-eclipse "
-             f"{result['eclipse_after_start_hours']:.2f} h after the start, depth "
-             f"{result['depth_ppm']:.1f} ppm",
-             "phase model   depth bias (ppm, fitted - true; Section 4.2)"]
-    lines += [f"{name:<13} {value:+8.1f}" for name, value in result["phase_bias_ppm"].items()]
-    return "\n".join(lines)

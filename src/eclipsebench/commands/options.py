@@ -16,13 +16,14 @@ from ..astro.catalogue import (
     system_from_pairs,
 )
 from ..config import builtin_config_names, load_config
+from ..config.base import parse_override
 from ..errors import InputError
 from ..io.paths import check_output_path
 from ..limits import size_problem
 
 __all__ = ["check_output_path", "finite_float", "positive_float", "nonnegative_float",
            "open_unit_float", "positive_int", "method_list", "add_config_options",
-           "add_planet_options", "planet_overrides", "planet_from_args"]
+           "add_planet_options", "planet_overrides", "planet_from_args", "method_options"]
 
 
 def _number(text: str) -> float:
@@ -95,6 +96,40 @@ def method_list(text: str) -> list[str]:
     if not names:
         raise argparse.ArgumentTypeError("expected a comma-separated list of method names")
     return names
+
+
+def method_options(items: list[str], method: str | None = None) -> dict[str, dict[str, Any]]:
+    """``--option [METHOD.]KEY=VALUE`` (repeatable), the one grammar of every command.
+
+    The value is read as a TOML literal (as ``--set``'s), else kept as text.
+    ``METHOD.`` may be left out when the command runs one ``method``
+    (``reduce``); with several (``trust``) it is required.
+
+    Returns
+    -------
+    dict
+        ``{method: {key: value}}``.
+
+    Examples
+    --------
+    >>> method_options(["kr-data.k=40", "gp.bin_seconds=30"])
+    {'kr-data': {'k': 40}, 'gp': {'bin_seconds': 30}}
+    >>> method_options(["k=40"], method="kr-data")
+    {'kr-data': {'k': 40}}
+    """
+    grammar = "[METHOD.]KEY=VALUE" if method is not None else "METHOD.KEY=VALUE"
+    out: dict[str, dict[str, Any]] = {}
+    for item in items:
+        head, sep, raw = item.partition("=")
+        name, dot, key = head.strip().rpartition(".")
+        if not sep or not key or (dot and not name) or (not dot and method is None):
+            raise InputError(f"--option {item!r}: expected {grammar}")
+        name = name if dot else str(method)
+        if method is not None and name != method:
+            raise InputError(f"--option {item!r}: names method {name!r}, not --method "
+                             f"{method!r}")
+        out.setdefault(name, {})[key] = parse_override(f"{key}={raw}")[1]
+    return out
 
 
 def add_config_options(parser: argparse.ArgumentParser, *, config_positional: bool = True) -> None:

@@ -8,7 +8,6 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..config import load_config
-from ..config.base import parse_override
 from ..detector.constants import READOUT_MODES
 from ..errors import InputError
 from ..fit.names import EVENTS
@@ -17,11 +16,12 @@ from .options import (
     add_planet_options,
     check_output_path,
     method_list,
+    method_options,
     planet_overrides,
     positive_float,
     positive_int,
 )
-from .reduce import _TABLE_LABELS, _column_map, add_table_options, time_options
+from .table_options import TABLE_LABELS, add_table_options, column_map, time_options
 
 #: The readouts twins are made for (subarray modes).
 SUBARRAY_READOUTS = tuple(name for name, mode in READOUT_MODES.items() if mode.subarray)
@@ -96,18 +96,6 @@ def _twin_count(text: str) -> int:
     return value
 
 
-def _method_options(items: list[str]) -> dict[str, dict]:
-    out: dict[str, dict] = {}
-    for item in items:
-        head, sep, _ = item.partition("=")
-        method, dot, key = head.strip().rpartition(".")
-        if not sep or not dot or not method or not key:
-            raise InputError(f"--option {item!r}: expected METHOD.KEY=VALUE")
-        _, value = parse_override(f"{key}={item.partition('=')[2]}")
-        out.setdefault(method, {})[key] = value
-    return out
-
-
 def run(args: argparse.Namespace) -> dict:
     # the simulator and every method: imported when the command runs, not for --help
     from ..decorrelate.base import unknown_methods
@@ -129,11 +117,11 @@ def run(args: argparse.Namespace) -> dict:
                               system=system_for(cfg.system) if explicit else None,
                               system_section=cfg.system, methods=args.methods,
                               n_twins=args.twins, depth_ppm=args.depth, seed=args.seed,
-                              method_options=_method_options(args.method_options),
-                              pmap=args.pmap, columns=_column_map(args.columns),
+                              method_options=method_options(args.method_options),
+                              pmap=args.pmap, columns=column_map(args.columns),
                               time_column=args.time_column, time_format=args.time_format,
                               time_options=time_options(args), readout=args.readout,
-                              channel=args.channel, labels=_TABLE_LABELS,
+                              channel=args.channel, labels=TABLE_LABELS,
                               depth_name="--depth")
     command = shlex.join(["eclipsebench", *getattr(args, "_argv", [])])   # for the page
     summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers,

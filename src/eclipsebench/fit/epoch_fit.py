@@ -15,6 +15,7 @@ import numpy as np
 
 from ..config.reduce import ReduceSection
 from ..decorrelate.base import Systematics
+from ..io.plain import json_safe
 from .astro_model import AstroModel
 from .data import median_cadence_s
 from .error_rule import largest_estimate, reported_depth_error
@@ -27,7 +28,7 @@ from .leastsq import (
 from .mcmc import McmcResult, run_mcmc
 from .prepare import PreparedEpoch
 from .profiles import paper_profile
-from .result import EpochResult, jsonable, lightcurve_errors
+from .result import EpochResult, lightcurve_errors
 
 __all__ = ["fit_prepared", "phase_curve_detail"]
 
@@ -228,7 +229,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         params=params, param_errors=param_err,
         mcmc=mcmc_info, system=str(getattr(prep.system, "name", prep.system)),
         seed=systematics.context.seed,
-        options=systematics.options.to_dict(), diagnostics=jsonable(systematics.diagnostics()),
+        options=systematics.options.to_dict(), diagnostics=json_safe(systematics.diagnostics(), nonfinite="keep"),
         depth_err_own_ppm={k: ppm(v) for k, v in own.items()}, lightcurve=lightcurve,
         chain=None if mc is None else {"names": np.asarray(mc.names),
                                        "samples": np.asarray(mc.samples)},

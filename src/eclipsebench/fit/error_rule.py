@@ -27,13 +27,14 @@ Examples
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["largest_estimate", "reported_depth_error"]
+__all__ = ["largest_estimate", "reported_depth_error", "check_reported_error", "ZERO_ERROR_PPM"]
 
 
 def largest_estimate(estimates: Mapping[str, float | None]) -> tuple[float, str]:
@@ -100,3 +101,36 @@ def reported_depth_error(shared: Mapping[str, float | None], *, error_rule: str,
         depth_err = float(np.hypot(depth_err, np.sqrt(separation_var)))
         name += "+separation"
     return depth_err, name
+
+
+#: A depth error below this (1e-12 of the flux: rounding) is zero, never a result.
+ZERO_ERROR_PPM = 1e-6
+
+
+def check_reported_error(depth_ppm: float, depth_err_ppm: float | None, *, method: str,
+                         source: str) -> None:
+    """Refuse a depth whose reported error is zero or not finite: it is not a result.
+
+    A constant flux, or a fit that the data do not constrain, gives an error
+    of zero (to rounding) or NaN; a depth quoted with it would claim infinite
+    precision. ``eb.reduce`` and ``eclipsebench reduce`` both refuse it here.
+
+    Raises
+    ------
+    InputError
+        One line naming ``source`` (the table), the method, the depth and the error.
+
+    Examples
+    --------
+    >>> check_reported_error(1875.0, 42.0, method="bliss", source="epoch_01.fits")
+    >>> check_reported_error(0.0, 2e-9, method="bliss", source="epoch_01.fits")
+    Traceback (most recent call last):
+    ...
+    eclipsebench.errors.InputError: epoch_01.fits: the bliss fit gives depth 0.0 +- 2e-09 ppm: a zero or non-finite error is not a result (constant flux or a degenerate fit); nothing written
+    """
+    if depth_err_ppm is None or not math.isfinite(depth_err_ppm) \
+            or depth_err_ppm < ZERO_ERROR_PPM:
+        shown = "no" if depth_err_ppm is None else f"{depth_err_ppm:.3g}"
+        raise InputError(f"{source}: the {method} fit gives depth {depth_ppm:.1f} +- "
+                         f"{shown} ppm: a zero or non-finite error is not a result "
+                         "(constant flux or a degenerate fit); nothing written")

@@ -20,7 +20,15 @@ from .leastsq import (
     _summarise,
     fit_leastsq,
 )
-from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch, resolve_method_options
+from .prepare import (
+    _DEFAULT_OPTIONS,
+    _read,
+    _resources,
+    _source,
+    prepare_epoch,
+    resolve_method_options,
+    resolve_system,
+)
 from .result import JointResult
 
 __all__ = ["reduce_joint"]
@@ -71,7 +79,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
                  time_format: str | None = None,
-                 time_options: Mapping[str, Any] | None = None) -> JointResult:
+                 time_options: Mapping[str, Any] | None = None, system_section: Any = None,
+                 labels: Mapping[str, str] | None = None) -> JointResult:
     """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
 
     Each epoch is first fitted alone (its solution starts the joint fit), then
@@ -82,6 +91,10 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     alone (``depth_alone_ppm``, ``depth_alone_err_ppm``: Jacobian x
     max(1, beta_red)), and ``depth_combined_ppm`` / ``depth_combined_err_ppm``
     their inverse-variance combination, to set beside the joint depth.
+
+    The fit is of one planet: ``system``, else the one every table names
+    (``system_section`` and ``labels`` as :func:`~eclipsebench.fit.prepare.prepare_epoch`
+    takes them); tables naming two planets are refused before any fit.
     """
     tables = list(tables)
     if not tables:
@@ -93,13 +106,18 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     if len(epochs) != len(tables):
         raise InputError("reduce_joint: give one epoch number per table")
     method_options = resolve_method_options(method, options, method_options)  # once, for all
+    hint = dict(labels or {}).get("system", "system=NAME")
+    if system is None:
+        tables = [_read(table) for table in tables]
+        system = _one_planet(tables, system_section, hint)
     problems, fits, preps = [], [], []
     for table, ep in zip(tables, epochs, strict=True):
         prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, seed=seed,
                              method_options=method_options,
                              resources=_resources(resources, pmap), columns=columns,
                              time_column=time_column, time_format=time_format,
-                             time_options=time_options)
+                             time_options=time_options, system_section=system_section,
+                             labels=labels)
         astro_model = prep.astro_model(options)
         theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
         fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,
@@ -150,3 +168,15 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                        phase=problems[0].astro.phase, converged=bool(sol.success),
                        t_ecl_bmjd=tuple(e["t_ecl_bmjd"] for e in per_epoch),
                        per_epoch=tuple(per_epoch))
+
+
+def _one_planet(tables: list, section: Any, hint: str):
+    """The planet every table names (:func:`~eclipsebench.fit.prepare.resolve_system`);
+    InputError naming the first table that names another."""
+    first = resolve_system(None, tables[0].meta, _source(tables[0]), section=section, hint=hint)
+    for table in tables[1:]:
+        other = resolve_system(None, table.meta, _source(table), section=section, hint=hint)
+        if other.name != first.name:
+            raise InputError(f"{_source(table)}: names {other.name}, {_source(tables[0])} names "
+                             f"{first.name}; a joint fit is of one planet (give {hint})")
+    return first

@@ -48,17 +48,20 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
                        phases: tuple[str, ...] = PHASE_MODELS,
                        columns: Mapping[str, str] | None = None, time_column: str | None = None,
                        time_format: str | None = None,
-                       time_options: Mapping[str, Any] | None = None) -> PhaseSelection:
+                       time_options: Mapping[str, Any] | None = None, system_section: Any = None,
+                       labels: Mapping[str, str] | None = None) -> PhaseSelection:
     """Fit each phase model by least squares and report BIC and AIC for each.
 
     The method is built once and reused; each model's depth error is the
     Jacobian error times ``max(1, beta_red)`` (no prayer bead or MCMC, to keep
-    the comparison fast).
+    the comparison fast). ``system_section`` and ``labels`` are as
+    :func:`~eclipsebench.fit.prepare.prepare_epoch` takes them.
     """
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
-                         time_options=time_options)
+                         time_options=time_options, system_section=system_section,
+                         labels=labels)
     if options.event == "phase-curve" and phases == PHASE_MODELS:
         phases = PHASE_CURVE_MODELS
     rows: list[dict[str, Any]] = []

@@ -21,9 +21,10 @@ from ..config.reduce import ReduceSection
 from ..decorrelate import get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options, unknown_methods
 from ..errors import ConfigError, InputError
+from ..io.pmap_files import check_pmap_path
 from ..photometry.table import read_table
 from .astro_model import PHASE_CURVE_MODELS, AstroModel
-from .data import epoch_data_from_table, standardise_table
+from .data import check_columns, epoch_data_from_table, standardise_table
 from .frames import per_aor_systematics, settling_aor
 from .profiles import centroid_columns, paper_profile
 from .target import system_of_table
@@ -50,26 +51,41 @@ def _read(table):
 
 def _as_table(table, *, columns: Mapping[str, str] | None = None, time_column: str | None = None,
               time_format: str | None = None, time_options: Mapping[str, Any] | None = None,
-              target=None):
+              target=None, radius_px: float | None = None,
+              labels: Mapping[str, str] | None = None):
     """An astropy Table with the package's column names from a Table or a path.
 
     A path is read as FITS, ECSV or CSV (:func:`read_table`); ``columns``,
     ``time_column``, ``time_format`` and ``time_options`` (``time_scale``,
     ``time_at``, ``observer``, ``frame_time_s``) map another pipeline's names
     and times, converted with ``target``'s coordinates
-    (:func:`~eclipsebench.fit.data.standardise_table`).
+    (:func:`~eclipsebench.fit.data.standardise_table`). A table still without
+    the columns a fit needs is refused in one line naming the likely
+    candidates (:func:`~eclipsebench.fit.data.check_columns`, ``labels``: how
+    it names the arguments), whichever door it came in by.
     """
-    return standardise_table(_read(table), columns=columns, time_column=time_column,
-                             time_format=time_format, target=target, **dict(time_options or {}))
+    out = standardise_table(_read(table), columns=columns, time_column=time_column,
+                            time_format=time_format, target=target, labels=labels,
+                            **dict(time_options or {}))
+    check_columns(out, _source(out), radius_px=radius_px, labels=labels)
+    return out
+
+
+def _source(table) -> str:
+    """The table as errors name it: its file, else "the photometry table"."""
+    return str((table.meta or {}).get("FILENAME", "the photometry table"))
 
 
 def resolve_system(system: Any, meta: Mapping[str, Any] | None = None,
-                   source: str = "the photometry table"):
+                   source: str = "the photometry table", *, section: Any = None,
+                   hint: str = "system=NAME"):
     """A PlanetSystem from a name, a mapping of the planet's values (with ``name``) or a
-    PlanetSystem; None: the planet the table's metadata name (``SYSTEM``, ``OBJECT``:
-    :func:`~eclipsebench.fit.target.system_of_table`), never the challenge's by default."""
-    return system_of_table(meta or {}, system=system, source=source,
-                           hint="system=NAME")
+    PlanetSystem; None: the one a configuration's ``[system]`` ``section`` names, else the
+    planet the table's metadata name (``SYSTEM``, ``OBJECT``, also in ``section``'s
+    catalogue: :func:`~eclipsebench.fit.target.system_of_table`), never the challenge's
+    by default; ``hint`` is how the caller gives a planet."""
+    return system_of_table(meta or {}, system=system, section=section, source=source,
+                           hint=hint)
 
 
 def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
@@ -225,7 +241,8 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                   columns: Mapping[str, str] | None = None, time_column: str | None = None,
                   time_format: str | None = None,
                   time_options: Mapping[str, Any] | None = None,
-                  centroid: str | None = None) -> PreparedEpoch:
+                  centroid: str | None = None, system_section: Any = None,
+                  labels: Mapping[str, str] | None = None) -> PreparedEpoch:
     """Read the table, keep the good frames, build the method and predict the eclipse time.
 
     The method gets its options, ``method_options``: an options instance (the
@@ -239,16 +256,22 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     the times' ``time_scale``, ``time_at``, ``observer`` and ``frame_time_s``
     (:func:`~eclipsebench.fit.data.standardise_table`); times at the observer
     (``time_format`` jd or mjd) are converted with the planet's coordinates,
-    so the planet is then found before the columns are read.
+    so the planet is then found before the columns are read. ``system_section``
+    (a configuration's ``[system]``) and ``labels`` (how errors name the table's
+    arguments and ``system``: :data:`eclipsebench.fit.data.check_columns`'s keys and
+    ``"system"``) are as :func:`resolve_system` and :func:`_as_table` take them.
     """
+    labels = dict(labels or {})
+    hint = labels.get("system", "system=NAME")
     target = None
     if time_format in ("jd", "mjd"):
         table = _read(table)
-        source = str((table.meta or {}).get("FILENAME", "the photometry table"))
-        system = target = resolve_system(system, table.meta, source)
+        system = target = resolve_system(system, table.meta, _source(table),
+                                         section=system_section, hint=hint)
     table = _as_table(table, columns=columns, time_column=time_column, time_format=time_format,
-                      time_options=time_options, target=target)
-    source = str((table.meta or {}).get("FILENAME", "the photometry table"))
+                      time_options=time_options, target=target,
+                      radius_px=options.radius_px or None, labels=labels)
+    source = _source(table)
     centroid_note = ""
     if centroid is not None:
         (cx, cy), centroid_note = centroid_columns(table.colnames, centroid)
@@ -266,7 +289,8 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         if settling.any():
             dropped["settling_aor"] = int(settling.sum())
             data = data.subset(~settling)
-    system = resolve_system(system, table.meta, source)
+    system = resolve_system(system, table.meta, source, section=system_section, hint=hint)
+    _check_resources(cls, resources, table.meta, source, labels)
     t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source, options.event)
     # What the ephemeris predicts (never the truth): a method may use it to find the
     # eclipse's signature in its own decomposition (ICA's eclipse component).
@@ -285,6 +309,28 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     return PreparedEpoch(table=table, systematics=systematics, system=system,
                          epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
                          source=source, n_frames_dropped=dropped, centroid=centroid_note)
+
+
+#: How :func:`_check_resources` names the method and its pixel map by default (the API's words).
+_RESOURCE_LABELS = {"method": "method", "pmap": 'a pmap as resources={"pmap": PATH}'}
+
+
+def _check_resources(cls: type[Systematics], resources: Mapping[str, Any] | None,
+                     meta: Mapping[str, Any] | None, source: str,
+                     labels: Mapping[str, str]) -> None:
+    """Before any fit: a pixel map given as a path must be a regular file or a folder, and a
+    method that needs one (``kr-pmap``) needs it given or a simulated table's ``SIMDIR``
+    to find it in; one line naming how to give it (``labels``: ``"method"``, ``"pmap"``)."""
+    words = {**_RESOURCE_LABELS, **labels}
+    pmap = dict(resources or {}).get("pmap")
+    if isinstance(pmap, (str, os.PathLike)):   # a device or a FIFO is refused here
+        check_pmap_path(pmap)
+    if "pmap" not in cls.resources or pmap is not None:
+        return
+    if not ((meta or {}).get("SIMDIR") or (meta or {}).get("simdir")):
+        raise InputError(f"{words['method']} {cls.name}: needs {words['pmap']} (a "
+                         "calibration-star table, the SSC pmap, or a folder of its versions); "
+                         f"{source} names no simulation folder (SIMDIR) to find one in")
 
 
 def _resources(resources: Mapping[str, Any] | None, pmap) -> dict[str, Any]:

@@ -35,7 +35,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
                  time_format: str | None = None, profile: str | None = None,
-                 time_options: Mapping[str, Any] | None = None) -> EpochResult:
+                 time_options: Mapping[str, Any] | None = None, system_section: Any = None,
+                 labels: Mapping[str, str] | None = None) -> EpochResult:
     """Fit one epoch with one method and estimate the depth and its uncertainty.
 
     Parameters
@@ -81,6 +82,12 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         for every method. ``paper``: the method's team's centroid, phase and
         ramp models (by BIC where the team chose by BIC), eclipse shape,
         sampler, options and reported error (:mod:`eclipsebench.fit.profiles`).
+    system_section : SystemSection, optional
+        A configuration's ``[system]``: its planet when it names one, its
+        catalogue searched for the table's ``OBJECT``.
+    labels : Mapping, optional
+        How errors name the table's arguments and the planet (the command line
+        passes its options: ``{"columns": "--columns", "system": "--system NAME", ...}``).
 
     Returns
     -------
@@ -99,7 +106,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
                          time_options=time_options,
-                         centroid=None if team is None else team.centroid)
+                         centroid=None if team is None else team.centroid,
+                         system_section=system_section, labels=labels)
     options, bic = _phase_curve_choice(prep, method, options)
     if team is None:
         result = replace(fit_prepared(prep, method, options=options), profile=requested)

@@ -26,9 +26,10 @@ from astropy.time import Time
 from .. import __version__
 from ..errors import InputError
 from ..io.atomic import atomic_path
+from ..io.plain import json_safe
 from .display import html_repr, text_repr
 
-__all__ = ["EpochResult", "jsonable", "lightcurve_errors", "lightcurve_path", "chain_path",
+__all__ = ["EpochResult", "lightcurve_errors", "lightcurve_path", "chain_path",
            "read_result", "bic_data", "JointResult",
            "LIGHTCURVE_COLUMNS"]
 
@@ -119,7 +120,7 @@ class EpochResult:
                      "event_detail", "mcmc"):
             value = getattr(self, name)
             if value is not None:
-                object.__setattr__(self, name, jsonable(value))
+                object.__setattr__(self, name, json_safe(value, nonfinite="keep"))
 
     def _fields_shown(self) -> dict[str, Any]:
         """The fields of the text and HTML summaries (:mod:`eclipsebench.fit.display`)."""
@@ -196,7 +197,7 @@ class EpochResult:
             "system": self.system, "seed": self.seed, "profile": self.profile,
         }
         if self.profile_detail:
-            out["profile_detail"] = jsonable(self.profile_detail)
+            out["profile_detail"] = json_safe(self.profile_detail, nonfinite="keep")
         for name, value in self.params.items():
             if name not in ("depth", "t_ecl_bmjd", "rp_rs", "t_transit_bmjd"):
                 out[name] = value
@@ -217,7 +218,7 @@ class EpochResult:
             for key in ("t_ecl_bmjd", "t_ecl_err_d", "t_ecl_predicted_bmjd"):
                 del out[key]
         if self.event_detail:
-            out.update(jsonable(self.event_detail))
+            out.update(json_safe(self.event_detail, nonfinite="keep"))
             out["event_keys"] = list(self.event_detail)
         out.update({"params": dict(self.params), "param_errors": dict(self.param_errors),
                     "depth_err_own_ppm": dict(self.depth_err_own_ppm),
@@ -373,18 +374,6 @@ def chain_path(result_path: str | os.PathLike) -> Path:
     """
     lc = lightcurve_path(result_path)
     return lc.with_name(lc.name.replace(".lc.ecsv", ".chain.npz"))
-
-
-def jsonable(obj: Any) -> Any:
-    """Diagnostics as plain JSON types (numpy scalars and arrays become numbers and lists)."""
-    if isinstance(obj, Mapping):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple, np.ndarray)):
-        return [jsonable(v) for v in np.asarray(obj, dtype=object).tolist()] \
-            if isinstance(obj, np.ndarray) else [jsonable(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return obj.item()
-    return obj
 
 
 def read_result(path: str | os.PathLike):

@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
+
+from .plain import json_safe
 
 __all__ = ["file_sha256", "files_sha256", "value_sha256"]
 
@@ -53,17 +54,6 @@ def files_sha256(paths: Iterable[str | os.PathLike]) -> str:
     return h.hexdigest()
 
 
-def _plain(value: Any) -> Any:
-    """``value`` with non-finite floats spelled out (JSON has none) and tuples as lists."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return repr(value)
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    return value
-
-
 def value_sha256(value: Any) -> str:
     """SHA-256 of a JSON-able value in a canonical form (sorted keys, no spaces).
 
@@ -72,5 +62,5 @@ def value_sha256(value: Any) -> str:
     >>> value_sha256({"b": 1, "a": (2.0, 3)}) == value_sha256({"a": [2.0, 3], "b": 1})
     True
     """
-    text = json.dumps(_plain(value), sort_keys=True, separators=(",", ":"), allow_nan=False)
+    text = json.dumps(json_safe(value, nonfinite="repr"), sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()

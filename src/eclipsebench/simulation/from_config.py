@@ -7,6 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import fields, replace
 
+import numpy as np
+
 from ..astro.catalogue import system_for
 from ..astro.lightcurve import LightCurve, cached_light_curve
 from ..astro.thermal import DEFAULT_WAVELENGTH_UM
@@ -22,9 +24,10 @@ from ..instrument.pointing import (
 )
 from ..io.header_template import XO3_DEC_DEG, XO3_RA_DEG
 from ..seeding import rng
+from .plan import epoch_start_times_bmjd, plan_epoch
 from .render import FrameModel
 
-__all__ = ['system_of', 'light_curve_of', 'readout_from_config', 'frame_model_from_config', 'pointing_ranges_from_config', 'draw_epoch_pointing', 'target_of']
+__all__ = ['challenge_epoch_times_bmjd', 'system_of', 'light_curve_of', 'readout_from_config', 'frame_model_from_config', 'pointing_ranges_from_config', 'draw_epoch_pointing', 'target_of']
 
 def system_of(cfg: Config):
     """``cfg.system`` for the channel observed.
@@ -116,3 +119,40 @@ def target_of(cfg: Config) -> tuple[float, float, str]:
     if ra is None or dec is None:
         ra, dec = XO3_RA_DEG, XO3_DEC_DEG
     return float(ra), float(dec), name.rstrip()
+
+
+def challenge_epoch_times_bmjd(epoch: int, cfg: Config | None = None, *,
+                               label: str = "epoch") -> np.ndarray:
+    """Mid-frame times (BMJD_TDB) of every frame of one epoch of a challenge.
+
+    The frames the simulator renders for that epoch (both AORs, Table 2's
+    start times; :func:`eclipsebench.simulation.plan.plan_epoch`), each at
+    the centre of its Fowler weights, where the simulator evaluates L(t).
+
+    Parameters
+    ----------
+    epoch : int
+        1 to ``cfg.challenge.epochs``.
+    cfg : Config, optional
+        Default: the built-in challenge.
+    label : str
+        How an error names ``epoch`` (``eclipsebench lightcurve`` passes ``--epoch``).
+
+    Examples
+    --------
+    >>> t = challenge_epoch_times_bmjd(10)
+    >>> t.size, round(float(t[0]), 4), round(float(t[-1] - t[0]) * 24, 2)
+    (15616, 57234.3406, 8.85)
+    """
+    cfg = cfg if cfg is not None else Config()
+    if not 1 <= epoch <= cfg.challenge.epochs:
+        raise InputError(f"{label}: expected an epoch of the challenge, 1-{cfg.challenge.epochs}, "
+                         f"got {epoch}")
+    obs = cfg.observation
+    period = system_for(cfg.system).period_days
+    start = float(epoch_start_times_bmjd(obs.start_times_jd, epoch, period)[epoch - 1])
+    plan = plan_epoch(obs, epoch, start, cfg.challenge.seed)
+    # as simulate_aor: time_bmjd at the centre of the Fowler weights, (2 FN + WT + 1)/2 ticks
+    tick_mid_s = 0.5 * (2 * obs.fowler + obs.wait + 1) * obs.sample_time_s
+    return np.concatenate([plan.to_bmjd(a.frame_starts_s().ravel() + tick_mid_s)
+                           for a in plan.aors])

@@ -1,7 +1,7 @@
 """The stats stage of a run: depth table, photon limits and the ensemble statistics.
 
 Pure functions (:func:`collect_depths`, :func:`in_eclipse_fraction_of`,
-:func:`readout_of`, :func:`json_safe`), the task function :func:`stats_task`
+:func:`readout_of`; :func:`json_safe` is :mod:`eclipsebench.io.plain`'s), the task function :func:`stats_task`
 (writes ``depths.ecsv`` and ``depths_paper.ecsv``, then ``summary.json`` last) and the planner
 :func:`plan_stats_tasks`.
 """
@@ -24,6 +24,7 @@ from ..engine.tasks import Task
 from ..errors import DataError
 from ..fit.reduce import predicted_eclipse_bmjd
 from ..io.atomic import atomic_path, write_json
+from ..io.plain import json_safe
 from ..photometry.table import read_photometry
 from .photon_limit import analytic_photon_limit, empirical_photon_limit, in_eclipse_fraction
 from .summary import summarize
@@ -86,19 +87,6 @@ def readout_of(cfg: Config) -> dict:
     """Fowler number, wait ticks and read noise of the configuration's readout."""
     return {"fowler": cfg.observation.fowler, "wait": cfg.observation.wait,
             "read_noise_e": float(read_noise_of(cfg))}
-
-
-def json_safe(obj):
-    """JSON-safe copy: non-finite floats become None (stable bytes, valid JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if np.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    return obj
 
 
 def _truth_rows(path: Path):
