@@ -112,16 +112,21 @@ def test_combined_depth_adds_the_methods_spread():
 
 
 def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
-    """A result lost and a joint fit cut short: only they (and the stats) are redone."""
+    """A result lost, another's light curve lost (the one resume rule,
+    :func:`eclipsebench.fit.result.result_ok`) and a joint fit cut short: only they (and
+    the stats) are redone."""
     _, _, tables, camp_root, _, _ = tiny
     root = tmp_path / "c"
     shutil.copytree(camp_root, root)
     (root / "results" / "pld" / "epoch_02.json").unlink()
+    (root / "results" / "bliss" / "epoch_01.lc.ecsv").unlink()
     joint = root / "joint" / "bliss_ch2.json"
     joint.write_text(joint.read_text()[:40])
     _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
                              workers=1)
-    assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/pld/epoch_02", "stats"]
+    assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/bliss/epoch_01",
+                                  "reduce/pld/epoch_02", "stats"]
+    assert (root / "results" / "bliss" / "epoch_01.lc.ecsv").is_file()
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
 
