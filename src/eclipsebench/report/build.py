@@ -225,7 +225,7 @@ SYMBOLS = (
     ("Closest match", "ppm", "the other method whose per-epoch differences from this one are "
                              "smallest: its name, (mean +- SD of the differences)"),
     ("RMSE", "ppm", "root-mean-square of depth - true depth"),
-    ("bias", "ppm", "D_mean - true depth"),
+    ("bias", "ppm", "mean of (depth - true depth), the plain mean (Section 3.4.3)"),
     ("a", "", "accuracy sigma_phot / RMSE (Section 3.4.3)"),
     ("sigma_phot", "ppm", "photon-noise limit of one epoch's depth (the notes at the top say "
                           "which)"),
