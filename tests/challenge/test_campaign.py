@@ -248,8 +248,21 @@ def test_two_workers_give_the_same_bytes(tiny, tmp_path):
     _, report = run_campaign(load_config(None, CAMPAIGN), tmp_path / "c2",
                              epochs_from_inputs(tables), workers=2)
     assert report.executor.startswith("dask")
-    for name in ("summary.json", "depths.ecsv", "joint/pld_ch2.json", "joint/bliss_ch2.json"):
+    for name in ("summary.json", "depths.ecsv", "joint/pld_ch2.json", "joint/bliss_ch2.json",
+                 "report/index.html"):
         assert (tmp_path / "c2" / name).read_bytes() == (camp_root / name).read_bytes(), name
+
+
+def test_the_command_names_the_report(tiny, tmp_path, capsys):
+    """A finished campaign rerun from the command line: nothing to do, the report named."""
+    _, _, tables, camp_root, _, _ = tiny
+    root = tmp_path / "c"
+    shutil.copytree(camp_root, root)
+    code = main(["campaign", *tables, "--out", str(root), "--methods", "pld,bliss",
+                 "--profiles", "controlled", "--sampler", "leastsq", "--quiet", "--workers", "1",
+                 "--set", "run.bootstrap=50"])
+    out = capsys.readouterr().out
+    assert code == 0 and f"report in {root / 'report' / 'index.html'}" in out, out
 
 
 def test_another_campaign_into_the_folder_is_refused(tiny, capsys):
