@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -52,7 +53,8 @@ def tiny(tmp_path_factory):
 
 def test_a_campaign_gives_run_s_depths_and_table3_statistics(tiny):
     run_root, summary, _, camp_root, camp, report = tiny
-    assert {k.split("/")[0] for k in report.ran} == {"photometry", "reduce", "joint", "stats"}
+    assert {k.split("/")[0] for k in report.ran} == {"photometry", "reduce", "joint", "stats",
+                                                     "report"}
     ran = Table.read(Layout(run_root).depths, format="ascii.ecsv")
     got = Table.read(Layout(camp_root).depths, format="ascii.ecsv")
     assert [(r["method"], r["epoch"], r["depth_ppm"], r["error_ppm"]) for r in ran] == \
@@ -76,6 +78,59 @@ def test_a_campaign_gives_run_s_depths_and_table3_statistics(tiny):
     assert combined["sigma_sys_ppm"] == pytest.approx(np.std(d, ddof=1))
     assert (camp_root / "tables" / "table3_controlled_ch2.tex").is_file()
     assert all("none" in e["time_conversion"] for e in camp["epochs"])
+
+
+def test_the_report_shows_the_real_data_figures_and_every_epoch_s_light_curves(tiny):
+    """Issue 38's report: ``DIR/report/index.html`` names every figure it drew, each file
+    exists, and the paper's real-data figures and each epoch's light curves are there."""
+    import re
+
+    camp_root = tiny[3]
+    index = camp_root / "report" / "index.html"
+    page = index.read_text()
+    shown = re.findall(r'<img src="([^"]+)"', page)
+    assert shown and all((index.parent / s).is_file() for s in shown)
+    drawn = {p.relative_to(index.parent).as_posix()
+             for p in index.parent.rglob("*.png")}
+    assert set(shown) == drawn                      # every figure drawn is on the page
+    for name in ("controlled_ch2/depths.png", "controlled_ch2/visit_differences.png",
+                 "controlled_ch2/method_differences.png",
+                 "controlled_ch2/repeatability_reliability.png",
+                 "lightcurves/lightcurves_epoch_01.png", "lightcurves/lightcurves_epoch_02.png"):
+        assert name in shown, name
+    assert "Eclipse depth statistics, ch2, controlled profile" in page
+    assert "Joint fits" in page and "Combined over methods" in page
+
+
+def test_building_the_report_leaves_matplotlib_s_backend_alone(tiny, tmp_path):
+    """In a fresh process whose backend is svg: the page is written (with a trust table, the
+    recommended method highlighted), the backend is still svg and pyplot never imported."""
+    import subprocess
+    import sys
+
+    script = f"""
+import json, sys
+import numpy as np
+import matplotlib
+from eclipsebench.report.campaign import build_campaign_report
+before = matplotlib.get_backend()
+summary = json.loads(open({str(tiny[3] / "summary.json")!r}).read())
+x = np.linspace(-2.0, 2.0, 50)
+curve = {{"hours": x, "flux_corrected": 1 + 0 * x, "astro_model": 1 + 0 * x}}
+trust = {{1: ({{"n_twins": 10, "recommended": "pld",
+               "methods": {{"pld": {{"depth_ppm": 1900.0, "honest_err_ppm": 80.0}}}}}}, None)}}
+page = build_campaign_report({str(tmp_path / "report")!r}, summary=summary,
+                             lightcurves={{1: {{"pld": curve}}}}, trust=trust)
+print(before, matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules, page)
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          env={**__import__("os").environ, "MPLBACKEND": "svg"}, check=False)
+    assert done.returncode == 0, done.stderr
+    before, after, pyplot, page = done.stdout.split()
+    assert before.lower() == "svg" and after.lower() == "svg" and pyplot == "False"
+    text = Path(page).read_text()
+    assert "Epoch 1: 10 twins" in text and "pld (recommended)" in text
+    assert '<tr class="chosen">' in text
 
 
 def test_a_campaign_file_of_aor_folders_measures_them_as_run_does(tiny, tmp_path):
@@ -112,21 +167,27 @@ def test_combined_depth_adds_the_methods_spread():
 
 
 def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
-    """A result lost and a joint fit cut short: only they (and the stats) are redone."""
+    """A result lost, another's light curve lost (the one resume rule,
+    :func:`eclipsebench.fit.result.result_ok`) and a joint fit cut short: only they (and
+    the stats and the report after them) are redone."""
     _, _, tables, camp_root, _, _ = tiny
     root = tmp_path / "c"
     shutil.copytree(camp_root, root)
     (root / "results" / "pld" / "epoch_02.json").unlink()
+    (root / "results" / "bliss" / "epoch_01.lc.ecsv").unlink()
     joint = root / "joint" / "bliss_ch2.json"
     joint.write_text(joint.read_text()[:40])
     _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
                              workers=1)
-    assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/pld/epoch_02", "stats"]
+    assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/bliss/epoch_01",
+                                  "reduce/pld/epoch_02", "report", "stats"]
+    assert (root / "results" / "bliss" / "epoch_01.lc.ecsv").is_file()
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
 
 def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, monkeypatch):
-    """Ctrl-C at the first joint fit: the rerun does only the joint fits and the statistics."""
+    """Ctrl-C at the first joint fit: the rerun does only the joint fits, the statistics and
+    the report."""
     import eclipsebench.challenge.campaign as campaign
 
     _, _, tables, camp_root, _, _ = tiny
@@ -143,7 +204,7 @@ def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, m
     monkeypatch.setattr(campaign, "joint_task", real)
     _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
                              workers=1)
-    assert sorted(report.ran) == ["joint/bliss_ch2", "joint/pld_ch2", "stats"]
+    assert sorted(report.ran) == ["joint/bliss_ch2", "joint/pld_ch2", "report", "stats"]
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
 
@@ -187,8 +248,21 @@ def test_two_workers_give_the_same_bytes(tiny, tmp_path):
     _, report = run_campaign(load_config(None, CAMPAIGN), tmp_path / "c2",
                              epochs_from_inputs(tables), workers=2)
     assert report.executor.startswith("dask")
-    for name in ("summary.json", "depths.ecsv", "joint/pld_ch2.json", "joint/bliss_ch2.json"):
+    for name in ("summary.json", "depths.ecsv", "joint/pld_ch2.json", "joint/bliss_ch2.json",
+                 "report/index.html"):
         assert (tmp_path / "c2" / name).read_bytes() == (camp_root / name).read_bytes(), name
+
+
+def test_the_command_names_the_report(tiny, tmp_path, capsys):
+    """A finished campaign rerun from the command line: nothing to do, the report named."""
+    _, _, tables, camp_root, _, _ = tiny
+    root = tmp_path / "c"
+    shutil.copytree(camp_root, root)
+    code = main(["campaign", *tables, "--out", str(root), "--methods", "pld,bliss",
+                 "--profiles", "controlled", "--sampler", "leastsq", "--quiet", "--workers", "1",
+                 "--set", "run.bootstrap=50"])
+    out = capsys.readouterr().out
+    assert code == 0 and f"report in {root / 'report' / 'index.html'}" in out, out
 
 
 def test_another_campaign_into_the_folder_is_refused(tiny, capsys):

@@ -11,6 +11,7 @@ from scipy import stats as sps
 from eclipsebench.errors import InputError
 from eclipsebench.stats.bootstrap import bootstrap_intervals
 from eclipsebench.stats.ensemble import (
+    accuracy_statistics,
     dispersion_factor,
     dispersion_interval,
     method_statistics,
@@ -165,3 +166,25 @@ def test_method_statistics_bootstrap_keys():
     s = method_statistics(DEPTHS, ERRORS, sigma_phot_ppm=53.0, truth_ppm=1875.0, seed=3)
     for name in ("R", "r", "a"):
         assert s[f"{name}_lo"] < s[f"{name}_hi"]
+
+
+def test_bias_is_the_plain_mean_in_run_s_table_and_in_trust_s_scores():
+    """Issue 38: one definition of the accuracy statistics. With unequal errors the plain
+    mean of D_i - D_t (the paper's mean bias) differs from the weighted mean's; run's
+    Table 4 and trust's twin scores both give the plain one, to the bit."""
+    from eclipsebench.trust.score import method_score
+
+    depths, errors, truth = [1900.0, 1800.0, 1950.0, 1700.0], [20.0, 80.0, 40.0, 160.0], 1875.0
+    plain = sum(d - truth for d in depths) / len(depths)
+    weighted, _ = weighted_mean(depths, errors)
+    assert abs((weighted - truth) - plain) > 10.0      # the two definitions differ here
+    table4 = method_statistics(depths, errors, truth_ppm=truth, n_bootstrap=0)
+    twins = method_score(depths, errors, truth)
+    acc = accuracy_statistics(depths, errors, truth)
+    assert acc["bias"] == pytest.approx(plain)
+    assert table4["bias"] == twins["bias_ppm"] == acc["bias"]
+    assert table4["RMSE"] == twins["rmse_ppm"] == acc["RMSE"]
+    assert table4["z_rms"] == twins["z_rms"] == acc["z_rms"]
+    assert [table4["coverage"], table4["coverage_lo"], table4["coverage_hi"]] == \
+        [twins["coverage_1sigma"], *twins["coverage_1sigma_interval"]]
+    assert twins["sd_ppm"] == pytest.approx(table4["SD"]) and twins["sd_ppm"] == acc["SD"]

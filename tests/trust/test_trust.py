@@ -200,11 +200,13 @@ def test_same_bytes_with_one_or_two_workers_and_an_interrupted_run_resumes(small
     # an interrupted run: a twin, a reduction and the answer missing; the rerun redoes them
     (one / "twins" / "twin_004.fits").unlink()
     (one / "twins" / "poly2" / "twin_007.json").unlink()
+    (one / "twins" / "poly2" / "twin_008.lc.ecsv").unlink()   # redone: the one resume rule
     (one / "trust.json").unlink()
     shutil.rmtree(one / "report")
     assert main(["trust", str(small_table), "--out", str(one), "--workers", "1", "--json"]
                 + FAST) == 0
     assert (one / "trust.json").read_bytes() == result
+    assert (one / "twins" / "poly2" / "twin_008.lc.ecsv").is_file()
     # more twins in the same folder: the ten made are kept, the score covers twelve;
     # back to ten, the answer is the ten-twin one again
     made = (one / "twins" / "twin_001.fits").stat().st_mtime_ns

@@ -17,6 +17,8 @@ task                                writes                                      
                                     epoch of the channel: :func:`joint_task`)
 ``stats``                           ``depths[_paper].ecsv``, ``tables/``,        everything
                                     ``summary.json`` (:func:`campaign_stats_task`)
+``report`` (``run.report``)         ``report/index.html``                        ``stats``
+                                    (:func:`campaign_report_task`)
 =================================== ============================================ =========
 
 and :func:`run_campaign` runs them on the engine with ``run``'s folder protocol
@@ -53,6 +55,7 @@ from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import DataError, InputError
 from ..fit import reduce as fit_reduce
 from ..fit.names import EVENTS, TIME_AT, TIME_FORMATS, TIME_SCALES
+from ..fit.result import lightcurve_path
 from ..fit.target import names_a_system, system_of_table
 from ..io.atomic import atomic_path, write_json, write_text
 from ..io.bcd_read import BCD_NAME, find_bcd_files, group_epochs, read_bcd_header
@@ -557,6 +560,10 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
                                                       if t.stage in ("joint", "photometry",
                                                                      "twins")),
                       check=campaign_summary_ok))
+    if cfg.run.report:
+        tasks.append(Task("report", "report", campaign_report_task,
+                          (cfg, str(layout.root), methods, numbers, twin_files),
+                          (layout.report,), ("stats",)))
     return tasks
 
 
@@ -702,6 +709,56 @@ def _twins_answer(path: str, root: Path) -> dict[str, Any]:
     if isinstance(answer.get("table"), str) and Path(answer["table"]).is_absolute():
         answer["table"] = os.path.relpath(answer["table"], root)
     return answer
+
+
+def _event_hours(result: Mapping[str, Any], time_bmjd: np.ndarray) -> tuple[np.ndarray, str]:
+    """Hours from the fitted mid-eclipse (or mid-transit) time of a result, else from the
+    middle of the visit; and what they count from."""
+    for key, what in (("t_ecl_bmjd", "mid-eclipse"), ("t_transit_bmjd", "mid-transit")):
+        t0 = result.get(key)
+        if isinstance(t0, (int, float)) and np.isfinite(t0):
+            return (time_bmjd - float(t0)) * 24.0, what
+    return (time_bmjd - float(np.median(time_bmjd))) * 24.0, "the middle of the visit"
+
+
+def campaign_report_task(cfg: Config, root: str, methods: list[str], epochs: list[int],
+                         twin_files: Mapping[str, str], command: str | None = None) -> None:
+    """``report/index.html`` of a campaign (:func:`eclipsebench.report.campaign.build_campaign_report`):
+    the Table 3 statistics and the run report's figures per profile and channel, each
+    epoch's decorrelated light curves (the first profile's results) and, where twins ran,
+    each epoch's trust table with a link to its trust page."""
+    from ..report.campaign import build_campaign_report  # matplotlib: only for a report
+
+    layout = Layout(Path(root))
+    summary = json.loads(layout.summary.read_text())
+    profile = cfg.run.profiles[0]
+    curves: dict[int, dict[str, dict[str, np.ndarray]]] = {}
+    since: dict[int, str] = {}
+    for e in epochs:
+        curves[e] = {}
+        for m in methods:
+            path = layout.result(m, e, profile=profile)
+            lc_path = lightcurve_path(path)
+            if not (path.is_file() and lc_path.is_file()):
+                continue
+            lc = Table.read(lc_path, format="ascii.ecsv")
+            hours, since[e] = _event_hours(json.loads(path.read_text()),
+                                           np.asarray(lc["time_bmjd"], float))
+            curves[e][m] = {"hours": hours,
+                            "flux_corrected": np.asarray(lc["flux_corrected"], float),
+                            "astro_model": np.asarray(lc["astro_model"], float)}
+    trust: dict[int, tuple[dict[str, Any], Path | None]] = {}
+    for number, answer_path in twin_files.items():
+        page = Path(answer_path).with_suffix("") / "report" / "index.html"
+        trust[int(number)] = (json.loads(Path(answer_path).read_text()),
+                              page if page.is_file() else None)
+    notes = {"planet": summary.get("planet"), "event": summary.get("event"),
+             "epochs": len(epochs), "methods": ", ".join(methods), "seed": summary.get("seed"),
+             "eclipsebench": __version__}
+    if command:
+        notes["command"] = command
+    build_campaign_report(layout.report.parent, summary=summary, lightcurves=curves,
+                          event_names=since, trust=trust, notes=notes)
 
 
 def campaign_summary_ok(*paths: Path) -> bool:

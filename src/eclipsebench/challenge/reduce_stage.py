@@ -10,11 +10,8 @@ loaded calibration set) is threaded here.
 
 from __future__ import annotations
 
-import json
 from functools import partial
-from pathlib import Path
 
-from .. import __version__
 from ..astro.catalogue import system_for
 from ..config import Config
 from ..decorrelate.base import MethodOptions
@@ -22,7 +19,7 @@ from ..engine.layout import Layout
 from ..engine.tasks import Task
 from ..errors import InputError
 from ..fit import reduce as fit_reduce
-from ..io.atomic import atomic_path, write_json
+from ..fit.result import result_ok, write_failure, write_result
 from ..progress import get_logger
 from .photometry_stage import photometry_key
 
@@ -51,7 +48,6 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int,
     statistics leave that epoch out and list it, and a rerun does not retry it
     (it would fail the same way).
     """
-    out = Path(out_path)
     system = system_for(cfg.system)
     try:
         result = fit_reduce.reduce_epoch(table_path, method, options=cfg.reduce, system=system,
@@ -59,34 +55,9 @@ def reduce_task(cfg: Config, table_path: str, method: str, epoch: int,
                                          method_options=method_options, profile=profile)
     except InputError as exc:
         log.warning("%s epoch %d: %s", method, epoch, exc)
-        write_json(out, {"method": method, "epoch": epoch, "failed": True, "error": str(exc),
-                         "depth_ppm": None, "depth_err_ppm": None, "profile": profile,
-                         "eclipsebench_version": __version__})
+        write_failure(out_path, method, epoch, str(exc), profile=profile)
         return
-    with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
-        result.lightcurve_table().write(tmp, format="ascii.ecsv")
-    write_json(out, result.to_dict())
-
-
-def _number_or_none(v) -> bool:
-    return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
-
-
-def result_ok(method: str, epoch: int, path: Path) -> bool:
-    """Resume check: the result JSON parses and matches its schema for (method, epoch).
-
-    A result has ``method``, ``epoch``, ``depth_ppm`` and ``depth_err_ppm``
-    (numbers, or null with ``failed`` and an ``error`` message); a finished
-    one also has its decorrelated light curve beside it.
-    """
-    res = json.loads(Path(path).read_text())
-    if not (isinstance(res, dict) and res.get("method") == method and res.get("epoch") == epoch
-            and _number_or_none(res.get("depth_ppm"))
-            and _number_or_none(res.get("depth_err_ppm"))):
-        return False
-    if res.get("failed"):
-        return isinstance(res.get("error"), str)
-    return Path(path).with_suffix(".lc.ecsv").is_file()
+    write_result(result, out_path)
 
 
 def plan_reduce_tasks(cfg: Config, layout: Layout, epochs: list[int], methods: list[str], *,

@@ -121,7 +121,10 @@ def run(args: argparse.Namespace) -> dict:
     return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
                                 "skipped": len(report.skipped), "wall_s": report.wall_s,
                                 "executor": report.executor,
-                                "summary": str(out / "summary.json")}}
+                                "summary": str(out / "summary.json"),
+                                "report": (str(out / "report" / "index.html")
+                                           if (out / "report" / "index.html").is_file()
+                                           else None)}}
 
 
 def _pm(value, err) -> str:
@@ -168,5 +171,6 @@ def format_text(result: dict) -> str:
     run = result.get("_run")
     if run:
         lines.append(f"{run['out']}: {run['ran']} tasks run, {run['skipped']} already done, "
-                     f"{run['wall_s']:.1f} s ({run['executor']}); summary in {run['summary']}")
+                     f"{run['wall_s']:.1f} s ({run['executor']}); summary in {run['summary']}"
+                     + (f", report in {run['report']}" if run.get("report") else ""))
     return "\n".join(lines)

@@ -30,7 +30,7 @@ from .profiles import centroid_columns, paper_profile
 from .target import system_of_table
 
 __all__ = ["prepare_epoch", "PreparedEpoch", "resolve_system", "predicted_eclipse_bmjd",
-           "resolve_method_options", "configured_method_options"]
+           "resolve_method_options", "configured_method_options", "table_epoch"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
 _DEFAULT_OPTIONS = ReduceSection()
@@ -113,7 +113,9 @@ def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the dat
     return t_ecl
 
 
-def _epoch_number(table, epoch):
+def table_epoch(table, epoch: int | None = None) -> int | None:
+    """The epoch a fit of ``table`` records: ``epoch`` when given, else the table's ``EPOCH``
+    metadata (None when it has none)."""
     if epoch is not None:
         return int(epoch)
     value = (getattr(table, "meta", {}) or {}).get("EPOCH")
@@ -295,7 +297,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     # What the ephemeris predicts (never the truth): a method may use it to find the
     # eclipse's signature in its own decomposition (ICA's eclipse component).
     data = replace(data, meta={**data.meta, "t_ecl_predicted_bmjd": t_pred})
-    epoch_number = _epoch_number(table, epoch)
+    epoch_number = table_epoch(table, epoch)
 
     def build(frames):
         return cls.build(frames, method_opts, seed=seed, epoch=epoch_number or 0,

@@ -25,13 +25,13 @@ from astropy.time import Time
 
 from .. import __version__
 from ..errors import InputError
-from ..io.atomic import atomic_path
+from ..io.atomic import atomic_path, write_json
 from ..io.plain import json_safe
 from .display import html_repr, text_repr
 
 __all__ = ["EpochResult", "lightcurve_errors", "lightcurve_path", "chain_path",
-           "read_result", "bic_data", "JointResult",
-           "LIGHTCURVE_COLUMNS"]
+           "read_result", "bic_data", "JointResult", "write_result", "write_failure",
+           "result_ok", "LIGHTCURVE_COLUMNS"]
 
 #: ``RESULT.lc.ecsv``'s columns: their description (all relative fluxes, units of the star).
 LIGHTCURVE_COLUMNS = {
@@ -374,6 +374,65 @@ def chain_path(result_path: str | os.PathLike) -> Path:
     """
     lc = lightcurve_path(result_path)
     return lc.with_name(lc.name.replace(".lc.ecsv", ".chain.npz"))
+
+
+def write_result(result: EpochResult, path: str | os.PathLike) -> None:
+    """Write one reduction's files: ``RESULT.lc.ecsv`` first, then ``RESULT.json`` (``path``).
+
+    The one result writer of every runner (``run``, ``trust``, ``campaign``): the
+    JSON is written last, so a result whose JSON exists has its light curve
+    (:func:`result_ok`).
+    """
+    with atomic_path(lightcurve_path(path)) as tmp:
+        result.lightcurve_table().write(tmp, format="ascii.ecsv")
+    write_json(Path(path), result.to_dict())
+
+
+def write_failure(path: str | os.PathLike, method: str, epoch: int | None, error: str,
+                  **extra: Any) -> None:
+    """Record at ``path`` that ``method`` refused epoch ``epoch`` (an InputError's message).
+
+    A refusal is an outcome, not a crash: the JSON has ``failed``, the ``error``
+    and null depths, and :func:`result_ok` accepts it, so a rerun does not retry it.
+    ``extra`` keys (the profile) are added.
+    """
+    write_json(Path(path), {"method": method, "epoch": epoch, "failed": True, "error": error,
+                            "depth_ppm": None, "depth_err_ppm": None, **extra,
+                            "eclipsebench_version": __version__})
+
+
+def _number_or_none(v: Any) -> bool:
+    return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
+
+def result_ok(method: str, epoch: int | None, path: str | os.PathLike) -> bool:
+    """The one resume rule of a reduction (``run``, ``trust``'s real and twin reductions,
+    ``campaign``): the result JSON parses and matches its schema for (method, epoch).
+
+    A result has ``method``, ``epoch`` (None for a table without an epoch number:
+    trust's real table may have none), ``depth_ppm`` and ``depth_err_ppm`` (numbers,
+    or null with ``failed`` and an ``error`` message); a finished one also has its
+    decorrelated light curve beside it (:func:`lightcurve_path`).
+
+    Examples
+    --------
+    >>> import json, tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "epoch_01.json"
+    >>> _ = path.write_text(json.dumps({"method": "pld", "epoch": 1, "failed": True,
+    ...                                 "error": "no stamps", "depth_ppm": None,
+    ...                                 "depth_err_ppm": None}))
+    >>> result_ok("pld", 1, path), result_ok("bliss", 1, path), result_ok("pld", 2, path)
+    (True, False, False)
+    """
+    res = json.loads(Path(path).read_text())
+    if not (isinstance(res, dict) and res.get("method") == method and "epoch" in res
+            and res["epoch"] == epoch
+            and _number_or_none(res.get("depth_ppm"))
+            and _number_or_none(res.get("depth_err_ppm"))):
+        return False
+    if res.get("failed"):
+        return isinstance(res.get("error"), str)
+    return lightcurve_path(path).is_file()
 
 
 def read_result(path: str | os.PathLike):

@@ -23,7 +23,7 @@ from .page import figure_html, html_table, notes_html, page_html, relative
 from .paper_tables import COMPARED_KEYS, TABLE4, comparison_rows
 from .tables import anova_lines, display_rows, write_tables
 
-__all__ = ["build_report", "render_index"]
+__all__ = ["build_report", "render_index", "result_figures", "with_units"]
 
 #: Centroids drawn over all epochs (4000 per epoch for ten; a PDF of 400,000 is 8 MB).
 CENTROID_POINTS = 40_000
@@ -82,7 +82,7 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
         table_files += write_tables(stats, root, stem=stem, caption=f"{title} ({name} profile)")
     profile = profile or summary.get("profile") or "controlled"
     items, skipped = _photometry_figures(root, photometry, gain_map)
-    more, not_drawn = _result_figures(
+    more, not_drawn = result_figures(
         root, summary, group_by_method(depths, list(summary["methods"])), profile,
         truth_ppm=truth_ppm, lightcurves=lightcurves, lightcurve_epoch=lightcurve_epoch,
         truth_curve=truth_curve)
@@ -117,7 +117,7 @@ def _photometry_figures(root: Path, photometry, gain_map) -> tuple[list[Item], l
     ], []
 
 
-def _result_figures(root: Path, summary: Mapping, groups: Mapping, profile: str, *,
+def result_figures(root: Path, summary: Mapping, groups: Mapping, profile: str, *,
                     truth_ppm, lightcurves, lightcurve_epoch, truth_curve
                     ) -> tuple[list[Item], list[str]]:
     """The figures of one profile's depths and statistics, each titled with the profile."""
@@ -225,7 +225,7 @@ SYMBOLS = (
     ("Closest match", "ppm", "the other method whose per-epoch differences from this one are "
                              "smallest: its name, (mean +- SD of the differences)"),
     ("RMSE", "ppm", "root-mean-square of depth - true depth"),
-    ("bias", "ppm", "D_mean - true depth"),
+    ("bias", "ppm", "mean of (depth - true depth), the plain mean (Section 3.4.3)"),
     ("a", "", "accuracy sigma_phot / RMSE (Section 3.4.3)"),
     ("sigma_phot", "ppm", "photon-noise limit of one epoch's depth (the notes at the top say "
                           "which)"),
@@ -243,7 +243,7 @@ def _symbols_html() -> str:
             f"</tr></thead><tbody>{rows}</tbody></table>")
 
 
-def _with_units(head: list[str]) -> list[str]:
+def with_units(head: list[str]) -> list[str]:
     """Table headings with their unit: ``D_mean (ppm)``."""
     units = [_UNITS.get(h, _UNITS.get(h.split(" ")[0], "")) for h in head]
     return [f"{h} ({u})" if u else h for h, u in zip(head, units, strict=True)]
@@ -265,7 +265,7 @@ def render_index(*, title: str, summary: Mapping, figures: list[tuple[str, str, 
         rows = display_rows(stats, pm=" ± ", minus="−", interval="{f} +{up}/−{down}")
         parts += [f"<h2>Eclipse depth statistics: {esc(name)} profile</h2>",
                   f"<p>{esc(_PROFILE_WORDS.get(name, ''))}</p>",
-                  html_table([_with_units(rows[0]), *rows[1:]])]
+                  html_table([with_units(rows[0]), *rows[1:]])]
         if name == next(iter(profiles)):
             parts.append(_symbols_html())
         parts += [f"<p>{esc(line)}</p>" for line in anova_lines(stats)]

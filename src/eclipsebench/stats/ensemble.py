@@ -25,7 +25,8 @@ from .bootstrap import bootstrap_intervals
 
 __all__ = ["validate_depths", "weighted_mean", "dispersion_factor", "dispersion_interval",
            "pairwise_differences", "repeatability", "normalised_residuals", "binomial_interval",
-           "coverage", "method_statistics", "STAT_KEYS", "GAUSS_1SIGMA", "GAUSS_2SIGMA"]
+           "coverage", "accuracy_statistics", "method_statistics", "STAT_KEYS", "GAUSS_1SIGMA",
+           "GAUSS_2SIGMA"]
 
 #: The keys of :func:`method_statistics`, in the order of the paper's Table 4.
 STAT_KEYS = ("N", "D_mean", "sigma_mean", "SD", "sigma_orig", "f_dis", "f_dis_raw", "f_dis_lo",
@@ -202,6 +203,61 @@ def coverage(depth_ppm, error_ppm, truth_ppm: float, n_sigma: float = 1.0,
     return k / z.size, lo, hi
 
 
+def accuracy_statistics(depth_ppm, error_ppm, truth_ppm: float) -> dict:
+    """How far depths of a known truth fall from it (Section 3.4.3): plain means throughout.
+
+    The one definition of the accuracy statistics, used by :func:`method_statistics`
+    (Table 4's ``RMSE`` and ``bias``) and by ``trust``'s scores over its twins
+    (:func:`eclipsebench.trust.score.error_score`). With ``r_i = D_i - D_t``:
+
+    - ``bias = mean(r_i)``, the paper's mean bias ``B = D - D_t`` with ``D`` the plain
+      mean of the depths (the equation after Eq. ``mse``; not the weighted mean);
+    - ``SD``, the sample SD of ``r_i`` (N - 1; NaN for one depth), which is that of ``D_i``;
+    - ``RMSE = sqrt(mean(r_i^2))`` (Eq. ``mse``);
+    - with errors ``sigma_i``: ``sigma_mean = mean(sigma_i)``, ``z_rms = sqrt(mean(z_i^2))``
+      with ``z_i = r_i / sigma_i`` (1 when the errors are honest) and the 1- and 2-sigma
+      :func:`coverage` of the truth with their binomial intervals (``coverage``,
+      ``coverage_lo``, ``coverage_hi``, ``coverage_2sigma``...).
+
+    Parameters
+    ----------
+    depth_ppm : array_like, shape (N,)
+        The measured values (N >= 1), finite; any unit (ppm for depths).
+    error_ppm : array_like, shape (N,) or None
+        Their reported 1-sigma errors, finite and positive; None: the error statistics
+        are None.
+    truth_ppm : float
+        The true value (0 for values that are already errors against the truth).
+
+    Examples
+    --------
+    >>> s = accuracy_statistics([1010.0, 990.0, 1020.0, 980.0], [20.0] * 4, 1000.0)
+    >>> s["bias"], round(s["RMSE"], 2), round(s["z_rms"], 3), s["coverage"]
+    (0.0, 15.81, 0.791, 1.0)
+    """
+    d = np.asarray(depth_ppm, dtype=float).ravel()
+    if d.size < 1 or not np.all(np.isfinite(d)):
+        raise InputError(f"accuracy: expected at least one finite value, got {d.size}")
+    r = d - float(truth_ppm)
+    out: dict = {"N": int(r.size), "bias": float(r.mean()),
+                 "SD": float(r.std(ddof=1)) if r.size > 1 else float("nan"),
+                 "RMSE": float(np.sqrt(np.mean(r**2))),   # Eq. mse
+                 "sigma_mean": None, "z_rms": None,
+                 "coverage": None, "coverage_lo": None, "coverage_hi": None,
+                 "coverage_2sigma": None, "coverage_2sigma_lo": None, "coverage_2sigma_hi": None}
+    if error_ppm is None:
+        return out
+    e = np.asarray(error_ppm, dtype=float).ravel()
+    if e.shape != r.shape or not np.all(np.isfinite(e)) or np.any(e <= 0):
+        raise InputError(f"accuracy: expected {r.size} finite positive errors")
+    z = r / e
+    out["sigma_mean"] = float(e.mean())
+    out["z_rms"] = float(np.sqrt(np.mean(z**2)))
+    for key, n_sigma in (("coverage", 1.0), ("coverage_2sigma", 2.0)):
+        out[key], out[f"{key}_lo"], out[f"{key}_hi"] = coverage(r, e, 0.0, n_sigma)
+    return out
+
+
 def method_statistics(depth_ppm, error_ppm, *, sigma_phot_ppm: float | None = None,
                       truth_ppm: float | None = None, seed: int = 0,
                       n_bootstrap: int = 2000) -> dict:
@@ -229,7 +285,8 @@ def method_statistics(depth_ppm, error_ppm, *, sigma_phot_ppm: float | None = No
         ``f_dis`` (Eq. ``f_dis`` floored at 1), ``f_dis_raw``, ``f_dis_lo``,
         ``f_dis_hi`` (68% interval on ``f_dis_raw``); ``sigma_tot = f_dis
         sigma_orig``; ``R``; ``r = sigma_phot / SD``; ``RMSE``; ``bias =
-        D_mean - truth``; ``a = sigma_phot / RMSE``; ``mean_ppm`` (unweighted
+        mean(D_i - truth)``, the plain mean (:func:`accuracy_statistics`, the one
+        definition); ``a = sigma_phot / RMSE``; ``mean_ppm`` (unweighted
         mean); ``chi2`` (Eq. ``chisquared`` with f_dis = 1); ``coverage``
         (fraction of epochs with ``|D_i - truth| <= sigma_i``); bootstrap
         68% intervals ``R_lo``.. ``a_hi``. Values that need an input not
@@ -267,12 +324,11 @@ def method_statistics(depth_ppm, error_ppm, *, sigma_phot_ppm: float | None = No
     if sigma_phot_ppm is not None:
         out["r"] = float(sigma_phot_ppm) / sd if sd > 0 else math.inf
     if truth_ppm is not None:
-        rmse = float(math.sqrt(np.mean((d - truth_ppm) ** 2)))  # Eq. mse
-        out["RMSE"] = rmse
-        out["bias"] = d_mean - float(truth_ppm)
-        for key, n_sigma in (("coverage", 1.0), ("coverage_2sigma", 2.0)):
-            out[key], out[f"{key}_lo"], out[f"{key}_hi"] = coverage(d, e, truth_ppm, n_sigma)
-        out["z_rms"] = float(math.sqrt(np.mean(normalised_residuals(d, e, truth_ppm) ** 2)))
+        acc = accuracy_statistics(d, e, truth_ppm)
+        rmse = acc["RMSE"]
+        out.update({k: acc[k] for k in ("RMSE", "bias", "z_rms", "coverage", "coverage_lo",
+                                        "coverage_hi", "coverage_2sigma", "coverage_2sigma_lo",
+                                        "coverage_2sigma_hi")})
         if sigma_phot_ppm is not None:
             out["a"] = float(sigma_phot_ppm) / rmse if rmse > 0 else math.inf
     boot = bootstrap_intervals(d, sigma_phot_ppm=sigma_phot_ppm, truth_ppm=truth_ppm, seed=seed,

@@ -38,7 +38,8 @@ from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import InputError
 from ..fit import reduce as fit_reduce
-from ..io.atomic import atomic_path, write_json, write_text
+from ..fit.result import result_ok, write_failure, write_result
+from ..io.atomic import write_text
 from ..io.digest import file_sha256, files_sha256
 from ..io.paths import check_links_inside
 from ..io.pmap_files import check_pmap_path
@@ -91,6 +92,9 @@ class TrustSettings:
     inputs: Mapping[str, Input] = field(default_factory=dict)
     #: Frames of the table (for the estimate of what the run writes).
     table_frames: int = 0
+    #: The epoch number the real table's reductions record (its ``EPOCH``, else None),
+    #: which their resume check expects (:func:`eclipsebench.fit.result.result_ok`).
+    table_epoch: int | None = None
 
     @property
     def sources(self) -> tuple[str, ...]:
@@ -117,21 +121,14 @@ def _reduce(settings: TrustSettings, table, method: str, *, seed: int, epoch: in
                                    method_options=options, pmap=settings.pmap)
 
 
-def _write_result(result, out: Path) -> None:
-    with atomic_path(out.with_suffix(".lc.ecsv")) as tmp:
-        result.lightcurve_table().write(tmp, format="ascii.ecsv")
-    write_json(out, result.to_dict())
-
-
 def real_task(settings: TrustSettings, method: str, out_path: str) -> None:
     """Reduce the real table with ``method``; a method that refuses it records why."""
-    out = Path(out_path)
     try:
         result = _reduce(settings, settings.table, method, seed=settings.seed, epoch=None)
     except InputError as exc:
-        write_json(out, {"method": method, "failed": True, "error": str(exc)})
+        write_failure(out_path, method, settings.table_epoch, str(exc))
         return
-    _write_result(result, out)
+    write_result(result, out_path)
 
 
 def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: str,
@@ -248,29 +245,21 @@ def twin_reduce_task(settings: TrustSettings, method: str, twin: int, table_path
     real = json.loads(Path(real_path).read_text())
     extra = shared_options(method, real, settings.method_options.get(method, {}))
     seed = spawn_ints(settings.seed, "trust", "reduce")[0]
-    out = Path(out_path)
     try:
         result = _reduce(settings, table_path, method, seed=seed, epoch=twin,
                          extra_options=extra)
     except InputError as exc:
-        write_json(out, {"method": method, "epoch": twin, "failed": True, "error": str(exc)})
+        write_failure(out_path, method, twin, str(exc))
         return
-    _write_result(result, out)
-
-
-def _json_ok(method: str, path: Path) -> bool:
-    try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, ValueError):
-        return False
-    return isinstance(data, dict) and data.get("method") == method
+    write_result(result, out_path)
 
 
 # ----------------------------------------------------------------------------- plans
 def plan_real(settings: TrustSettings, layout: TrustLayout) -> list[Task]:
     """One task per method on the real table."""
     return [Task(f"real/{m}", "real", real_task, (settings, m, str(layout.real(m))),
-                 (layout.real(m),), check=partial(_json_ok, m), sources=settings.sources)
+                 (layout.real(m),), check=partial(result_ok, m, settings.table_epoch),
+                 sources=settings.sources)
             for m in settings.methods]
 
 
@@ -298,7 +287,7 @@ def plan_twins(settings: TrustSettings, layout: TrustLayout, usable: Sequence[st
                 tasks.append(Task(key, "reduce", twin_reduce_task,
                                   (settings, m, i, str(layout.twin(i)), str(layout.real(m)),
                                    str(layout.twin_result(m, i))), (layout.twin_result(m, i),),
-                                  (made, f"real/{m}"), check=partial(_json_ok, m),
+                                  (made, f"real/{m}"), check=partial(result_ok, m, i),
                                   sources=settings.sources))
     tasks.append(Task("score", "score", score_task,
                       (settings.describe(), list(usable), str(layout.root), command),
@@ -460,6 +449,7 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     from ..decorrelate import available_methods
     from ..decorrelate.base import unknown_methods
     from ..fit.astro_model import AstroModel, depth_limit_ppm
+    from ..fit.prepare import table_epoch
     from ..fit.target import system_of_table
     from ..io.pmap_files import find_pmap_path, pmap_files
     from .observation import check_several_aors, observation_from_table
@@ -519,7 +509,8 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
                          n_twins=int(n_twins), seed=int(seed), reduce=reduce,
                          depth_ppm=None if depth_ppm is None else float(depth_ppm),
                          method_options=options, pmap=pmap, resolved_options=resolved,
-                         inputs=inputs, table_frames=int(obs.n_frames))
+                         inputs=inputs, table_frames=int(obs.n_frames),
+                         table_epoch=table_epoch(data))
 
 
 def trust_settings(table, root, *, columns: Mapping[str, str] | None = None,

@@ -4,13 +4,14 @@ Pure functions on arrays and dicts. For one method, the twins' depths
 ``D_i`` with reported errors ``sigma_i`` against the injected depth ``D``
 give (``docs/trust.md``):
 
-- ``bias_ppm = mean(D_i - D)``, ``sd_ppm`` (sample standard deviation),
-  ``rmse_ppm = sqrt(mean((D_i - D)^2))`` -- the paper's accuracy statistics
-  (Section 3.3) over twins of one observation instead of challenge epochs;
-- ``mean_err_ppm = mean(sigma_i)`` and ``z_rms = sqrt(mean(z_i^2))`` with
-  ``z_i = (D_i - D) / sigma_i``: 1 when the reported errors are honest;
-- 1- and 2-sigma coverage with exact binomial intervals
-  (:func:`eclipsebench.stats.ensemble.coverage`);
+- ``bias_ppm = mean(D_i - D)`` (the plain mean, as ``run``'s Table 4 bias),
+  ``sd_ppm`` (sample standard deviation), ``rmse_ppm = sqrt(mean((D_i - D)^2))``,
+  ``mean_err_ppm = mean(sigma_i)``, ``z_rms = sqrt(mean(z_i^2))`` with
+  ``z_i = (D_i - D) / sigma_i`` (1 when the reported errors are honest) and the
+  1- and 2-sigma coverage with exact binomial intervals: the paper's accuracy
+  statistics (Section 3.4.3) over twins of one observation instead of challenge
+  epochs, computed by :func:`eclipsebench.stats.ensemble.accuracy_statistics`
+  (the one definition) and only named here;
 - the honest error of the real depth: its reported error times
   ``max(1, z_rms)``.
 
@@ -44,7 +45,7 @@ import numpy as np
 from ..limits import MAX_TWINS
 from ..photometry.binning import bin_indices, bin_values
 from ..seeding import rng
-from ..stats.ensemble import GAUSS_1SIGMA, binomial_interval, coverage
+from ..stats.ensemble import GAUSS_1SIGMA, accuracy_statistics, binomial_interval
 
 __all__ = ["method_score", "recommend", "score_methods", "red_noise_check", "REDDER_THAN",
            "observation_statistics", "mse_excess_sigma", "near_equals", "DISTINGUISHABLE_AT",
@@ -82,18 +83,22 @@ def error_score(resid: Sequence[float] | np.ndarray, error: Sequence[float] | np
     >>> s["offset_bias_deg"], round(s["offset_rmse_deg"], 2), s["offset_coverage_1sigma"]
     (0.0, 15.81, 1.0)
     """
-    r = np.asarray(resid, float)
-    e = np.asarray(error, float)
-    z = r / e
-    c1, c1_lo, c1_hi = coverage(r, e, 0.0, 1.0)
-    c2, c2_lo, c2_hi = coverage(r, e, 0.0, 2.0)
-    return {f"{prefix}n_twins": int(r.size), f"{prefix}bias_{unit}": float(r.mean()),
-            f"{prefix}sd_{unit}": float(r.std(ddof=1)) if r.size > 1 else float("nan"),
-            f"{prefix}rmse_{unit}": float(np.sqrt(np.mean(r**2))),
-            f"{prefix}mean_err_{unit}": float(e.mean()),
-            f"{prefix}z_rms": float(np.sqrt(np.mean(z**2))),
-            f"{prefix}coverage_1sigma": c1, f"{prefix}coverage_1sigma_interval": [c1_lo, c1_hi],
-            f"{prefix}coverage_2sigma": c2, f"{prefix}coverage_2sigma_interval": [c2_lo, c2_hi]}
+    return _named(accuracy_statistics(resid, error, 0.0), unit, prefix)
+
+
+def _named(acc: Mapping[str, Any], unit: str, prefix: str) -> dict[str, Any]:
+    """:func:`~eclipsebench.stats.ensemble.accuracy_statistics` under trust's names
+    (``trust.json``, ``trust.ecsv``: ``bias_ppm``, ``sd_ppm``, ``coverage_1sigma``...)."""
+    def interval(key: str) -> list[float] | None:
+        return None if acc[key] is None else [acc[f"{key}_lo"], acc[f"{key}_hi"]]
+
+    return {f"{prefix}n_twins": acc["N"], f"{prefix}bias_{unit}": acc["bias"],
+            f"{prefix}sd_{unit}": acc["SD"], f"{prefix}rmse_{unit}": acc["RMSE"],
+            f"{prefix}mean_err_{unit}": acc["sigma_mean"], f"{prefix}z_rms": acc["z_rms"],
+            f"{prefix}coverage_1sigma": acc["coverage"],
+            f"{prefix}coverage_1sigma_interval": interval("coverage"),
+            f"{prefix}coverage_2sigma": acc["coverage_2sigma"],
+            f"{prefix}coverage_2sigma_interval": interval("coverage_2sigma")}
 
 
 def method_score(depth_ppm: Sequence[float], error_ppm: Sequence[float], truth_ppm: float
@@ -155,13 +160,7 @@ def phase_score(name: str, unit: str, values: Sequence[float], errors: Sequence[
     if has_err.all():
         out = error_score(resid, err, unit=unit, prefix=prefix)
     else:
-        out = {f"{prefix}n_twins": int(resid.size),
-               f"{prefix}bias_{unit}": float(resid.mean()),
-               f"{prefix}sd_{unit}": float(resid.std(ddof=1)),
-               f"{prefix}rmse_{unit}": float(np.sqrt(np.mean(resid**2))),
-               f"{prefix}mean_err_{unit}": None, f"{prefix}z_rms": None,
-               f"{prefix}coverage_1sigma": None, f"{prefix}coverage_1sigma_interval": None,
-               f"{prefix}coverage_2sigma": None, f"{prefix}coverage_2sigma_interval": None,
+        out = {**_named(accuracy_statistics(resid, None, 0.0), unit, prefix),
                f"{prefix}no_error": f"{int((~has_err).sum())} of {resid.size} twins' fits gave "
                                     f"no error for {name}"}
     value = float(real) if real is not None and np.isfinite(real) else None
