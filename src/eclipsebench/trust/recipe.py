@@ -43,7 +43,6 @@ from .twin import (
     make_recipe,
     map_gain,
     twin_table,
-    uncalibrated_motion,
 )
 
 __all__ = ["twin_light_curve", "twin_truth", "phase_truth", "build_recipe", "twin_map", "twin_gain", "write_recipe",
@@ -189,8 +188,9 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
         blur, peak, calibration = calibrate_motion(
             make_recipe(obs, lc, radius_px=options.radius_px), options)
     else:   # another pipeline's table without noise pixels: nothing to calibrate on
-        blur = None
-        peak, calibration = uncalibrated_motion(obs)
+        blur, peak, calibration = None, 0.0, {
+            "noise_pixels_real": None, "rms_per_peak": 0.0,
+            "target_vs_grid": "no noise pixels in the table"}
     gain, gain_text, gain_fit = twin_gain(obs, pmap, blur)
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
                          blur_px=blur)

@@ -45,7 +45,6 @@ from ..instrument.pointing import (
     FBM_SEGMENT,
     PointingModel,
     PointingParams,
-    PointingRanges,
     frame_windows,
 )
 from ..instrument.prf import (
@@ -68,17 +67,15 @@ from .observation import Observation
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
            "calibrate_motion", "photometry_window", "twin_star", "MOTION_GRID_PX",
            "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain", "builtin_prf", "builtin_gain",
-           "background_scatter_share", "uncalibrated_motion"]
+           "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 4 since a table without noise pixels jitters with
-#: the paper's A_fbm instead of not at all (:func:`uncalibrated_motion`); 3 since the PSF's
-#: blur is fitted with the motion,
+#: otherwise is refused rather than mixed): 3 since the PSF's blur is fitted with the motion,
 #: the real background scatter and correlated noise are added (issue 36), and only the part of
 #: the subarray the photometry reads is rendered (:func:`photometry_window`); 2 since the
 #: motion within an exposure is the simulator's block-scaled jitter (:class:`ExposureMotion`),
 #: 1 before (one rms throughout).
-TWIN_MODEL = 4
+TWIN_MODEL = 3
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
@@ -487,39 +484,6 @@ def _solve_on_curve(target: float, values: np.ndarray, grid: tuple[float, ...]
     return float(np.interp(target, env, grid))
 
 
-def _unit_motion(obs: Observation, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:class:`ExposureMotion`'s offsets of ``rows`` at a peak of 1 px (one fixed draw)."""
-    return ExposureMotion(obs, _frame_model(obs, "none"), 1.0,
-                          rng(0, "trust", "calibrate")).offsets(rows)
-
-
-def _rms(dx: np.ndarray, dy: np.ndarray) -> float:
-    return float(np.sqrt(0.5 * (np.mean(dx**2) + np.mean(dy**2))))
-
-
-def uncalibrated_motion(obs: Observation, *, frames_per_cube: int = 8,
-                        max_frames: int = 2048) -> tuple[float, dict]:
-    """The motion within an exposure of a table without noise pixels: nothing to calibrate
-    it on, so the twins jitter as the simulator does, with the paper's ``A_fbm`` (Table 5:
-    0.4 px, constant) rather than not at all (which would make them quieter than any
-    real observation: another pipeline's table of real epoch 1 gave twin RMSEs 25 % below
-    the full table's).
-
-    Returns
-    -------
-    peak_px : float
-        ``A_fbm``.
-    diagnostics : dict
-        As :func:`calibrate_motion`'s, with ``target_vs_grid`` saying it was not calibrated.
-    """
-    peak = float(PointingRanges().a_fbm_px.lo)
-    rows, _, _ = _calibration_rows(obs, frames_per_cube, max_frames)
-    return peak, {"noise_pixels_real": None, "motion_peak_px": peak,
-                  "rms_per_peak": _rms(*_unit_motion(obs, rows)), "blur_fitted": False,
-                  "target_vs_grid": "no noise pixels in the table: not calibrated; the "
-                                    "paper's A_fbm (Table 5, 0.4 px)"}
-
-
 def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
                      frames_per_cube: int = 8, max_frames: int = 2048,
                      blur_grid_px: tuple[float, ...] = BLUR_GRID_PX,
@@ -569,7 +533,8 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
     target = float(np.median(obs.noise_pixels[obs.good]))
     real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
     target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
-    unit_x, unit_y = _unit_motion(obs, rows)
+    model = _frame_model(obs, "none")
+    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
 
     def curves(blur: float) -> tuple[np.ndarray, np.ndarray]:
         star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
@@ -584,7 +549,7 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
         return np.asarray(medians), np.asarray(spreads)
 
     builtin_blur = float(load_gainmap_coefficients(obs.channel)["builtin"]["blur_px"])
-    rms_per_peak = _rms(unit_x, unit_y)
+    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
     # the committed PSF where it is not too broad: the motion alone on the median
     med, sd = curves(builtin_blur)
     peak_builtin = _solve_on_curve(target, med, grid_px)
