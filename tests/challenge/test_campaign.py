@@ -367,3 +367,48 @@ def test_the_real_k2_141b_campaign_runs_end_to_end(shared_irac, tmp_path, capsys
     joint = summary["joint"]["ch2"]["poly2"]
     assert joint["epochs"] == [1, 2, 3] and joint["depth_err_ppm"] > 0
     assert joint["n_points"] == sum(len(Table.read(p, format="ascii.csv")) for p in csvs)
+
+
+@pytest.mark.shared_data
+@pytest.mark.timeout(1800)
+def test_real_epoch1_beside_two_simulated_epochs_with_twins(shared_irac, tmp_path, capsys):
+    """Issue 38: real epoch 1 from its AOR folders (Pre and Main) and two simulated epochs,
+    ``--twins 10``: Table 3 with the reported and the honest errors, and the report with
+    the real-data figures."""
+    # simulated as the catalogue's XO-3b (not the 2015 challenge's variant): one planet
+    sets = TWIN_SETS + ['system.name="XO-3b"']
+    tables = [simulate_eclipse_epoch(tmp_path / f"e{k}", sets, lead)
+              for k, lead in ((2, 0.12), (3, 0.10))]
+    real = shared_irac / "real_xo3_eclipse1"
+    aors = sorted(str(p) for p in real.iterdir() if p.name.startswith("r"))
+    assert len(aors) == 2
+    spec = tmp_path / "campaign.toml"
+    spec.write_text("[[epoch]]\ninputs = " + json.dumps(aors) + "\nchannel = 2\n"
+                    + "".join(f"\n[[epoch]]\ninputs = [{json.dumps(str(t))}]\n" for t in tables))
+    capsys.readouterr()
+    out = tmp_path / "c"
+    code = main(["campaign", "--file", str(spec), "--out", str(out), "--system", "XO-3b",
+                 "--methods", "poly2", "--profiles", "controlled", "--sampler", "leastsq",
+                 "--twins", "10", "--workers", "1", "--set", "run.bootstrap=50", "--json",
+                 "--quiet"])
+    assert code == 0, capsys.readouterr().err
+    summary = json.loads(capsys.readouterr().out)
+    group = next(iter(summary["profiles"]["controlled"]["channels"].values()))
+    assert [d["epoch"] for d in group["depths"]] == [1, 2, 3]
+    assert {"D_mean", "f_dis", "sigma_tot", "R"} <= set(group["methods"]["poly2"])
+    honest = group["honest"]
+    for d in honest["depths"]:
+        answer = json.loads((out / "twins" / f"epoch_{d['epoch']:02d}" / "trust.json")
+                            .read_text())
+        assert answer["n_twins"] == 10
+        assert d["error_ppm"] == answer["methods"]["poly2"]["honest_err_ppm"]
+    assert honest["methods"]["poly2"]["D_mean"] == pytest.approx(group["methods"]["poly2"][
+        "D_mean"], rel=0.2)
+    # the real epoch's photometry came from its BCDs, with its own time conversion named
+    assert "BCD" in summary["epochs"][0]["time_conversion"] or summary["epochs"][0][
+        "time_conversion"]
+    page = (out / "report" / "index.html").read_text()
+    assert "honest" in page.lower() and page.count("<img") >= 4
+    for src in __import__("re").findall(r"src='([^']+)'|src=\"([^\"]+)\"", page):
+        name = next(s for s in src if s)
+        assert (out / "report" / name).is_file(), name

@@ -67,6 +67,10 @@ def test_aors_within_a_day_form_one_epoch(tmp_path, make_bcd, make_star_cube):
     epochs = group_epochs(infos)
     assert [e.aorkeys for e in epochs] == [(1, 2), (3,)]
     assert [e.number for e in epochs] == [1, 2]
+    # no gap splits: every AOR one epoch (a campaign's epoch of real Pre and Main AORs;
+    # it raised KeyError: 0, the first AOR opening no epoch when the gap is infinite)
+    whole = group_epochs(infos, gap_days=float("inf"))
+    assert [e.aorkeys for e in whole] == [(1, 2, 3)] and whole[0].number == 1
     out = tmp_path / "out"
     assert main(["photometry", str(tmp_path), "--out", str(out), "--quiet"]) == 0
     t1 = read_photometry(out / "epoch_01.fits")

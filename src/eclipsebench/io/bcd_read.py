@@ -518,7 +518,7 @@ def group_epochs(infos: list[BcdInfo], gap_days: float = 1.0) -> list[Epoch]:
         last_start = -np.inf
         for a in aors:
             start = by_aor[a][0].bmjd_obs
-            if start - last_start > gap_days:
+            if not groups or start - last_start > gap_days:   # gap_days may be inf
                 number += 1
                 groups[number] = []
             groups[number].append(a)
