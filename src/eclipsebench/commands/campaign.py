@@ -11,7 +11,13 @@ from ..errors import InputError
 from ..fit.names import EVENTS
 from ..io.paths import check_output_path
 from ..limits import MAX_WORKERS
-from .options import add_planet_options, method_list, planet_overrides, positive_int
+from .options import (
+    add_planet_options,
+    method_list,
+    planet_overrides,
+    positive_int,
+    run_overrides,
+)
 from .run import _profile_list, _scheduler, add_cluster_options
 from .table_options import TABLE_LABELS, add_table_options, column_map
 
@@ -67,13 +73,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _config(args: argparse.Namespace) -> Config:
-    extra = []
-    if args.methods is not None:
-        extra.append("run.methods=[" + ", ".join(f'"{m}"' for m in args.methods) + "]")
-    if args.profiles is not None:
-        extra.append("run.profiles=[" + ", ".join(f'"{p}"' for p in args.profiles) + "]")
-    if args.workers is not None:
-        extra.append(f"run.workers={args.workers}")
+    extra = run_overrides(args)
     for key, value in (("event", args.event), ("sampler", args.sampler)):
         if value is not None:
             extra.append(f'reduce.{key}="{value}"')

@@ -211,3 +211,16 @@ def planet_from_args(args: argparse.Namespace, name: str | None = None,
     """
     cfg = load_config(None, planet_overrides(args, name, label))
     return system_for(cfg.system)
+
+
+def run_overrides(args) -> list[str]:
+    """``[run]`` overrides of a runner's ``--methods``, ``--profiles`` and ``--workers``
+    (each left to the configuration when not given)."""
+    extra = []
+    if args.methods is not None:
+        extra.append("run.methods=[" + ", ".join(f'"{m}"' for m in args.methods) + "]")
+    if args.profiles is not None:
+        extra.append("run.profiles=[" + ", ".join(f'"{p}"' for p in args.profiles) + "]")
+    if args.workers is not None:
+        extra.append(f"run.workers={args.workers}")
+    return extra

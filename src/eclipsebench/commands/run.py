@@ -23,6 +23,7 @@ from .options import (
     planet_overrides,
     positive_float,
     positive_int,
+    run_overrides,
 )
 
 NAME = "run"
@@ -83,12 +84,7 @@ def _overrides(args: argparse.Namespace) -> list[str]:
     extra = []
     if args.epochs is not None:
         extra.append(f"challenge.epochs={args.epochs}")
-    if args.methods is not None:
-        extra.append("run.methods=[" + ", ".join(f'"{m}"' for m in args.methods) + "]")
-    if args.profiles is not None:
-        extra.append("run.profiles=[" + ", ".join(f'"{p}"' for p in args.profiles) + "]")
-    if args.workers is not None:
-        extra.append(f"run.workers={args.workers}")
+    extra += run_overrides(args)
     return list(args.overrides) + extra + planet_overrides(args)
 
 

@@ -19,7 +19,7 @@ from ..io.atomic import write_text
 from ..stats.compare import group_by_method
 from ..stats.ensemble import normalised_residuals
 from . import figures as F
-from .page import figure_html, html_table, notes_html, page_html, relative
+from .page import figure_html, html_table, notes_html, page_folder, page_html, relative
 from .paper_tables import COMPARED_KEYS, TABLE4, comparison_rows
 from .tables import anova_lines, display_rows, write_tables
 
@@ -74,8 +74,7 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
     Path
         ``dest/index.html``.
     """
-    root = Path(dest)
-    root.mkdir(parents=True, exist_ok=True)
+    root = page_folder(dest)
     table_files = []
     for name, stats in (summary.get("profiles") or {"controlled": summary}).items():
         stem = "eclipse_depth_stats" + ("" if name == "controlled" else f"_{name}")

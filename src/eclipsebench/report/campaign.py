@@ -27,7 +27,7 @@ from ..io.atomic import write_text
 from ..stats.compare import group_by_method
 from . import figures as F
 from .build import result_figures, with_units
-from .page import figure_html, html_table, notes_html, page_html
+from .page import figure_html, html_table, notes_html, page_folder, page_html
 from .tables import anova_lines, display_rows
 
 __all__ = ["build_campaign_report", "trust_rows", "TRUST_COLUMNS"]
@@ -138,8 +138,7 @@ def build_campaign_report(dest: str | os.PathLike[str], *, summary: Mapping[str,
     Path
         ``dest/index.html``.
     """
-    root = Path(dest)
-    root.mkdir(parents=True, exist_ok=True)
+    root = page_folder(dest)
     esc = html.escape
     parts: list[str] = [notes_html(notes)] if notes else []
     figures: list[tuple[str, str, list[Path]]] = []

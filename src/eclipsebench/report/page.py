@@ -11,10 +11,12 @@ folder can be moved or opened offline. Every text given is escaped here;
 from __future__ import annotations
 
 import html
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-__all__ = ["STYLE", "page_html", "html_table", "notes_html", "figure_html", "relative"]
+__all__ = ["STYLE", "page_html", "html_table", "notes_html", "figure_html", "relative",
+           "page_folder"]
 
 #: The pages' one style sheet.
 STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
@@ -24,6 +26,13 @@ STYLE = ("body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
          "table.symbols td,table.symbols th{text-align:left}"
          "tr.chosen td{background:#fff3c4;font-weight:bold}"
          ".caution{border-left:4px solid #d62728;padding:0.2em 0.8em;background:#fdf0f0}")
+
+
+def page_folder(dest: str | os.PathLike[str]) -> Path:
+    """The folder a page and its figures go to, made if missing."""
+    root = Path(dest)
+    root.mkdir(parents=True, exist_ok=True)
+    return root
 
 
 def relative(path: Path, root: Path) -> str:

@@ -33,7 +33,7 @@ from ..fit.plot import literal_text
 from ..photometry.binning import bin_indices, bin_values
 from ..photometry.table import read_table
 from ..report import figures as F
-from ..report.page import figure_html, html_table, notes_html, page_html
+from ..report.page import figure_html, html_table, notes_html, page_folder, page_html
 from .collect import collect
 from .layout import TrustLayout
 from .rows import (
@@ -345,8 +345,7 @@ def write_page(dest: str | Path, summary: Mapping[str, Any], *, twins: Mapping[s
     """
     from ..io.atomic import write_text
 
-    root = Path(dest)
-    root.mkdir(parents=True, exist_ok=True)
+    root = page_folder(dest)
     items: list[tuple[str, str, list[Path]]] = []
     event = (summary.get("twins") or {}).get("event", "eclipse")
     if curves:
