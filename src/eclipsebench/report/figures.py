@@ -9,6 +9,7 @@ canvas (no pyplot, no display, no global state).
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -42,7 +43,9 @@ def _finish_grid(fig: Figure, axes, n_used: int, title: str, xlabel: str | None 
         fig.supxlabel(xlabel, fontsize=8)
     if ylabel:
         fig.supylabel(ylabel, fontsize=8)
-    fig.suptitle(title)
+    # a grid narrower than its title (one or two methods) wraps the title, not clips it
+    width_in = fig.get_size_inches()[0]
+    fig.suptitle(textwrap.fill(title, max(20, int(width_in * 7.5))))
     return fig
 
 
