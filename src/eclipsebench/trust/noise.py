@@ -106,7 +106,11 @@ def correlated_component(time_bmjd: np.ndarray, real: tuple[np.ndarray, np.ndarr
     diagnostics : dict
         ``rms_ppm`` (of ``c``), ``white_ppm`` (the real residuals' rms per frame),
         ``bins_in_excess`` of ``bins`` and their periods (``periods_in_excess_min``,
-        minutes), ``beta_red_real`` and ``beta_red_pilot``
+        minutes); the other way round, ``bins_twin_in_excess`` and
+        ``periods_twin_in_excess_min`` (``[shortest, longest, S_twin / S_real]``):
+        where the pilot's residuals are significantly redder than the real ones
+        (the same F test), which nothing added can undo: there the twins
+        overstate the noise; ``beta_red_real`` and ``beta_red_pilot``
         (of the two fits' residuals, 10-30 minute bins) and
         ``beta_red_pilot_plus_correlated`` (of the pilot's residuals plus ``c``:
         what a twin's residuals show before its fit absorbs any of ``c``).
@@ -132,6 +136,7 @@ def correlated_component(time_bmjd: np.ndarray, real: tuple[np.ndarray, np.ndarr
     edges = _bin_edges(f_r)
     gain = np.zeros(spec_r.size)
     in_excess: list[list[float]] = []
+    twin_redder: list[list[float]] = []
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
         sel_r = (f_r >= lo) & (f_r < hi)
         sel_p = (f_p >= lo) & (f_p < hi)
@@ -143,6 +148,8 @@ def correlated_component(time_bmjd: np.ndarray, real: tuple[np.ndarray, np.ndarr
         if s_r > s_p * float(f_distribution.ppf(1.0 - FALSE_EXCESS, 2 * k_r, 2 * k_p)):
             gain[sel_r] = np.sqrt(excess / s_r)
             in_excess.append([1440.0 / hi, 1440.0 / lo])
+        elif s_p > s_r * float(f_distribution.ppf(1.0 - FALSE_EXCESS, 2 * k_p, 2 * k_r)):
+            twin_redder.append([1440.0 / hi, 1440.0 / lo, float(s_p / s_r)])
     c = np.fft.irfft(gain * spec_r, r.size)
     times = np.asarray(time_bmjd, float)
     inside = (times >= t_r[0]) & (times <= t_r[-1])
@@ -154,6 +161,8 @@ def correlated_component(time_bmjd: np.ndarray, real: tuple[np.ndarray, np.ndarr
                  "rms_ppm": float(np.std(c)) * 1e6, "white_ppm": float(np.std(r)) * 1e6,
                  "bins_in_excess": len(in_excess), "bins": int(edges.size - 1),
                  "periods_in_excess_min": in_excess,
+                 "bins_twin_in_excess": len(twin_redder),
+                 "periods_twin_in_excess_min": twin_redder,
                  "beta_red_real": red_noise_beta(r, t_r),
                  "beta_red_pilot": red_noise_beta(p, t_p),
                  "beta_red_pilot_plus_correlated": red_noise_beta(p + at_pilot, t_p),

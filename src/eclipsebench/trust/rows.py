@@ -106,6 +106,13 @@ def cautions(summary: Mapping[str, Any], *, ranking: bool = True) -> list[str]:
                        f"{s['beta_red_twins_median']:.2f}): its RMSE may under-predict the error")
         if s.get("n_twins_failed"):
             out.append(f"{m}: {s['n_twins_failed']} twins not reduced (scored over the others)")
+    noise = (summary.get("twins") or {}).get("correlated_noise") or {}
+    if noise.get("periods_twin_in_excess_min"):
+        bands = noise["periods_twin_in_excess_min"]
+        out.append("the pilot twin's residuals are redder than the real ones at periods of "
+                   + ", ".join(f"{lo:.0f}-{hi:.0f} min (power x{ratio:.1f})"
+                               for lo, hi, ratio in bands)
+                   + ": the twins may over-predict the error")
     for m, why in (summary.get("skipped") or {}).items():
         out.append(f"{m} skipped: {why}")
     return out
