@@ -166,6 +166,25 @@ def simulate_eclipse_epoch(root: Path, sets: list[str], lead_d: float) -> Path:
     return root / "phot" / "epoch_01.fits"
 
 
+#: The small simulated observation of tests/trust (and a campaign's first epoch): one short
+#: epoch of 81 16-frame cubes, two sub-samples, starting 0.12 d before an eclipse.
+SMALL_OBSERVATION_SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
+                          "observation.main_cubes=80", "observation.cube_interval_s=220.0",
+                          "simulation.subsamples=2"]
+SMALL_OBSERVATION_LEAD_D = 0.12
+
+
+@pytest.fixture(scope="session")
+def small_observation_table(tmp_path_factory) -> Path:
+    """The photometry table of the small simulated observation (``SMALL_OBSERVATION_SETS``),
+    simulated and measured once per test run for every file that uses it (tests only read it;
+    one that changes it works on a copy)."""
+    out = built_once(tmp_path_factory, "small_observation",
+                     lambda folder: simulate_eclipse_epoch(folder, SMALL_OBSERVATION_SETS,
+                                                           SMALL_OBSERVATION_LEAD_D))
+    return out / "phot" / "epoch_01.fits"
+
+
 def real_epoch1_jd_utc(table, shared_irac: Path):
     """The times of a photometry table of real epoch 1 as JD_UTC at the observer (Spitzer),
     from the archive's own headers: each cube's ``MJD_OBS`` (UTC at Spitzer) less its

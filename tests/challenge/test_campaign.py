@@ -22,7 +22,7 @@ from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.photometry.table import read_photometry, write_photometry
 
-from ..conftest import simulate_eclipse_epoch
+from ..conftest import SMALL_OBSERVATION_LEAD_D, SMALL_OBSERVATION_SETS, simulate_eclipse_epoch
 
 # The tiny challenge of tests/challenge/test_runner.py, least squares, one profile.
 TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
@@ -209,15 +209,16 @@ def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, m
 
 
 #: Two small simulated eclipses (tests/trust's observation), a day apart in their lead.
-TWIN_SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
-             "observation.main_cubes=80", "observation.cube_interval_s=220.0",
-             "simulation.subsamples=2"]
+TWIN_SETS = SMALL_OBSERVATION_SETS
 
 
-def test_twins_give_table3_with_the_honest_errors_beside_the_reported(tmp_path, capsys):
+def test_twins_give_table3_with_the_honest_errors_beside_the_reported(tmp_path, capsys,
+                                                                       small_observation_table):
     """``--twins 10``: each epoch's trust run, and Table 3 again with its honest errors."""
-    tables = [str(simulate_eclipse_epoch(tmp_path / f"e{k}", TWIN_SETS, lead))
-              for k, lead in ((1, 0.12), (2, 0.10))]
+    # the first epoch is tests/trust's observation, made once per test run (tests/conftest.py)
+    assert SMALL_OBSERVATION_LEAD_D == 0.12
+    tables = [str(small_observation_table),
+              str(simulate_eclipse_epoch(tmp_path / "e2", TWIN_SETS, 0.10))]
     capsys.readouterr()   # what simulate and photometry printed
     out = tmp_path / "c"
     code = main(["campaign", *tables, "--out", str(out), "--methods", "poly2", "--profiles",

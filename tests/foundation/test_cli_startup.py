@@ -58,3 +58,38 @@ def test_version_and_help_import_nothing_heavy(argv):
             "    except SystemExit:\n"
             "        pass")
     assert _heavy_after(body) == []
+
+
+#: What ``eclipsebench reduce`` does not need before its fit (issue 40's start-up: about
+#: 0.5 s of CPU when ``eclipsebench.api`` imported them all). The engine's ``cluster`` module
+#: is light: every command's parser reads its options.
+NOT_FOR_REDUCE = ("eclipsebench.challenge", "eclipsebench.simulation", "eclipsebench.stats",
+                  "eclipsebench.engine.tasks", "eclipsebench.trust", "eclipsebench.report",
+                  "eclipsebench.photometry.pipeline", "scipy.stats", "dask", "distributed")
+
+
+def test_reduce_reaches_its_fit_without_the_challenge_the_statistics_or_the_engine(tmp_path):
+    table = tmp_path / "lc.csv"
+    rows = [f"{57234.34 + i * 2.0 / 86400:.7f},1.0,0.002,15.0,15.1" for i in range(200)]
+    table.write_text("time_bmjd,flux,flux_err,x,y\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    argv = ["reduce", str(table), "--method", "bliss", "--sampler", "leastsq", "--system",
+            "XO-3b", "--quiet", "--out", str(tmp_path / "r.json")]
+    body = ("import eclipsebench.fit.reduce as fit\n"
+            "def stop(*args, **kwargs):\n"
+            "    raise SystemExit(0)\n"
+            "fit.reduce_epoch = stop\n"
+            "import eclipsebench.api as api\n"
+            "api.reduce_epoch = stop\n"
+            "from eclipsebench.cli import main\n"
+            "try:\n"
+            f"    main({argv!r})\n"
+            "except SystemExit as exc:\n"
+            "    assert exc.code == 0, exc.code\n"
+            f"print(json.dumps(sorted(m for m in sys.modules if m.startswith({NOT_FOR_REDUCE!r}))))")
+    env = {**os.environ, "PYTHONPATH": str(Path(eclipsebench.__file__).resolve().parents[1])}
+    done = subprocess.run([sys.executable, "-c", "import json, sys\n" + body],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    loaded = json.loads(done.stdout.strip().splitlines()[-1])
+    assert loaded == [], loaded
+    assert not (tmp_path / "r.json").exists()          # stopped before the fit

@@ -23,8 +23,7 @@ from eclipsebench.trust.observation import (
 )
 from eclipsebench.trust.run import trust_settings
 
-from ..conftest import real_epoch1_jd_utc, simulate_eclipse_epoch
-from .test_trust import SETS
+from ..conftest import real_epoch1_jd_utc
 
 FAST = ["--sampler", "leastsq", "--twins", "10", "--quiet", "--system", "XO-3b"]
 UNIT = 1.0 / 3737.0     # electrons to an arbitrary unit
@@ -41,10 +40,9 @@ def _foreign(table, rows=None) -> Table:
 
 
 @pytest.fixture(scope="module")
-def small(tmp_path_factory):
+def small(tmp_path_factory, small_observation_table):
     root = tmp_path_factory.mktemp("any_table")
-    path = simulate_eclipse_epoch(root, SETS, 0.12)
-    full = read_table(path)
+    full = read_table(small_observation_table)
     _foreign(full).write(root / "other.csv", format="ascii.csv")
     return root, full
 

@@ -24,18 +24,14 @@ from eclipsebench.trust.result import read_trust
 from eclipsebench.trust.score import observation_statistics
 from eclipsebench.trust.twin import TWIN_MODEL, ExposureMotion, make_recipe, twin_table
 
-from ..conftest import simulate_eclipse_epoch
-
-SETS = ["observation.pre_cubes=1", "observation.frames_per_cube=16",
-        "observation.main_cubes=80", "observation.cube_interval_s=220.0",
-        "simulation.subsamples=2"]
 FAST = ["--methods", "poly2,kr-pmap", "--sampler", "leastsq", "--twins", "10", "--quiet"]
 
 
 @pytest.fixture(scope="module")
-def small_table(tmp_path_factory):
-    """The photometry table (``eclipsebench photometry``) of a small simulated observation."""
-    return simulate_eclipse_epoch(tmp_path_factory.mktemp("trust_obs"), SETS, 0.12)
+def small_table(small_observation_table):
+    """The photometry table (``eclipsebench photometry``) of a small simulated observation,
+    made once per test run (tests/conftest.py, shared with test_folder and test_any_table)."""
+    return small_observation_table
 
 
 def _cubes_of_sub_2s(n_cubes: int) -> Observation:
