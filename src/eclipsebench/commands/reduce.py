@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
 from ..astro.catalogue import system_for
+from ..astro.events import event_for
 from ..config import Config, load_config
 from ..errors import InputError
 from ..fit.names import ECLIPSE_SHAPES, EVENTS, PHASE_CURVE_MODELS, PHASE_MODELS, RAMP_MODELS
@@ -122,13 +123,13 @@ def _config(args: argparse.Namespace) -> Config:
                "sampler": args.sampler, "prayer_bead_shifts": args.prayer_bead,
                "mcmc_walkers": args.walkers, "mcmc_steps": args.steps, "radius_px": args.radius,
                "profile": args.profile}
-    event = args.event or cfg.reduce.event
+    whole_orbit = event_for(args.event or cfg.reduce.event).whole_orbit
     if args.phase in PHASE_CURVE_MODELS + ("bic",):
-        if event != "phase-curve":
+        if not whole_orbit:
             raise InputError(f"--phase {args.phase}: a whole phase curve's model (give "
                              "--event phase-curve)")
         changes["phase"], changes["phase_curve_model"] = None, args.phase
-    elif args.phase is not None and event == "phase-curve":
+    elif args.phase is not None and whole_orbit:
         raise InputError(f"--phase {args.phase}: --event phase-curve takes "
                          f"{', '.join(PHASE_CURVE_MODELS)} or bic")
     options = replace(cfg.reduce, **{k: v for k, v in changes.items() if v is not None})

@@ -7,6 +7,7 @@ import shlex
 from dataclasses import replace
 from pathlib import Path
 
+from ..astro.events import event_for
 from ..config import load_config
 from ..detector.constants import READOUT_MODES
 from ..errors import InputError
@@ -179,7 +180,7 @@ def format_text(result: dict) -> str:
     lines += text_table(head, units, rows)
     head, units, rows = method_rows(result, TIME_COLUMNS)
     if rows:
-        lines.append(f"the {'transit' if result['twins']['event'] == 'transit' else 'eclipse'}"
+        lines.append(f"the {event_for(result['twins']['event']).conjunction}"
                      "'s mid-time, against the injected one (the twins whose fit freed it):")
         lines += text_table(["mid-time", *head[1:]], units, rows)
     for name, unit, rows in phase_rows(result):
