@@ -158,7 +158,8 @@ def reduce(table: Table | str | os.PathLike | Sequence[Table | str | os.PathLike
 
     ``eclipsebench reduce`` is this function: the same checks, the same
     refusals (a table without the columns a fit needs, with the likely ones
-    named; tables of two planets in a joint fit; a zero or non-finite error),
+    named; tables of two planets in a joint fit; a joint fit asked for
+    ``sampler="mcmc"`` or ``profile="paper"``; a zero or non-finite error),
     the same result.
 
     Parameters
@@ -233,6 +234,7 @@ def reduce(table: Table | str | os.PathLike | Sequence[Table | str | os.PathLike
     if isinstance(table, (list, tuple)):
         if epoch is not None:
             raise InputError("epoch: a joint fit takes each table's EPOCH")
+        _check_joint_settings(section, len(table), labels)
         return reduce_joint(list(table), method, options=section, **how)
     result = reduce_epoch(table, method, options=section, epoch=epoch, **how)
     source = (os.fspath(table) if isinstance(table, (str, os.PathLike))
@@ -260,6 +262,23 @@ def compare_phases(table: Table | str | os.PathLike, method: str, *, system: Any
     """
     section, how = _reduce_inputs(locals(), controlled=True)
     return select_phase_model(table, method, options=section, epoch=epoch, **how)
+
+
+#: The ``[reduce]`` settings a joint fit refuses: it is least squares with the controlled
+#: settings (its method options never the team's), so a posterior or a team's profile asked
+#: for would be silently ignored.
+_JOINT_REFUSES = (("sampler", "mcmc"), ("profile", "paper"))
+
+
+def _check_joint_settings(section: Any, n_tables: int, labels: Mapping[str, str] | None) -> None:
+    """Refuse, in one line, a setting a joint fit of ``n_tables`` tables cannot honour, named as
+    the caller names it (``labels``: the command line's ``--sampler``; else the keyword)."""
+    for key, value in _JOINT_REFUSES:
+        if getattr(section, key) == value:
+            name = (f"{labels[key]} {value}" if labels and key in labels
+                    else f'{key}="{value}"')
+            raise InputError(f"{name}: applies to one table; a joint fit of {n_tables} "
+                             "tables is least squares with the controlled settings")
 
 
 def _reduce_inputs(given: Mapping[str, Any], *, controlled: bool) -> tuple[Any, dict[str, Any]]:
