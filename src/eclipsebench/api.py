@@ -159,7 +159,8 @@ def reduce(table: Table | str | os.PathLike | Sequence[Table | str | os.PathLike
 
     ``eclipsebench reduce`` is this function: the same checks, the same
     refusals (a table without the columns a fit needs, with the likely ones
-    named; tables of two planets in a joint fit; a zero or non-finite error),
+    named; tables of two planets in a joint fit; a joint fit asked for
+    ``sampler="mcmc"`` or ``profile="paper"``; a zero or non-finite error),
     the same result.
 
     Parameters
@@ -234,6 +235,7 @@ def reduce(table: Table | str | os.PathLike | Sequence[Table | str | os.PathLike
     if isinstance(table, (list, tuple)):
         if epoch is not None:
             raise InputError("epoch: a joint fit takes each table's EPOCH")
+        _check_joint_settings(section, len(table), labels)
         return reduce_joint(list(table), method, options=section, **how)
     result = reduce_epoch(table, method, options=section, epoch=epoch, **how)
     source = (os.fspath(table) if isinstance(table, (str, os.PathLike))
@@ -261,6 +263,23 @@ def compare_phases(table: Table | str | os.PathLike, method: str, *, system: Any
     """
     section, how = _reduce_inputs(locals(), controlled=True)
     return select_phase_model(table, method, options=section, epoch=epoch, **how)
+
+
+#: The ``[reduce]`` settings a joint fit refuses: it is least squares with the controlled
+#: settings (its method options never the team's), so a posterior or a team's profile asked
+#: for would be silently ignored.
+_JOINT_REFUSES = (("sampler", "mcmc"), ("profile", "paper"))
+
+
+def _check_joint_settings(section: Any, n_tables: int, labels: Mapping[str, str] | None) -> None:
+    """Refuse, in one line, a setting a joint fit of ``n_tables`` tables cannot honour, named as
+    the caller names it (``labels``: the command line's ``--sampler``; else the keyword)."""
+    for key, value in _JOINT_REFUSES:
+        if getattr(section, key) == value:
+            name = (f"{labels[key]} {value}" if labels and key in labels
+                    else f'{key}="{value}"')
+            raise InputError(f"{name}: applies to one table; a joint fit of {n_tables} "
+                             "tables is least squares with the controlled settings")
 
 
 def _reduce_inputs(given: Mapping[str, Any], *, controlled: bool) -> tuple[Any, dict[str, Any]]:
@@ -450,7 +469,7 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
           time_column: str | None = None, time_format: str | None = None,
           time_scale: str | None = None, time_at: str | None = None, observer: Any = None,
           readout: str | None = None, channel: int | None = None,
-          **reduce_options: Any) -> TrustResult:
+          labels: Mapping[str, str] | None = None, **reduce_options: Any) -> TrustResult:
     """How far to trust the depth of one real observation: its digital twins, every method.
 
     Simulates ``twins`` copies of the observation (its times, pointing track,
@@ -494,6 +513,10 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         Another pipeline's subarray readout (``"sub_2s"``...; default: from the cadence).
     channel : int, optional
         Another pipeline's IRAC channel (default: its ``CHANNEL``, else 2).
+    labels : mapping, optional
+        How errors name the arguments (default: these keywords; the command
+        line gives its options, ``{"out": "--out", "depth_ppm": "--depth",
+        "system": "--system NAME", "columns": "--columns", ...}``).
     **reduce_options
         ``[reduce]`` values to change, e.g. ``sampler="leastsq"``, ``profile="paper"``,
         ``event="phase-curve"`` (a whole phase curve of several AORs, scored also on
@@ -509,28 +532,43 @@ def trust(table: str | os.PathLike, out: str | os.PathLike, *, system: Any = Non
         ``recommended``, ``near_equals`` (the methods the twins cannot tell from
         it), ``n_twins``, ``twin_depth_ppm``.
     """
-    call = _call_text("eb.trust", trust, locals())   # shown on the page
+    return _trust(locals(), _call_text("eb.trust", trust, locals()))[0]   # call: on the page
+
+
+def trust_with_report(table: str | os.PathLike, out: str | os.PathLike, *, command: str,
+                      **keywords: Any) -> tuple[TrustResult, RunReport]:
+    """:func:`trust` (the same keywords) and what ran; ``command`` is the text shown on the
+    page instead of the call (``eclipsebench trust``'s command line, which prints what ran)."""
+    bound = inspect.signature(trust).bind(table, out, **keywords)
+    bound.apply_defaults()
+    return _trust(bound.arguments, command)
+
+
+def _trust(given: Mapping[str, Any], command: str) -> tuple[TrustResult, RunReport]:
+    """The trust run of :func:`trust`'s arguments ``given``, shown on its page as ``command``."""
     from .io.paths import check_output_path
     from .trust.run import run_trust, trust_settings
 
-    cfg = _config(config)
+    labels = dict(given["labels"] or {})
+    cfg = _config(given["config"])
     section = cfg.reduce
-    if reduce_options:
-        section = replace(section, **reduce_options)
+    if given["reduce_options"]:
+        section = replace(section, **given["reduce_options"])
         section.validate()
-    root = check_output_path(out, "out", "folder")
-    times = {k: v for k, v in (("time_scale", time_scale), ("time_at", time_at),
-                                ("observer", observer)) if v is not None}
-    settings = trust_settings(table, root, reduce=section, system=system,
-                              system_section=cfg.system, methods=methods, n_twins=twins,
-                              depth_ppm=depth_ppm, seed=seed, method_options=options, pmap=pmap,
-                              hint="system=NAME", columns=columns, time_column=time_column,
-                              time_format=time_format, time_options=times, readout=readout,
-                              channel=channel)
-    summary, _ = run_trust(settings, root,
-                           workers=cfg.run.workers if workers is None else workers,
-                           command=call)
-    return summary
+    root = check_output_path(given["out"], labels.get("out", "out"), "folder")
+    times = {k: given[k] for k in ("time_scale", "time_at", "observer") if given[k] is not None}
+    settings = trust_settings(given["table"], root, reduce=section, system=given["system"],
+                              system_section=cfg.system, methods=given["methods"],
+                              n_twins=given["twins"], depth_ppm=given["depth_ppm"],
+                              seed=given["seed"], method_options=given["options"],
+                              pmap=given["pmap"], hint=labels.get("system", "system=NAME"),
+                              columns=given["columns"], time_column=given["time_column"],
+                              time_format=given["time_format"], time_options=times,
+                              readout=given["readout"], channel=given["channel"],
+                              labels=given["labels"],
+                              depth_name=labels.get("depth_ppm", "depth_ppm"))
+    workers = cfg.run.workers if given["workers"] is None else given["workers"]
+    return run_trust(settings, root, workers=workers, command=command)
 
 
 def read_result(path: str | os.PathLike):

@@ -173,7 +173,7 @@ def fit_depth(model, time, *, t_ecl_guess, depth_guess=1500.0, phase="flat"):
 
     astro = AstroModel(time, None, phase=phase, shape=TrapezoidShape(time))
     fit = fit_leastsq(model, astro, astro.initial(depth=depth_guess * 1e-6,
-                                                  t_ecl_bmjd=t_ecl_guess))
+                                                  t_event_bmjd=t_ecl_guess))
     return fit.value("depth") * 1e6, fit.value("t_ecl_bmjd")
 
 

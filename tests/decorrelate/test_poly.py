@@ -179,7 +179,7 @@ def test_psf_width_term_multiplies_the_polynomial_exactly(epoch_sys, synth):
                                rtol=1e-10)
     astro = AstroModel(data.time_bmjd, None, phase="flat", shape=_Trapezoid(data.time_bmjd, synth))
     fit = fit_leastsq(model, astro, astro.initial(depth=1.5e-3,
-                                                  t_ecl_bmjd=epoch_sys.t_ecl_bmjd + 0.003))
+                                                  t_event_bmjd=epoch_sys.t_ecl_bmjd + 0.003))
     assert abs(fit.value("depth") * 1e6 - epoch_sys.depth_ppm) < 1e-3
     np.testing.assert_allclose([fit.value("sys_psfw_x_per_px"), fit.value("sys_psfw_y_per_px")],
                                d_true, rtol=1e-6)

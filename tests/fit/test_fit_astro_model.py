@@ -85,7 +85,7 @@ def test_bad_options_are_named(shape):
         AstroModel(TIME, None, phase="sinusoid", shape=shape())
     m = AstroModel(TIME, None, phase="flat", shape=shape())
     with pytest.raises(InputError, match="outside the data"):
-        m.initial(t_ecl_bmjd=56999.0)
+        m.initial(t_event_bmjd=56999.0)
 
 
 def test_box_duration_of_a_real_system_even_from_a_short_span():

@@ -51,7 +51,7 @@ def fitted(kit, trapezoid_epoch):
     data = epoch_data_from_table(trapezoid_epoch["table"])
     sys = kit.PolyGain(data)
     model = AstroModel(data.time_bmjd, None, phase="quadratic", shape=trapezoid_epoch["shape"])
-    theta0 = model.initial(depth=1e-3, t_ecl_bmjd=trapezoid_epoch["t_ecl"] - 0.004)
+    theta0 = model.initial(depth=1e-3, t_event_bmjd=trapezoid_epoch["t_ecl"] - 0.004)
     return sys, model, fit_leastsq(sys, model, theta0)
 
 
@@ -88,7 +88,7 @@ def test_jacobian_error_matches_the_scatter_of_noise_realisations(kit, trapezoid
         data = epoch_data_from_table(table)
         model = AstroModel(data.time_bmjd, None, phase="flat", shape=trapezoid_epoch["shape"])
         fit = fit_leastsq(kit.PolyGain(data), model,
-                          model.initial(t_ecl_bmjd=trapezoid_epoch["t_ecl"]))
+                          model.initial(t_event_bmjd=trapezoid_epoch["t_ecl"]))
         depths.append(fit.value("depth"))
         errors.append(fit.error("depth"))
     # 12 draws: the sample sd is within ~ +-40 % of the true sigma at 2 sigma
@@ -110,6 +110,6 @@ def test_inputs_are_not_modified(kit, trapezoid_epoch):
     data = epoch_data_from_table(trapezoid_epoch["table"])
     before = data.flux.copy()
     model = AstroModel(data.time_bmjd, None, phase="flat", shape=trapezoid_epoch["shape"])
-    fit_leastsq(kit.PolyGain(data), model, model.initial(t_ecl_bmjd=trapezoid_epoch["t_ecl"]))
+    fit_leastsq(kit.PolyGain(data), model, model.initial(t_event_bmjd=trapezoid_epoch["t_ecl"]))
     assert np.array_equal(data.flux, before)
     assert isinstance(data, EpochData)

@@ -125,7 +125,7 @@ def test_batch_likelihood_equals_the_loop(name, psf_epoch):
     astro_model = AstroModel(t, get_system("XO-3b"), phase="quadratic",
                              shape=_ShiftedShape(t))
     g = np.random.default_rng(3)
-    theta = astro_model.initial(depth=2e-3, t_ecl_bmjd=float(np.median(t)))
+    theta = astro_model.initial(depth=2e-3, t_event_bmjd=float(np.median(t)))
     thetas = theta + np.column_stack([3e-4 * g.standard_normal(6), 2e-3 * g.standard_normal(6),
                                       1e-3 * g.standard_normal((6, 2))])
     astro = astro_model.batch(thetas)
@@ -172,7 +172,7 @@ def test_astro_batch_is_the_model_of_each_row(xo3_epoch, shape, phase, ramp):
     time = xo3_epoch["time"][::4]
     model = AstroModel(time, xo3_epoch["system"], phase=phase, ramp=ramp, eclipse_shape=shape)
     g = np.random.default_rng(8)
-    thetas = np.tile(model.initial(t_ecl_bmjd=xo3_epoch["t_true"]), (5, 1))
+    thetas = np.tile(model.initial(t_event_bmjd=xo3_epoch["t_true"]), (5, 1))
     thetas[:, 0] += 1e-4 * g.standard_normal(5)
     thetas[:, 1] += 3e-3 * g.standard_normal(5)
     thetas[:, 2:] += 1e-3 * np.abs(g.standard_normal((5, thetas.shape[1] - 2)))

@@ -28,7 +28,7 @@ from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.system import SystemSection
 from eclipsebench.errors import ConfigError, InputError
 from eclipsebench.fit.astro_model import AstroModel, integration_offsets_d
-from eclipsebench.fit.reduce import predicted_eclipse_bmjd, reduce_epoch
+from eclipsebench.fit.reduce import predicted_event_bmjd, reduce_epoch
 
 SYSTEM = get_system(SystemSection().name)   # the 2015 challenge's XO-3b (e = 0.29)
 PERIOD = SYSTEM.period_days
@@ -70,7 +70,7 @@ def _table(model: AstroModel, theta, *, noise: float, seed: int, kit) -> Table:
 
 
 def _truth(model: AstroModel, harmonics, *, depth=2.0e-3, rp_rs=0.0906, offsets=()):
-    theta = model.initial(t_ecl_bmjd=T_ECL, depth=depth, rp_rs=rp_rs)
+    theta = model.initial(t_event_bmjd=T_ECL, depth=depth, rp_rs=rp_rs)
     theta[3:3 + len(harmonics)] = harmonics
     if offsets:
         theta[-len(offsets):] = offsets
@@ -90,7 +90,7 @@ def test_the_model_is_transit_plus_visible_planet_and_the_batch_is_bit_identical
     t_tr = T_ECL + m.transit_minus_eclipse_d
     assert t_tr == pytest.approx(transit_time_bmjd(SYSTEM, T_ECL - 0.5 * PERIOD), abs=1e-9)
     tr = AstroModel(time, SYSTEM, phase="flat", event="transit")
-    transit = tr(tr.initial(t_ecl_bmjd=t_tr + PERIOD, rp_rs=0.0906))   # the next one: same
+    transit = tr(tr.initial(t_event_bmjd=t_tr + PERIOD, rp_rs=0.0906))   # the next one: same
     assert np.allclose(m.stellar_flux(theta), transit, rtol=0, atol=1e-12)
     assert transit.min() < 0.995                                        # the data hold it
     # v(t): the eclipse event's shape, every eclipse in the data (the next one a period on)
@@ -104,7 +104,7 @@ def test_the_model_is_transit_plus_visible_planet_and_the_batch_is_bit_identical
     assert np.array_equal(m.aor_factor(theta), o)
     assert np.allclose(m(theta), (m.stellar_flux(theta) + v * p) * o, rtol=0, atol=1e-15)
     # the MCMC's batch is the per-row call, bit for bit
-    rows = np.vstack([theta, theta * (1 + 1e-3), m.initial(t_ecl_bmjd=T_ECL + 0.01)])
+    rows = np.vstack([theta, theta * (1 + 1e-3), m.initial(t_event_bmjd=T_ECL + 0.01)])
     batch = m.batch(rows)
     assert all(np.array_equal(batch[i], m(r)) for i, r in enumerate(rows))
     # what the literature reports: the lead's summary at this orbit's mid-transit phase
@@ -141,9 +141,9 @@ def test_bad_phase_curve_settings_are_one_line_errors():
     with pytest.raises(ConfigError, match="exposure_s"):
         replace(ReduceSection(), exposure_s=-1.0).validate()
     # the eclipse that starts the series is the first one whose centre lies in the data
-    assert predicted_eclipse_bmjd(SYSTEM, time, event="phase-curve") == pytest.approx(T_ECL)
+    assert predicted_event_bmjd(SYSTEM, time, event="phase-curve") == pytest.approx(T_ECL)
     late = time[time > T_ECL + 0.2]
-    assert predicted_eclipse_bmjd(SYSTEM, late, event="phase-curve") == pytest.approx(
+    assert predicted_event_bmjd(SYSTEM, late, event="phase-curve") == pytest.approx(
         T_ECL + PERIOD)
 
 
@@ -191,7 +191,7 @@ def test_the_planet_flux_can_be_kept_non_negative(polygain, kit):
     # the MCMC's prior is -inf where the planet goes negative
     prior = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
                        nonnegative_planet=True)
-    rows = np.array([prior.initial(t_ecl_bmjd=T_ECL, depth=8e-4) for _ in range(2)])
+    rows = np.array([prior.initial(t_event_bmjd=T_ECL, depth=8e-4) for _ in range(2)])
     rows[0, 3] = 6e-4
     assert prior.log_prior_batch(rows).tolist() == [-np.inf, 0.0]
     assert prior.prior_residuals(rows[1]).tolist() == [0.0]

@@ -182,7 +182,7 @@ def _chains(epoch, name):
     t = method.data.time_bmjd
     astro_model = AstroModel(t, epoch["system"], phase="flat")
     fit = fit_leastsq(method, astro_model, astro_model.initial(depth=1.5e-3,
-                                                               t_ecl_bmjd=epoch["t_ecl"]),
+                                                               t_event_bmjd=epoch["t_ecl"]),
                       max_alternations=0)
     kw = dict(names=fit.names, n_walkers=48, max_steps=40000, block_steps=500,
               tau_factor=TAU_FACTOR, move="de")

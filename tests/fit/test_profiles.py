@@ -103,7 +103,7 @@ def test_prayer_bead_all_cycles_every_stride(kit, polygain, xo3_epoch):
     prep = prepare_epoch(xo3_epoch["table"](noise=3e-4), polygain.name)
     model = prep.astro_model(ReduceSection(phase="flat"))
     fit = fit_leastsq(prep.systematics, model,
-                      model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd))
+                      model.initial(depth=1e-3, t_event_bmjd=prep.t_event_predicted_bmjd))
     n = prep.n_frames
     beads = prayer_bead(prep.systematics, model, fit, n_shifts=None, stride=n // 10,
                         max_nfev=None)

@@ -50,7 +50,7 @@ def test_kipping_q_and_u_invert_each_other():
 
 def test_the_transit_is_batmans_and_the_simulators():
     m = AstroModel(TIME, SYSTEM, phase="flat", event="transit")
-    theta = m.initial(t_ecl_bmjd=T_TR + 0.001)
+    theta = m.initial(t_event_bmjd=T_TR + 0.001)
     assert m.names == ("rp_rs", "t_transit_bmjd")
     # batman's t0 is the conjunction: 138 s after this eccentric orbit's mid-transit
     offset = m.describe()["conjunction_minus_mid_transit_s"] / 86400.0
@@ -59,7 +59,7 @@ def test_the_transit_is_batmans_and_the_simulators():
                   SYSTEM.ld_quadratic)
     assert np.max(np.abs(m(theta) - ref)) < 1e-9          # the tabulated separation
     free = AstroModel(TIME, SYSTEM, phase="flat", event="transit", transit_free=("a_rs", "b"))
-    theta_free = free.initial(t_ecl_bmjd=T_TR + 0.001)
+    theta_free = free.initial(t_event_bmjd=T_TR + 0.001)
     assert theta_free[2:].tolist() == pytest.approx([SYSTEM.a_rs, SYSTEM.impact_parameter])
     assert np.max(np.abs(free(theta_free) - ref)) < 1e-12  # batman's rsky at the data times
     # the simulator's L(t) transit (light travel included): the same to 1e-5 of the flux
@@ -78,7 +78,7 @@ def test_free_limb_darkening_phase_and_ramp_and_the_batch_is_bit_identical():
                    transit_free=("q2", "q1"))
     assert m.names == ("rp_rs", "t_transit_bmjd", "q1", "q2", "c1_per_day", "c2_per_day2",
                        "ramp_slope_per_day")
-    theta = m.initial(t_ecl_bmjd=T_TR)
+    theta = m.initial(t_event_bmjd=T_TR)
     assert theta[2:4].tolist() == pytest.approx(list(q_from_u(*SYSTEM.ld_quadratic)))
     theta[4:] = [2e-3, -1e-2, 5e-4]
     u = u_from_q(*theta[2:4])
@@ -111,7 +111,7 @@ def test_gaussian_priors_enter_residuals_and_log_prior():
     m = AstroModel(TIME, SYSTEM, phase="flat", event="transit", transit_free=("q1", "q2"),
                    transit_priors={"q1": (0.05, 0.01)})
     assert m.n_priors == 1
-    theta = m.initial(t_ecl_bmjd=T_TR)
+    theta = m.initial(t_event_bmjd=T_TR)
     assert theta[2] == 0.05                       # a prior's mean starts the parameter
     theta[2] = 0.08
     assert m.prior_residuals(theta).tolist() == pytest.approx([3.0])
@@ -253,7 +253,7 @@ def test_method_hooks_see_the_derivative_per_unit_depth():
     from the derivative per unit of transit depth, which is negative in transit."""
     from eclipsebench.decorrelate.pld import eclipse_frames
     m = AstroModel(TIME, SYSTEM, phase="flat", event="transit")
-    theta = m.initial(t_ecl_bmjd=T_TR)
+    theta = m.initial(t_event_bmjd=T_TR)
     h = 1e-6
     up = theta.copy()
     up[0] += h

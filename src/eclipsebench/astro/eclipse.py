@@ -49,6 +49,8 @@ def event_window(clock: OrbitClock, which: str, t_conj_geom: float) -> tuple[flo
 
 class _EventShape(ABC):
     _which = "eclipse"
+    #: Where the event's conjunction lies after a transit, in periods.
+    _periods_after_transit = 0.5
 
     @abstractmethod
     def _batman(self, t_geom: np.ndarray, t_conj: float) -> np.ndarray:
@@ -59,7 +61,7 @@ class _EventShape(ABC):
         self.system = system
         self.period = system.period_days
         clock = system.clock
-        near = system.t_transit_bmjd + (0.5 * self.period if self._which == "eclipse" else 0.0)
+        near = system.t_transit_bmjd + self._periods_after_transit * self.period
         t_conj = clock.conjunction_geom(self._which, near)
         t_mid_geom = clock._mid_event_geom(t_conj, self._which)
         self.t_conjunction_offset_days = t_conj - t_mid_geom
@@ -151,6 +153,7 @@ class TransitShape(_EventShape):
     """
 
     _which = "transit"
+    _periods_after_transit = 0.0
 
     def __init__(self, time_bmjd, system, *, limb_dark: str = "quadratic", u=None,
                  grid_step_s: float = _GRID_STEP_S):

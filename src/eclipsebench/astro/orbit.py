@@ -46,7 +46,7 @@ __all__ = [
     "separation", "sky_coordinates", "sky_separation",
     "periastron_angular_velocity",
     "geometric_to_observed", "observed_to_geometric",
-    "transit_time_bmjd", "eclipse_time_bmjd", "orbital_phase",
+    "transit_time_bmjd", "eclipse_time_bmjd", "conjunction_time_bmjd", "orbital_phase",
     "OrbitClock",
 ]
 
@@ -286,7 +286,12 @@ def observed_to_geometric(t_obs, system):
 
 
 # --------------------------------------------------------------------------- event times
-def _event_time(system, near_bmjd: float, which: str, reference: str) -> float:
+def conjunction_time_bmjd(system, near_bmjd: float, which: str, *,
+                          reference: str = "mid") -> float:
+    """Observed time (BMJD_TDB) of the transit (``which="transit"``) or secondary eclipse
+    (``"eclipse"``) nearest ``near_bmjd``: :func:`transit_time_bmjd` or
+    :func:`eclipse_time_bmjd` (an event's ``conjunction``,
+    :mod:`eclipsebench.astro.events`, names it)."""
     clock = _clock(system)
     if reference not in ("mid", "conjunction"):
         raise ValueError("reference must be 'mid' or 'conjunction'")
@@ -304,7 +309,7 @@ def transit_time_bmjd(system, near_bmjd: float, *, reference: str = "mid") -> fl
     time, so with ``"mid"`` the catalogue's transit epochs are returned
     exactly.
     """
-    return _event_time(system, near_bmjd, "transit", reference)
+    return conjunction_time_bmjd(system, near_bmjd, "transit", reference=reference)
 
 
 def eclipse_time_bmjd(system, near_bmjd: float, *, reference: str = "mid") -> float:
@@ -313,7 +318,7 @@ def eclipse_time_bmjd(system, near_bmjd: float, *, reference: str = "mid") -> fl
     Includes the light-travel time across the orbit; see
     :func:`transit_time_bmjd` for ``reference``.
     """
-    return _event_time(system, near_bmjd, "eclipse", reference)
+    return conjunction_time_bmjd(system, near_bmjd, "eclipse", reference=reference)
 
 
 def orbital_phase(time_bmjd, system, *, reference: str = "transit"):

@@ -45,6 +45,7 @@ from astropy.table import Table, vstack
 
 from .. import __version__
 from ..astro.catalogue import PlanetSystem, system_for, system_from_meta
+from ..astro.events import event_for
 from ..config import Config, load_toml
 from ..config.photometry import PhotometrySection
 from ..engine.cluster import ClusterOptions, SchedulerUnreachable, external_security
@@ -421,7 +422,7 @@ def joint_task(cfg: Config, table_paths: list[str], epochs: list[int], method: s
     base = {"method": method, "epochs": list(epochs), "event": cfg.reduce.event,
             "eclipsebench_version": __version__}
     try:
-        if cfg.reduce.event == "eclipse":
+        if event_for(cfg.reduce.event).joint_fit:
             tables = [read_table(p) for p in table_paths]
             result = fit_reduce.reduce_joint(tables, method, options=cfg.reduce, system=system,
                                              seed=cfg.challenge.seed, epochs=epochs,
@@ -527,7 +528,7 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
     configured = fit_reduce.configured_method_options(cfg.reduce)
     for group, members in groups.items():
         events = {(by_number[n].event or cfg.reduce.event) for n in members}
-        if len(members) < MIN_EPOCHS or len(events) != 1 or events == {"transit"}:
+        if len(members) < MIN_EPOCHS or len(events) != 1 or not event_for(*events).campaign_group:
             continue
         gcfg = _event_of(cfg, by_number[members[0]])
         joints[group] = {}
@@ -598,7 +599,7 @@ def _photon_limit(cfg: Config, layout: Layout, members: list[int],
     """The analytic photon limit (Section 3.3) of an eclipse campaign whose tables have a
     background column (this package's photometry), at ``depth_ppm`` (the mean measured
     depth, as ``run`` without a truth); None otherwise."""
-    if cfg.reduce.event != "eclipse":
+    if not event_for(cfg.reduce.event).scored:
         return None
     tables = {e: read_table(layout.photometry(e)) for e in members}
     if not all("background" in t.colnames for t in tables.values()):

@@ -36,6 +36,7 @@ import numpy as np
 from astropy.table import Table
 
 from ..astro.catalogue import system_for
+from ..astro.events import event_for
 from ..config import Config, dump_toml, from_mapping, load_toml, to_mapping
 from ..decorrelate import available_methods
 from ..decorrelate.base import unknown_methods
@@ -97,7 +98,7 @@ def check_run_config(cfg: Config) -> None:
     """What makes a run pointless, refused before any work."""
     for key, event in (("observation.event", cfg.observation.event),
                        ("reduce.event", cfg.reduce.event)):
-        if event != "eclipse":
+        if not event_for(event).scored:
             raise ConfigError(key, f"a run scores eclipse depths against the truth, not "
                                    f"{event}s; simulate them with `simulate` and fit them with "
                                    f"`reduce --event {event}`")

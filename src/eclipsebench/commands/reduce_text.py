@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..astro.events import event_for
+
 __all__ = ["format_text"]
 
 
@@ -27,7 +29,8 @@ def format_text(result: dict) -> str:
                          f"{e['depth_alone_err_ppm']:5.1f} ppm, beta_red {_num(e['beta_red'])}")
         lines.append(f"wrote         {result['result_file']}")
         return "\n".join(lines)
-    when = "t_transit" if result.get("event") == "transit" else "t_ecl"
+    event = event_for(result.get("event"))
+    when = event.time_prefix
     lines = [f"method        {result['method']} (epoch {result['epoch']}, phase {result['phase']}, "
              f"{result['sampler']}, {result.get('profile', 'controlled')} profile)",
              f"depth         {result['depth_ppm']:.1f} +- {result['depth_err_ppm']:.1f} ppm "
@@ -39,20 +42,7 @@ def format_text(result: dict) -> str:
              f"BIC / AIC     {_num(result['bic'], 1)} / {_num(result['aic'], 1)} (k = {result['k']}, "
              f"on {result.get('bic_data', 'points not recorded')}: comparable only with fits "
              "of the same points)"]
-    if when == "t_transit":
-        lines.insert(2, f"rp_rs         {result['rp_rs']:.5f} +- {result['rp_rs_err']:.5f} "
-                        "(depth = rp_rs^2)")
-    if result.get("event") == "phase-curve":
-        lines[2:2] = [
-            f"amplitude     {result['phase_amplitude_ppm']:.1f} +- "
-            f"{result['phase_amplitude_err_ppm']:.1f} ppm (semi-amplitude)",
-            f"offset        {result['phase_offset_deg']:.1f} +- "
-            f"{result['phase_offset_err_deg']:.1f} deg (hotspot, east positive)",
-            f"night side    {result['nightside_flux_ppm']:.1f} +- "
-            f"{result['nightside_flux_err_ppm']:.1f} ppm; minimum "
-            f"{result['planet_flux_min_ppm']:.1f} ppm"
-            + (" (NEGATIVE)" if result.get("planet_flux_negative") else ""),
-            f"rp_rs         {result['rp_rs']:.5f} +- {result['rp_rs_err']:.5f}"]
+    lines[2:2] = event.detail_lines(result)   # Rp/R*, or a phase curve's summary
     models = result.get("phase_models")
     if models:
         lines.append("phase models  (BIC picks " + models["best_bic"] + ", AIC picks "

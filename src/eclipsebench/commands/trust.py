@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 import shlex
-from dataclasses import replace
 from pathlib import Path
 
+from ..astro.events import event_for
 from ..config import load_config
 from ..detector.constants import READOUT_MODES
 from ..errors import InputError
@@ -14,14 +14,13 @@ from ..fit.names import EVENTS
 from ..limits import MAX_WORKERS
 from .options import (
     add_planet_options,
-    check_output_path,
     method_list,
     method_options,
     planet_overrides,
     positive_float,
     positive_int,
 )
-from .table_options import TABLE_LABELS, add_table_options, column_map, time_options
+from .table_options import TABLE_LABELS, add_table_options, table_keywords
 
 #: The readouts twins are made for (subarray modes).
 SUBARRAY_READOUTS = tuple(name for name, mode in READOUT_MODES.items() if mode.subarray)
@@ -96,10 +95,15 @@ def _twin_count(text: str) -> int:
     return value
 
 
+#: How the library's refusals name this command's options.
+LABELS = {**TABLE_LABELS, "out": "--out", "depth_ppm": "--depth"}
+
+
 def run(args: argparse.Namespace) -> dict:
     # the simulator and every method: imported when the command runs, not for --help
+    from ..api import trust_with_report
+    from ..astro.catalogue import system_for
     from ..decorrelate.base import unknown_methods
-    from ..trust.run import run_trust, trust_settings
 
     if args.methods and (problem := unknown_methods(args.methods)):   # before the table
         raise InputError(f"--methods: {problem}")
@@ -107,26 +111,16 @@ def run(args: argparse.Namespace) -> dict:
     cfg = load_config(args.config, args.overrides + planet_overrides(args, args.system))
     changes = {k: v for k, v in (("profile", args.profile), ("sampler", args.sampler),
                                  ("event", args.event)) if v is not None}
-    section = replace(cfg.reduce, **changes)
-    section.validate()
-    out = check_output_path(Path(args.out), "--out", "folder")
     explicit = args.system is not None or bool(args.planet)
-    from ..astro.catalogue import system_for
-
-    settings = trust_settings(args.table, out, reduce=section,
-                              system=system_for(cfg.system) if explicit else None,
-                              system_section=cfg.system, methods=args.methods,
-                              n_twins=args.twins, depth_ppm=args.depth, seed=args.seed,
-                              method_options=method_options(args.method_options),
-                              pmap=args.pmap, columns=column_map(args.columns),
-                              time_column=args.time_column, time_format=args.time_format,
-                              time_options=time_options(args), readout=args.readout,
-                              channel=args.channel, labels=TABLE_LABELS,
-                              depth_name="--depth")
     command = shlex.join(["eclipsebench", *getattr(args, "_argv", [])])   # for the page
-    summary, report = run_trust(settings, out, workers=args.workers or cfg.run.workers,
-                                command=command)
-    return {**summary, "_run": {"out": str(out), "ran": len(report.ran),
+    summary, report = trust_with_report(
+        args.table, Path(args.out), command=command, config=cfg,
+        system=system_for(cfg.system) if explicit else None, twins=args.twins,
+        methods=args.methods, depth_ppm=args.depth, seed=args.seed,
+        options=method_options(args.method_options), pmap=args.pmap,
+        readout=args.readout, channel=args.channel, labels=LABELS,
+        workers=args.workers or cfg.run.workers, **table_keywords(args), **changes)
+    return {**summary, "_run": {"out": str(Path(args.out)), "ran": len(report.ran),
                                 "skipped": len(report.skipped), "wall_s": report.wall_s,
                                 "stage_seconds": report.stage_seconds()}}
 
@@ -179,7 +173,7 @@ def format_text(result: dict) -> str:
     lines += text_table(head, units, rows)
     head, units, rows = method_rows(result, TIME_COLUMNS)
     if rows:
-        lines.append(f"the {'transit' if result['twins']['event'] == 'transit' else 'eclipse'}"
+        lines.append(f"the {event_for(result['twins']['event']).conjunction}"
                      "'s mid-time, against the injected one (the twins whose fit freed it):")
         lines += text_table(["mid-time", *head[1:]], units, rows)
     for name, unit, rows in phase_rows(result):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ..astro.events import event_for
 from ..limits import MAX_MCMC_WALKER_STEPS, MAX_MCMC_WALKERS, check_size
 from .base import check
 
@@ -171,7 +172,7 @@ class ReduceSection:
         """
         if self.sampler != "auto":
             return self.sampler
-        return "leastsq" if self.event == "phase-curve" else "mcmc"
+        return event_for(self.event).default_sampler
 
     def _check_chain_size(self) -> None:
         """Walkers, and walkers x steps (the chain kept in memory), within the stated limits."""
@@ -200,7 +201,7 @@ class ReduceSection:
         check(0.0 <= self.exposure_s <= 3600.0, "exposure_s",
               "0 (the table's cadence) or an exposure of at most 3600 s")
         for key in ("systematics_per_aor", "nonnegative_planet"):
-            check(not getattr(self, key) or self.event == "phase-curve", key,
+            check(not getattr(self, key) or key in event_for(self.event).own_settings, key,
                   "true only with event = 'phase-curve'")
         free = ("a_rs", "b", "q1", "q2")   # eclipsebench.fit.astro_model.TRANSIT_FREE
         check(all(n in free for n in self.transit_free)

@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ..astro.events import Event, event_for
 from ..errors import InputError
 from .astro_parts import (
     DEPTH_BOUNDS,
@@ -150,18 +151,26 @@ class AstroModel(ABC):
     phase_models: ClassVar[tuple[str, ...]] = PHASE_MODELS
     #: Each event's subclass, registered as it is defined (:meth:`__init_subclass__`).
     _event_classes: ClassVar[dict[str, type[AstroModel]]] = {}
+    #: The facts of the event that callers branch on (:mod:`eclipsebench.astro.events`):
+    #: its time key, conjunction, size of a depth...; set from ``event`` as a subclass is
+    #: defined.
+    facts: ClassVar[Event]
     #: Whether the event spans a whole orbit over several AORs: a flux offset per AOR after
     #: the first (from the table's ``aorkey``) and a harmonic phase curve that
     #: :meth:`phase_summary` summarises (a phase curve's; not an eclipse's or a transit's).
+    #: The event's fact (:attr:`facts`), set with it.
     whole_orbit: ClassVar[bool] = False
     #: A phase curve's AORs in time order (:attr:`n_aor` offsets after the first); none
     #: for the other events.
     aor_keys: tuple = ()
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
-        """Register a subclass that names its own ``event`` (not one that inherits it)."""
+        """Register a subclass that names its own ``event`` (not one that inherits it), with
+        that event's facts."""
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("event"):
+            cls.facts = event_for(cls.event)
+            cls.whole_orbit = cls.facts.whole_orbit
             AstroModel._event_classes[cls.event] = cls
 
     @staticmethod
@@ -293,26 +302,26 @@ class AstroModel(ABC):
         """Set the event's own bounds in place (default: none)."""
         return None   # a hook: nothing to do by default
 
-    def initial(self, *, depth: float | None = None, t_ecl_bmjd: float | None = None,
+    def initial(self, *, depth: float | None = None, t_event_bmjd: float | None = None,
                 rp_rs: float | None = None) -> np.ndarray:
         """Starting parameters: no phase variation or ramp, and
 
-        - an eclipse: ``depth`` (default 1e-3) at ``t_ecl_bmjd``;
-        - a transit: ``rp_rs`` (default the catalogue's) at ``t_ecl_bmjd`` (the
-          event's time: mid-transit), free a_rs, b, q1, q2 at their prior
-          means or else their fixed values;
-        - a phase curve: ``depth`` at ``t_ecl_bmjd`` (an eclipse within half a
+        - an eclipse: ``depth`` (default 1e-3) at ``t_event_bmjd`` (mid-eclipse);
+        - a transit: ``rp_rs`` (default the catalogue's) at ``t_event_bmjd``
+          (mid-transit), free a_rs, b, q1, q2 at their prior means or else
+          their fixed values;
+        - a phase curve: ``depth`` at ``t_event_bmjd`` (an eclipse within half a
           period of the data), the catalogue's ``rp_rs``, no phase variation,
           AOR offsets 0.
 
         The time defaults to the middle of the data.
         """
-        if t_ecl_bmjd is None:
-            t_ecl_bmjd = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
-        self._check_event_time(t_ecl_bmjd)
+        if t_event_bmjd is None:
+            t_event_bmjd = 0.5 * (self.t_start_bmjd + self.t_stop_bmjd)
+        self._check_event_time(t_event_bmjd)
         theta = np.zeros(len(self.names))
         self._start_event(theta, depth=depth, rp_rs=rp_rs)
-        theta[1] = t_ecl_bmjd
+        theta[1] = t_event_bmjd
         self.ramp_term.start(theta, self._ramp_at, self.t_stop_bmjd - self.t_start_bmjd)
         return theta
 
@@ -436,6 +445,20 @@ class AstroModel(ABC):
     def depth_difference_ppm(self, lower: float, upper: float) -> float:
         """``depth(upper) - depth(lower)`` in ppm (a posterior interval's side)."""
         return float((upper - lower) * 1e6)
+
+    @classmethod
+    def depth_limit_ppm(cls) -> float:
+        """The deepest event (ppm) a fit can return: the depth of its size's upper bound
+        (an eclipse's and a phase curve's ``DEPTH_BOUNDS[1]``)."""
+        return float(DEPTH_BOUNDS[1] * 1e6)
+
+    def event_detail(self, size: float, size_err: float, t_bmjd: float, t_err_d: float,
+                     t_predicted_bmjd: float) -> dict[str, Any]:
+        """The result's ``event_detail`` of the fitted size, the event's time and their
+        errors: none for an eclipse (a transit's: its Rp/R* and its times under their own
+        names; a whole phase curve's summary is
+        :func:`~eclipsebench.fit.epoch_fit.phase_curve_detail`)."""
+        return {}
 
     # ------------------------------------------------------------------ priors
     def prior_residuals(self, theta) -> np.ndarray:

@@ -51,8 +51,6 @@ from __future__ import annotations
 from .astro_base import AstroModel
 from .astro_eclipse import EclipseModel
 from .astro_parts import (
-    DEPTH_BOUNDS,
-    TRANSIT_BOUNDS,
     TRANSIT_FREE,
     aor_order,
     box_visible_fraction,
@@ -84,6 +82,4 @@ def depth_limit_ppm(event: str) -> float:
     >>> depth_limit_ppm("eclipse"), depth_limit_ppm("transit")
     (100000.0, 250000.0)
     """
-    if event == "transit":
-        return float(TRANSIT_BOUNDS["rp_rs"][1] ** 2 * 1e6)
-    return float(DEPTH_BOUNDS[1] * 1e6)
+    return AstroModel.event_class(event).depth_limit_ppm()

@@ -58,7 +58,6 @@ class PhaseCurveModel(TransitGeometry, AstroModel):
 
     event = "phase-curve"
     phase_models = PHASE_CURVE_MODELS
-    whole_orbit = True
 
     def _check_exposure_options(self, settings: EventSettings) -> None:
         """A phase curve's own settings: all accepted."""

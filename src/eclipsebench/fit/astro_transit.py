@@ -241,6 +241,22 @@ class TransitModel(TransitGeometry, AstroModel):
         for i, name in enumerate(self.transit_free):
             theta[2 + i] = self.priors.get(name, (self.transit_fixed[name],))[0]
 
+    @classmethod
+    def depth_limit_ppm(cls) -> float:
+        """The geometric depth (ppm) of Rp/R*'s upper bound ``TRANSIT_BOUNDS["rp_rs"][1]``."""
+        return float(TRANSIT_BOUNDS["rp_rs"][1] ** 2 * 1e6)
+
+    def event_detail(self, size: float, size_err: float, t_bmjd: float, t_err_d: float,
+                     t_predicted_bmjd: float) -> dict[str, Any]:
+        """A transit's ``event_detail``: Rp/R* and its error as fitted, the depth, the time
+        (under the transit's own keys, which replace the result's ``t_ecl_*``)."""
+        return {"event": self.event, "rp_rs": size, "rp_rs_err": size_err,
+                "transit_depth_ppm": self.depth_ppm(size),
+                "transit_depth_err_ppm": self.depth_error_ppm(size, size_err),
+                "transit_depth_definition": "rp_rs^2 (geometric)", "t_transit_bmjd": t_bmjd,
+                "t_transit_err_d": t_err_d, "t_transit_predicted_bmjd": t_predicted_bmjd,
+                "transit_model": self.describe()}
+
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
         """v(t): 1 throughout a transit (the planet is never hidden)."""
         return np.ones_like(self.time_bmjd)

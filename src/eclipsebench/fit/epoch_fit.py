@@ -108,18 +108,6 @@ def _corrected_lightcurve(systematics: Systematics, astro_model: AstroModel,
             **lightcurve_errors(systematics.data.flux, systematics.data.flux_err, corrected)}
 
 
-def _transit_detail(astro_model: AstroModel, rp_rs: float, rp_rs_err: float,
-                    t_transit_bmjd: float, t_err_d: float,
-                    t_predicted_bmjd: float) -> dict[str, Any]:
-    """A transit's ``event_detail``: Rp/R* and its error as fitted, the depth, the time."""
-    return {"event": astro_model.event, "rp_rs": rp_rs, "rp_rs_err": rp_rs_err,
-            "transit_depth_ppm": astro_model.depth_ppm(rp_rs),
-            "transit_depth_err_ppm": astro_model.depth_error_ppm(rp_rs, rp_rs_err),
-            "transit_depth_definition": "rp_rs^2 (geometric)", "t_transit_bmjd": t_transit_bmjd,
-            "t_transit_err_d": t_err_d, "t_transit_predicted_bmjd": t_predicted_bmjd,
-            "transit_model": astro_model.describe()}
-
-
 def _method_error_estimates(systematics, astro_model, fit, errors: bool
                             ) -> tuple[dict[str, float], float]:
     """The method's own depth errors and its separation variance, in the event's size parameter.
@@ -157,7 +145,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     systematics = prep.systematics
     astro_model = prep.astro_model(options, phase=phase)
     size, when = astro_model.names[:2]   # ("depth", "t_ecl_bmjd") or ("rp_rs", "t_transit_bmjd")
-    theta0 = astro_model.initial(t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
+    theta0 = astro_model.initial(t_event_bmjd=prep.t_event_predicted_bmjd)
     fit = fit_leastsq(systematics, astro_model, theta0, max_nfev=options.max_nfev,
                       beta_bin_minutes=tuple(options.beta_bin_minutes))
     inflate = max(1.0, fit.beta_red) if np.isfinite(fit.beta_red) else 1.0
@@ -205,10 +193,9 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
     def ppm(err):   # an error of the size parameter as a depth error (ppm)
         return astro_model.depth_error_ppm(value, err)
 
-    detail = {} if astro_model.event != "transit" else _transit_detail(
-        astro_model, value, depth_err, params[when], t_err, prep.t_ecl_predicted_bmjd)
-    if astro_model.event == "phase-curve":
-        detail = phase_curve_detail(astro_model, fit, mc, inflate)
+    detail = (phase_curve_detail(astro_model, fit, mc, inflate) if astro_model.whole_orbit
+              else astro_model.event_detail(value, depth_err, params[when], t_err,
+                                            prep.t_event_predicted_bmjd))
     return EpochResult(
         method=method, epoch=prep.epoch,
         depth_ppm=astro_model.depth_ppm(value), depth_err_ppm=ppm(depth_err),
@@ -218,7 +205,7 @@ def fit_prepared(prep: PreparedEpoch, method: str, *, options: ReduceSection,
         depth_err_mcmc_ppm=None if mc is None else ppm(mc.error(size)),
         depth_err_separation_ppm=ppm(float(np.sqrt(separation_var))),
         t_ecl_bmjd=params[when], t_ecl_err_d=t_err,
-        t_ecl_predicted_bmjd=prep.t_ecl_predicted_bmjd,
+        t_ecl_predicted_bmjd=prep.t_event_predicted_bmjd,
         bic=fit.bic, aic=fit.aic, k=fit.k, log_likelihood=fit.log_likelihood,
         chi2_red=fit.chi2_red, rms_ppm=fit.rms_ppm, beta_red=fit.beta_red,
         cadence_s=median_cadence_s(prep.table["time_bmjd"]),

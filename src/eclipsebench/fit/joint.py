@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..astro.events import event_for
 from ..config.reduce import ReduceSection
 from ..errors import InputError
 from .leastsq import (
@@ -99,7 +100,7 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     tables = list(tables)
     if not tables:
         raise InputError("reduce_joint: no photometry tables given")
-    if options.event != "eclipse":
+    if not event_for(options.event).joint_fit:
         raise InputError(f"reduce_joint: event '{options.event}': joint fits share an eclipse "
                          "depth; fit each transit alone (and each phase curve)")
     epochs = list(epochs) if epochs is not None else [None] * len(tables)
@@ -119,7 +120,7 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                              time_options=time_options, system_section=system_section,
                              labels=labels)
         astro_model = prep.astro_model(options)
-        theta0 = astro_model.initial(depth=1e-3, t_ecl_bmjd=prep.t_ecl_predicted_bmjd)
+        theta0 = astro_model.initial(depth=1e-3, t_event_bmjd=prep.t_event_predicted_bmjd)
         fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,
                           beta_bin_minutes=tuple(options.beta_bin_minutes))
         preps.append(prep)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..config.reduce import ReduceSection
-from .astro_model import PHASE_CURVE_MODELS, PHASE_MODELS
+from .astro_model import PHASE_MODELS, AstroModel
 from .epoch_fit import fit_prepared
 from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch
 
@@ -62,8 +62,8 @@ def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_
                          columns=columns, time_column=time_column, time_format=time_format,
                          time_options=time_options, system_section=system_section,
                          labels=labels)
-    if options.event == "phase-curve" and phases == PHASE_MODELS:
-        phases = PHASE_CURVE_MODELS
+    if phases == PHASE_MODELS:   # the default: the event's own models (a phase curve's)
+        phases = AstroModel.event_class(options.event).phase_models
     rows: list[dict[str, Any]] = []
     for phase in phases:
         res = fit_prepared(prep, method, options=options, phase=phase, errors=False)

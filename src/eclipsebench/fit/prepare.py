@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 from astropy.table import Table
 
-from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+from ..astro.events import event_for
+from ..astro.orbit import conjunction_time_bmjd, eclipse_time_bmjd
 from ..config.reduce import ReduceSection
 from ..decorrelate import get_method
 from ..decorrelate.base import MethodOptions, Systematics, parse_method_options, unknown_methods
@@ -29,7 +30,7 @@ from .frames import per_aor_systematics, settling_aor
 from .profiles import centroid_columns, paper_profile
 from .target import system_of_table
 
-__all__ = ["prepare_epoch", "PreparedEpoch", "resolve_system", "predicted_eclipse_bmjd",
+__all__ = ["prepare_epoch", "PreparedEpoch", "resolve_system", "predicted_event_bmjd",
            "resolve_method_options", "configured_method_options", "table_epoch"]
 
 #: The ``[reduce]`` defaults (a frozen dataclass, so one shared instance is safe).
@@ -88,29 +89,29 @@ def resolve_system(system: Any, meta: Mapping[str, Any] | None = None,
                            hint=hint)
 
 
-def predicted_eclipse_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
-                           event: str = "eclipse") -> float:
-    """The catalogue ephemeris's eclipse (or transit) nearest the data; InputError if it is
-    outside them.
+def predicted_event_bmjd(system, time_bmjd: np.ndarray, source: str = "the data",
+                         event: str = "eclipse") -> float:
+    """The catalogue ephemeris's time of ``event`` nearest the data (its conjunction: the
+    eclipse, or the transit); InputError if it is outside them.
 
     A whole phase curve (``event="phase-curve"``): the first eclipse whose
     centre lies in the data, else (no eclipse centre inside) the one nearest
     their middle; the others follow from the period.
     """
     t0, t1 = float(np.min(time_bmjd)), float(np.max(time_bmjd))
-    if event == "phase-curve":
+    facts = event_for(event)
+    if facts.whole_orbit:
         period = float(system.period_days)
         first = float(eclipse_time_bmjd(system, t0))
         first += period * np.ceil((t0 - first) / period - 1e-12)   # first at or after t0
         return first if first <= t1 else float(eclipse_time_bmjd(system, 0.5 * (t0 + t1)))
-    when = transit_time_bmjd if event == "transit" else eclipse_time_bmjd
-    t_ecl = float(when(system, 0.5 * (t0 + t1)))
-    if not t0 <= t_ecl <= t1:
+    t_event = float(conjunction_time_bmjd(system, 0.5 * (t0 + t1), facts.conjunction))
+    if not t0 <= t_event <= t1:
         name = getattr(system, "name", "the system")
         raise InputError(f"{source}: the {name} {event} nearest the data is at "
-                         f"{t_ecl:.5f} BMJD, outside the time span {t0:.5f}-{t1:.5f} "
+                         f"{t_event:.5f} BMJD, outside the time span {t0:.5f}-{t1:.5f} "
                          f"(wrong system, or no {event} in these frames)")
-    return t_ecl
+    return t_event
 
 
 def table_epoch(table, epoch: int | None = None) -> int | None:
@@ -127,14 +128,15 @@ def table_epoch(table, epoch: int | None = None) -> int | None:
 
 @dataclass
 class PreparedEpoch:
-    """One epoch ready to fit: the method built on the data, and the predicted eclipse
-    (``t_ecl_predicted_bmjd``: the predicted mid-transit when ``[reduce] event`` is a transit)."""
+    """One epoch ready to fit: the method built on the data, and the predicted time of its
+    event (``t_event_predicted_bmjd``: the mid-eclipse, or the mid-transit when ``[reduce]
+    event`` is a transit)."""
 
     table: Any
     systematics: Systematics
     system: Any
     epoch: int | None
-    t_ecl_predicted_bmjd: float
+    t_event_predicted_bmjd: float
     source: str
     n_frames_dropped: dict[str, int]
     #: The centroid columns the method regresses on when a profile chose them ("" otherwise).
@@ -148,7 +150,7 @@ class PreparedEpoch:
     def astro_model(self, options: ReduceSection, *, phase: str | None = None) -> AstroModel:
         """The shared astrophysical model at the method's data times."""
         shape = options.eclipse_shape
-        if options.event == "phase-curve":
+        if event_for(options.event).whole_orbit:
             # a whole phase curve: its own phase models, the physical eclipse repeated each
             # orbit, an offset per AOR unless each AOR has its own systematics
             data = self.systematics.data
@@ -293,7 +295,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
             data = data.subset(~settling)
     system = resolve_system(system, table.meta, source, section=system_section, hint=hint)
     _check_resources(cls, resources, table.meta, source, labels)
-    t_pred = predicted_eclipse_bmjd(system, data.time_bmjd, source, options.event)
+    t_pred = predicted_event_bmjd(system, data.time_bmjd, source, options.event)
     # What the ephemeris predicts (never the truth): a method may use it to find the
     # eclipse's signature in its own decomposition (ICA's eclipse component).
     data = replace(data, meta={**data.meta, "t_ecl_predicted_bmjd": t_pred})
@@ -309,7 +311,7 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         systematics = build(data)
     dropped.update({k: int(v) for k, v in systematics.dropped_frames().items()})
     return PreparedEpoch(table=table, systematics=systematics, system=system,
-                         epoch=epoch_number, t_ecl_predicted_bmjd=t_pred,
+                         epoch=epoch_number, t_event_predicted_bmjd=t_pred,
                          source=source, n_frames_dropped=dropped, centroid=centroid_note)
 
 

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
+from ..astro.events import event_for
 from ..config.reduce import ReduceSection
 from ..errors import InputError
 from .astro_model import PHASE_CURVE_MODELS
@@ -128,7 +129,7 @@ def _phase_curve_choice(prep: PreparedEpoch, method: str, options: ReduceSection
     back with the chosen one; the BIC of each is returned for the result.
     Any other event or model: the options unchanged and no BIC.
     """
-    if options.event != "phase-curve" or options.phase_curve_model != "bic":
+    if not event_for(options.event).whole_orbit or options.phase_curve_model != "bic":
         return options, {}
     bic: dict[str, float] = {phase: float(fit_prepared(prep, method, options=options,
                                                        phase=phase, errors=False).bic)

@@ -22,7 +22,7 @@ from .phase_select import PhaseSelection, select_phase_model
 from .prepare import (
     PreparedEpoch,
     configured_method_options,
-    predicted_eclipse_bmjd,
+    predicted_event_bmjd,
     prepare_epoch,
     resolve_method_options,
     resolve_system,
@@ -32,5 +32,5 @@ from .result import EpochResult, JointResult
 
 __all__ = ["EpochResult", "JointResult", "PhaseSelection", "reduce_epoch", "reduce_joint",
            "select_phase_model", "prepare_epoch", "PreparedEpoch", "fit_prepared",
-           "resolve_system", "predicted_eclipse_bmjd", "resolve_method_options",
+           "resolve_system", "predicted_event_bmjd", "resolve_method_options",
            "configured_method_options", "resolve_profile", "phase_curve_detail"]

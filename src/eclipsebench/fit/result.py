@@ -24,6 +24,7 @@ from astropy.table import QTable, Table
 from astropy.time import Time
 
 from .. import __version__
+from ..astro.events import event_for
 from ..errors import InputError
 from ..io.atomic import atomic_path, write_json
 from ..io.plain import json_safe
@@ -214,9 +215,8 @@ class EpochResult:
         out.update({f"depth_err_{k}_ppm": v for k, v in self.depth_err_own_ppm.items()})
         out["options"] = dict(self.options)
         out["diagnostics"] = dict(self.diagnostics)
-        if self.event_detail.get("event") == "transit":   # its times under their own names
-            for key in ("t_ecl_bmjd", "t_ecl_err_d", "t_ecl_predicted_bmjd"):
-                del out[key]
+        for key in event_for(self.event_detail.get("event")).replaced_time_keys:
+            del out[key]   # a transit's: its detail holds its times under their own names
         if self.event_detail:
             out.update(json_safe(self.event_detail, nonfinite="keep"))
             out["event_keys"] = list(self.event_detail)
@@ -297,7 +297,7 @@ def _fields_from_dict(cls, data: Mapping[str, Any]) -> dict[str, Any]:
         value = data[f.name]
         out[f.name] = float("nan") if value is None and f.type == "float" else value
     event = {k: data[k] for k in data.get("event_keys", [])}
-    prefix = "t_transit" if event.get("event") == "transit" else "t_ecl"
+    prefix = event_for(event.get("event")).time_prefix
     out.update(t_ecl_bmjd=data[f"{prefix}_bmjd"], t_ecl_err_d=data[f"{prefix}_err_d"],
                t_ecl_predicted_bmjd=data[f"{prefix}_predicted_bmjd"])
     mcmc = {k[5:]: v for k, v in data.items() if k.startswith("mcmc_")}

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..astro.eclipse import EclipseShape
+from ..astro.events import event_for
 from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from ..config.simulation import ObservationSection
 from ..errors import ConfigError
@@ -360,13 +361,14 @@ def plan_challenge(obs: ObservationSection, n_epochs: int, period_days: float,
     (:func:`phase_curve_window_starts_bmjd`). Both need ``system``.
     """
     starts = epoch_start_times_bmjd(obs.start_times_jd, n_epochs, period_days)
-    if obs.event in ("transit", "phase-curve") and system is None:
+    event = event_for(obs.event)
+    if event.needs_orbit and system is None:
         raise ConfigError("observation.event", f"a {obs.event} plan needs the planet's orbit")
-    if obs.event == "transit":
+    if event.transit_windows:
         duration_d = plan_epoch(obs, 1, 0.0, seed).duration_s / SECONDS_PER_DAY
         starts = transit_window_starts_bmjd(starts, duration_d, system)
     main_cubes = None
-    if obs.event == "phase-curve":
+    if event.whole_orbit:
         main_cubes = phase_curve_main_cubes(obs, period_days)
         probe = plan_epoch(obs, 1, 0.0, seed, main_cubes=main_cubes)
         first_main = next(a for a in probe.aors if a.label.startswith("Main"))

@@ -11,7 +11,8 @@ from pathlib import Path
 from astropy.table import Table
 
 from ..astro.catalogue import system_for
-from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+from ..astro.events import event_for
+from ..astro.orbit import conjunction_time_bmjd
 from ..config import Config, dump_toml, to_mapping
 from ..engine.layout import SimulationLayout
 from ..engine.tasks import Task
@@ -113,17 +114,14 @@ def challenge_plans(cfg: Config) -> list[EpochPlan]:
     :func:`.plan.phase_curve_main_cubes`) is warned about when it lacks either.
     """
     system = system_for(cfg.system)
-    event = cfg.observation.event
+    event = event_for(cfg.observation.event)
     plans = plan_challenge(cfg.observation, cfg.challenge.epochs, system.period_days,
                            cfg.challenge.seed, system=system)
-    events = {"eclipse": (("eclipse", eclipse_time_bmjd),),
-              "transit": (("transit", transit_time_bmjd),),
-              "phase-curve": (("eclipse", eclipse_time_bmjd), ("transit", transit_time_bmjd))}
     for plan in plans:
         t0 = plan.start_bmjd
         t1 = t0 + plan.duration_s / SECONDS_PER_DAY
-        for name, when in events[event]:
-            t_event = float(when(system, 0.5 * (t0 + t1)))
+        for name in event.observed:
+            t_event = float(conjunction_time_bmjd(system, 0.5 * (t0 + t1), name))
             if not t0 <= t_event <= t1:
                 log.warning("epoch %d (%.4f-%.4f BMJD) holds no %s of %s (the nearest is at "
                             "%.4f BMJD): set observation.start_times_jd (JD - 2455000) a few "

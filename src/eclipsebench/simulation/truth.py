@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from astropy.table import Table
 
+from ..astro.events import event_for
 from ..astro.phase_curves import fit_harmonic_light_curve, fit_harmonics, harmonic_summary
 from ..config import Config
 from ..engine.layout import SimulationLayout
@@ -124,13 +125,13 @@ def epoch_truth_row(cfg: Config, plan: EpochPlan, frames: dict[str, np.ndarray],
            "y_mean": float(y.mean()), "y_sd": float(y.std()),
            "xy_cov": float(np.mean((x - x.mean()) * (y - y.mean()))),
            "n_frames": int(x.size)}
-    event = cfg.observation.event
-    if event in ("transit", "phase-curve"):
+    event = event_for(cfg.observation.event)
+    if event.observes_transit:
         transits = lc.transit_times_bmjd(t0, t1)
         rp_rs = float(lc.system.rp_rs)
         row.update({"rp_rs": rp_rs, "transit_depth_ppm": rp_rs * rp_rs * 1e6,
                     "t_transit_bmjd": float(transits[0]) if transits else float("nan")})
-    if event == "phase-curve":
+    if event.whole_orbit:
         row["aorkey_main_last"] = mains[-1]
         if eclipses:
             t_ref = float(eclipses[0])

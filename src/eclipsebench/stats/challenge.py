@@ -22,7 +22,7 @@ from ..config.detector import read_noise_of
 from ..engine.layout import Layout
 from ..engine.tasks import Task
 from ..errors import DataError
-from ..fit.reduce import predicted_eclipse_bmjd
+from ..fit.reduce import predicted_event_bmjd
 from ..io.atomic import atomic_path, write_json
 from ..io.plain import json_safe
 from ..photometry.table import read_photometry
@@ -78,7 +78,7 @@ def in_eclipse_fraction_of(cfg: Config, tables: Mapping[int, Table], truth) -> f
         time = np.asarray(t["time_bmjd"], float)[good_frames(t)]
         t_ecl = by_epoch.get(epoch)
         if t_ecl is None or not np.isfinite(t_ecl):
-            t_ecl = predicted_eclipse_bmjd(system, time)
+            t_ecl = predicted_event_bmjd(system, time)
         fractions.append(in_eclipse_fraction(EclipseShape(time, system).visible_fraction(t_ecl)))
     return float(np.mean(fractions))
 

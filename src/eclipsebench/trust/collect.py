@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..astro.events import event_for
 from .layout import TrustLayout
 from .score import PHASE_QUANTITIES
 
@@ -33,7 +34,7 @@ def collect(root: Path, methods: Sequence[str], n_twins: int, event: str = "ecli
     quantities ``{key: values}`` with the keys of :data:`~eclipsebench.trust.score.
     PHASE_QUANTITIES` and their errors, NaN where a result has none), skipped methods,
     failed twins."""
-    when = "t_transit" if event == "transit" else "t_ecl"
+    when = event_for(event).time_prefix
     layout = TrustLayout(Path(root))
     real: dict = {}
     twins: dict = {}

@@ -29,6 +29,7 @@ from astropy.table import Table
 from matplotlib.figure import Figure
 
 from .. import __version__
+from ..astro.events import event_for
 from ..fit.plot import literal_text
 from ..photometry.binning import bin_indices, bin_values
 from ..photometry.table import read_table
@@ -55,8 +56,7 @@ REAL_COLOR, TWIN_COLOR, CHOSEN_COLOR = "tab:red", "tab:blue", "goldenrod"
 
 
 def _event(summary: Mapping[str, Any]) -> str:
-    return "mid-transit" if (summary.get("twins") or {}).get("event") == "transit" \
-        else "mid-eclipse"
+    return event_for((summary.get("twins") or {}).get("event")).mid_label
 
 
 def hours_label(summary: Mapping[str, Any]) -> str:

@@ -66,10 +66,8 @@ def twin_truth(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any], depth
         raise InputError(f"event {event!r}: twins carry an eclipse, a transit or a whole "
                          f"phase curve ({', '.join(EVENTS)})")
     model = AstroModel.build(time_bmjd, system, phase=str(fit.get("phase", "flat")), event=event)
-    when = "t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"
-    size = np.sqrt(depth_ppm * 1e-6) if event == "transit" else depth_ppm * 1e-6
-    theta = model.initial(t_ecl_bmjd=float(fit[when]))
-    theta[0] = size
+    theta = model.initial(t_event_bmjd=float(fit[model.facts.time_key]))
+    theta[0] = model.facts.size_from_depth(depth_ppm)
     for i, name in enumerate(model.names[2:], start=2):
         value = fit.get(name)
         if isinstance(value, (int, float)) and np.isfinite(value):
@@ -198,7 +196,7 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
                          blur_px=blur, sky_scatter=share)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
-            "t_event_bmjd": float(fit["t_transit_bmjd" if event == "transit" else "t_ecl_bmjd"]),
+            "t_event_bmjd": float(fit[model.facts.time_key]),
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
             "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
             "y_ref_px": recipe.y_ref_px, "motion_peak_px": peak,

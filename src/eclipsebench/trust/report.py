@@ -17,6 +17,7 @@ import numpy as np
 from astropy.table import Table
 
 from .. import __version__
+from ..astro.events import event_for
 from ..io.atomic import atomic_path, write_json
 from ..photometry.table import read_table
 from .collect import collect
@@ -79,7 +80,7 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
     frequency = recommendation_frequency(resid, errors, seed=int(settings["seed"]))
     for m, s in scores.items():
         s["recommended_frequency"] = frequency.get(m, float("nan"))
-    when = "t_transit" if settings["reduce"]["event"] == "transit" else "t_ecl"
+    when = event_for(settings["reduce"]["event"]).time_prefix
     for m, s in scores.items():
         timing = timing_score(twins[m][4], twins[m][5], float(recipe["t_event_bmjd"]),
                               real[m].get(f"{when}_bmjd", np.nan),
