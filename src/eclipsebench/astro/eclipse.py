@@ -38,6 +38,7 @@ def event_window(clock: OrbitClock, which: str, t_conj_geom: float) -> tuple[flo
     span = 0.25 * clock.period
     t = np.linspace(t_conj_geom - span, t_conj_geom + span, 20001)
     x, y, z = clock.sky(t)
+    # the conjunction's name (orbit.py's word), not a branch on the event: the planet in front
     front = z > 0 if which == "transit" else z < 0
     inside = (np.hypot(x, y) < 1.0 + k) & front
     if not inside.any():

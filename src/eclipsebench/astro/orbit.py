@@ -143,6 +143,7 @@ def mean_anomaly_from_true(true_anom, ecc):
 
 def true_anomaly_at_conjunction(omega_rad: float, which: str) -> float:
     """True anomaly at inferior (``"transit"``) or superior (``"eclipse"``) conjunction."""
+    # a conjunction's name (an event passes its ``conjunction``), not a branch on the event
     if which == "transit":
         return math.pi / 2.0 - omega_rad
     if which == "eclipse":
@@ -325,6 +326,7 @@ def orbital_phase(time_bmjd, system, *, reference: str = "transit"):
     """Orbital phase in [0, 1): fraction of a period since the observed mid-transit
     (``reference="transit"``) or mid-eclipse (``"eclipse"``)."""
     t = np.asarray(time_bmjd, dtype=float)
+    # a conjunction's name (an event passes its ``conjunction``), not a branch on the event
     if reference == "transit":
         t_ref = system.t_transit_bmjd
     elif reference == "eclipse":
