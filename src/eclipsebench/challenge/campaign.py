@@ -14,7 +14,8 @@ task                                writes                                      
 ``reduce[_paper]/<m>/epoch_NN``     ``results[_paper]/<m>/epoch_NN.json``        its table
                                     (run's planner, :func:`.reduce_stage.plan_reduce_tasks`)
 ``joint/<m>[_chN]``                 ``joint/<m>[_chN].json`` (one depth, every   the tables
-                                    epoch of the channel: :func:`joint_task`)
+                                    epoch of the channel: :func:`joint_task`)    (and <m>'s
+                                                                                 reductions)
 ``stats``                           ``depths[_paper].ecsv``, ``tables/``,        everything
                                     ``summary.json`` (:func:`campaign_stats_task`)
 ``report`` (``run.report``)         ``report/index.html``                        ``stats``
