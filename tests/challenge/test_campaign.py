@@ -186,7 +186,8 @@ def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
 
-def test_the_joint_fits_start_from_the_reductions_and_answer_as_if_fitted_alone(tiny, tmp_path):
+def test_the_joint_fits_start_from_the_reductions_and_answer_as_if_fitted_alone(
+        tiny, tmp_path, monkeypatch):
     """Each joint task waits for its method's reductions and is given them, so no epoch is
     fitted alone twice (issue 38's speed); its answer is the bytes of the joint fit that
     fits every epoch alone itself (``result_paths=None``)."""
@@ -197,6 +198,7 @@ def test_the_joint_fits_start_from_the_reductions_and_answer_as_if_fitted_alone(
         build_campaign_tasks,
         campaign_planet,
     )
+    from eclipsebench.fit import joint as fit_joint
 
     _, _, tables, camp_root, _, _ = tiny
     epochs = epochs_from_inputs(tables)
@@ -206,14 +208,22 @@ def test_the_joint_fits_start_from_the_reductions_and_answer_as_if_fitted_alone(
     tasks = build_campaign_tasks(cfg, camp_root, epochs, system, _channels(epochs))
     joints = {t.key: t for t in tasks if t.stage == "joint"}
     assert sorted(joints) == ["joint/bliss_ch2", "joint/pld_ch2"]
+    calls: list[int] = []
+    real = fit_joint.fit_leastsq
+    monkeypatch.setattr(fit_joint, "fit_leastsq", lambda *a, **k: calls.append(1) or real(*a, **k))
     for key, task in joints.items():
         m = key.split("/")[1].removesuffix("_ch2")
         assert {f"reduce/{m}/epoch_01", f"reduce/{m}/epoch_02"} <= set(task.deps)
         *args, out, starts = task.args
         assert starts == [str(camp_root / "results" / m / f"epoch_{e:02d}.json")
                           for e in (1, 2)]
+        calls.clear()
+        seeded = tmp_path / f"{m}_seeded.json"
+        task.func(*args, str(seeded), starts)
+        assert calls == [] and seeded.read_bytes() == Path(out).read_bytes(), m
         alone = tmp_path / f"{m}.json"
         task.func(*args, str(alone), None)
+        assert calls == [1, 1]      # each epoch fitted alone
         assert alone.read_bytes() == Path(out).read_bytes(), m
 
 

@@ -3,6 +3,7 @@ fitting each epoch alone again; a start that is not that fit is not used (issue 
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import pytest
@@ -11,18 +12,25 @@ from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.fit import joint as fit_joint
 from eclipsebench.fit.reduce import reduce_epoch, reduce_joint
 from eclipsebench.fit.result import EpochResult
+from eclipsebench.io.atomic import write_json
 
 LSQ = ReduceSection(phase="quadratic", sampler="leastsq", prayer_bead_shifts=0)
 
 
 @pytest.fixture
-def epochs(polygain, xo3_epoch):
-    """Two synthetic epochs and their reductions, read back from their JSON as a campaign
-    reads them."""
+def epochs(polygain, xo3_epoch, tmp_path):
+    """Two synthetic epochs and their reductions, written and read back from their JSON
+    (its keys sorted: ``params`` no longer in the fit's order) as a campaign reads them."""
     tables = [xo3_epoch["table"](seed=21), xo3_epoch["table"](seed=22)]
     done = [reduce_epoch(t, polygain.name, options=LSQ, epoch=e, seed=4)
             for e, t in zip((1, 2), tables, strict=True)]
-    return tables, [EpochResult.from_dict(r.to_dict()) for r in done]
+    back = []
+    for r in done:
+        write_json(tmp_path / f"epoch_{r.epoch}.json", r.to_dict())
+        back.append(EpochResult.from_dict(json.loads((tmp_path / f"epoch_{r.epoch}.json")
+                                                     .read_text())))
+    assert list(back[0].params) != list(done[0].params)   # the order the JSON gives
+    return tables, back
 
 
 def _count_fits_alone(monkeypatch) -> list[int]:

@@ -64,7 +64,7 @@ def start_of(result: EpochResult | None, prep: PreparedEpoch, astro_model: Astro
     least-squares sampler (so ``params`` are the least-squares solution and
     ``param_errors`` its Jacobian errors: with MCMC they are the posterior's), the same
     method options, phase, ramp and eclipse shape, on the same points, with the same
-    parameters in the same order. The ``[reduce]`` settings a result does
+    parameters (by name). The ``[reduce]`` settings a result does
     not record (``max_nfev``, ``beta_bin_minutes``, the limb darkening ...) are the
     caller's to keep equal: give results made with the ``options`` given to
     :func:`reduce_joint`.
@@ -80,7 +80,10 @@ def start_of(result: EpochResult | None, prep: PreparedEpoch, astro_model: Astro
             and (result.phase, result.ramp, result.eclipse_shape)
             == (astro_model.phase, astro_model.ramp, astro_model.eclipse_shape)
             and result.n_points == len(prep.systematics.data.time_bmjd)
-            and tuple(result.params) == names and tuple(result.param_errors) == names
+            # by name: a result read back from its JSON has its keys sorted
+            and sorted(result.params) == sorted(names)
+            and sorted(result.param_errors) == sorted(names)
+            and len(set(names)) == len(names)
             and names[0] == "depth")
     if not same:
         return None
