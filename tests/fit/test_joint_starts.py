@@ -61,13 +61,24 @@ def test_a_joint_fit_from_the_epochs_reductions_fits_none_alone_and_answers_the_
         assert e["depth_alone_ppm"] == r.depth_leastsq_ppm
 
 
-@pytest.mark.parametrize("change", ["mcmc", "phase", "seed", "epoch", "method_options"])
+@pytest.mark.parametrize("change", ["mcmc", "phase", "seed", "epoch", "method_options",
+                                    "hyperparameters"])
 def test_a_start_that_is_not_the_fit_alone_is_not_used(epochs, polygain, monkeypatch, change):
     """A reduction sampled by MCMC (its errors are the posterior's), with another phase
     model, seed, epoch number or method options is not the joint's fit alone: that epoch
-    is fitted alone again, and the answer is the unseeded one."""
+    is fitted alone again, and the answer is the unseeded one. Nor is any result of a
+    method with maximum-likelihood settings (GP, PLD, SegPoly): its fit alone leaves them
+    on the method for the joint fit, and a result does not record them."""
     tables, results = epochs
     other = results[1]
+    if change == "hyperparameters":
+        monkeypatch.setattr(polygain, "optimise_hyperparameters", lambda self, astro: None)
+        calls = _count_fits_alone(monkeypatch)
+        seeded = reduce_joint(tables, polygain.name, options=LSQ, epochs=[1, 2], seed=4,
+                              starts=results)
+        assert len(calls) == 2
+        assert seeded == reduce_joint(tables, polygain.name, options=LSQ, epochs=[1, 2], seed=4)
+        return
     if change == "mcmc":
         other = replace(other, sampler="mcmc")
     elif change == "phase":

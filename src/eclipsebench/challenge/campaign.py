@@ -48,6 +48,7 @@ from .. import __version__
 from ..astro.catalogue import PlanetSystem, system_for, system_from_meta
 from ..config import Config, load_toml
 from ..config.photometry import PhotometrySection
+from ..decorrelate import get_method
 from ..engine.cluster import ClusterOptions, SchedulerUnreachable, external_security
 from ..engine.folder import Input, check_free_space, check_kind, claim, planet_input
 from ..engine.layout import Layout
@@ -55,6 +56,7 @@ from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import DataError, InputError
 from ..fit import reduce as fit_reduce
+from ..fit.leastsq import has_hyperparameters
 from ..fit.names import EVENTS, TIME_AT, TIME_FORMATS, TIME_SCALES
 from ..fit.result import EpochResult, lightcurve_path
 from ..fit.target import names_a_system, system_of_table
@@ -550,9 +552,11 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
             key = f"joint/{_joint_name(m, group)}"
             opts = fit_reduce.resolve_method_options(m, gcfg.reduce, configured=configured)
             # an eclipse's joint fit starts from the controlled least-squares reductions
-            # (not fitted alone again); with MCMC they are not its start, so not waited for
+            # (not fitted alone again); with MCMC, or a method with maximum-likelihood
+            # settings, they are not its start (fit.joint.start_of), so not waited for
             seeded = (gcfg.reduce.event == "eclipse" and "controlled" in cfg.run.profiles
-                      and gcfg.reduce.resolved_sampler() == "leastsq")
+                      and gcfg.reduce.resolved_sampler() == "leastsq"
+                      and not has_hyperparameters(get_method(m)))
             starts = [str(layout.result(m, n)) for n in members] if seeded else None
             deps = tuple(photometry_key(n) for n in members) + (
                 tuple(reduce_key(m, n) for n in members) if seeded else ())

@@ -22,6 +22,7 @@ from .leastsq import (
     _Problem,
     _summarise,
     fit_leastsq,
+    has_hyperparameters,
     joint_names,
 )
 from .prepare import (
@@ -64,12 +65,16 @@ def start_of(result: EpochResult | None, prep: PreparedEpoch, astro_model: Astro
     least-squares sampler (so ``params`` are the least-squares solution and
     ``param_errors`` its Jacobian errors: with MCMC they are the posterior's), the same
     method options, phase, ramp and eclipse shape, on the same points, with the same
-    parameters (by name). The ``[reduce]`` settings a result does
+    parameters (by name). A method that sets maximum-likelihood settings between fits
+    (:func:`~eclipsebench.fit.leastsq.has_hyperparameters`: GP's kernel, PLD's bin size,
+    SegPoly) is never started from a result: its fit alone leaves those settings on the
+    method, the joint fit uses them, and a result does not record them (started without
+    them, PLD's joint depth on a two-epoch campaign moved by 125 ppm). The ``[reduce]`` settings a result does
     not record (``max_nfev``, ``beta_bin_minutes``, the limb darkening ...) are the
     caller's to keep equal: give results made with the ``options`` given to
     :func:`reduce_joint`.
     """
-    if result is None:
+    if result is None or has_hyperparameters(prep.systematics):
         return None
     names = joint_names(astro_model, prep.systematics)
     same = (result.method == method and result.epoch == prep.epoch and result.seed == seed
