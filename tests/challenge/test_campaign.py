@@ -169,7 +169,7 @@ def test_combined_depth_adds_the_methods_spread():
 def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
     """A result lost, another's light curve lost (the one resume rule,
     :func:`eclipsebench.fit.result.result_ok`) and a joint fit cut short: only they (and
-    the stats and the report after them) are redone."""
+    what is made from them: the stats and the report) are redone."""
     _, _, tables, camp_root, _, _ = tiny
     root = tmp_path / "c"
     shutil.copytree(camp_root, root)
@@ -179,10 +179,56 @@ def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
     joint.write_text(joint.read_text()[:40])
     _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
                              workers=1)
+    # BLISS's joint fit starts from its reductions (redone with them); PLD's does not
+    # (its bin size is a maximum-likelihood setting, fit.joint.start_of)
     assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/bliss/epoch_01",
                                   "reduce/pld/epoch_02", "report", "stats"]
     assert (root / "results" / "bliss" / "epoch_01.lc.ecsv").is_file()
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
+
+
+def test_the_joint_fits_start_from_the_reductions_and_answer_as_if_fitted_alone(
+        tiny, tmp_path, monkeypatch):
+    """Each joint task waits for its method's reductions and is given them, so no epoch is
+    fitted alone twice (issue 38's speed); its answer is the bytes of the joint fit that
+    fits every epoch alone itself (``result_paths=None``)."""
+    from dataclasses import replace
+
+    from eclipsebench.challenge.campaign import (
+        _channels,
+        build_campaign_tasks,
+        campaign_planet,
+    )
+    from eclipsebench.fit import joint as fit_joint
+
+    _, _, tables, camp_root, _, _ = tiny
+    epochs = epochs_from_inputs(tables)
+    cfg = load_config(None, CAMPAIGN)
+    system = campaign_planet(epochs, cfg.system)
+    cfg = replace(cfg, system=replace(cfg.system, name=system.name))
+    tasks = build_campaign_tasks(cfg, camp_root, epochs, system, _channels(epochs))
+    joints = {t.key: t for t in tasks if t.stage == "joint"}
+    assert sorted(joints) == ["joint/bliss_ch2", "joint/pld_ch2"]
+    calls: list[int] = []
+    real = fit_joint.fit_leastsq
+    monkeypatch.setattr(fit_joint, "fit_leastsq", lambda *a, **k: calls.append(1) or real(*a, **k))
+    for key, task in joints.items():
+        m = key.split("/")[1].removesuffix("_ch2")
+        *args, out, starts = task.args
+        if m == "pld":   # its bin size is set by maximum likelihood: not started, not waiting
+            assert starts is None and not any(d.startswith("reduce/") for d in task.deps)
+            continue
+        assert {f"reduce/{m}/epoch_01", f"reduce/{m}/epoch_02"} <= set(task.deps)
+        assert starts == [str(camp_root / "results" / m / f"epoch_{e:02d}.json")
+                          for e in (1, 2)]
+        calls.clear()
+        seeded = tmp_path / f"{m}_seeded.json"
+        task.func(*args, str(seeded), starts)
+        assert calls == [] and seeded.read_bytes() == Path(out).read_bytes(), m
+        alone = tmp_path / f"{m}.json"
+        task.func(*args, str(alone), None)
+        assert calls == [1, 1]      # each epoch fitted alone
+        assert alone.read_bytes() == Path(out).read_bytes(), m
 
 
 def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, monkeypatch):

@@ -14,7 +14,8 @@ task                                writes                                      
 ``reduce[_paper]/<m>/epoch_NN``     ``results[_paper]/<m>/epoch_NN.json``        its table
                                     (run's planner, :func:`.reduce_stage.plan_reduce_tasks`)
 ``joint/<m>[_chN]``                 ``joint/<m>[_chN].json`` (one depth, every   the tables
-                                    epoch of the channel: :func:`joint_task`)
+                                    epoch of the channel: :func:`joint_task`)    (and <m>'s
+                                                                                 reductions)
 ``stats``                           ``depths[_paper].ecsv``, ``tables/``,        everything
                                     ``summary.json`` (:func:`campaign_stats_task`)
 ``report`` (``run.report``)         ``report/index.html``                        ``stats``
@@ -48,6 +49,7 @@ from ..astro.catalogue import PlanetSystem, system_for, system_from_meta
 from ..astro.events import event_for
 from ..config import Config, load_toml
 from ..config.photometry import PhotometrySection
+from ..decorrelate import get_method
 from ..engine.cluster import ClusterOptions, SchedulerUnreachable, external_security
 from ..engine.folder import Input, check_free_space, check_kind, claim, planet_input
 from ..engine.layout import Layout
@@ -55,8 +57,9 @@ from ..engine.lock import run_lock
 from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import DataError, InputError
 from ..fit import reduce as fit_reduce
+from ..fit.leastsq import has_hyperparameters
 from ..fit.names import EVENTS, TIME_AT, TIME_FORMATS, TIME_SCALES
-from ..fit.result import lightcurve_path
+from ..fit.result import EpochResult, lightcurve_path
 from ..fit.target import names_a_system, system_of_table
 from ..io.atomic import atomic_path, write_json, write_text
 from ..io.bcd_read import BCD_NAME, find_bcd_files, group_epochs, read_bcd_header
@@ -409,11 +412,15 @@ def table_ok(path: Path) -> bool:
 
 
 def joint_task(cfg: Config, table_paths: list[str], epochs: list[int], method: str,
-               method_options: Any, out_path: str) -> None:
+               method_options: Any, out_path: str,
+               result_paths: Sequence[str] | None = None) -> None:
     """One depth over every epoch of a channel for one method.
 
     An eclipse is :func:`eclipsebench.fit.joint.reduce_joint` (each epoch its own
-    eclipse time, phase and systematics, one depth). A whole phase curve is one
+    eclipse time, phase and systematics, one depth), started from the campaign's own
+    reductions of the epochs (``result_paths``, the controlled profile's, one per
+    table): an epoch whose reduction is the fit alone ``reduce_joint`` would make is not
+    fitted again (:func:`eclipsebench.fit.joint.start_of` says when). A whole phase curve is one
     phase-curve fit of every epoch's frames (:func:`eclipsebench.fit.reduce.reduce_epoch`,
     one flux offset per AOR: each epoch's frames are their own AOR unless the table
     says which). A method that refuses the data is recorded, as in ``run``.
@@ -424,9 +431,11 @@ def joint_task(cfg: Config, table_paths: list[str], epochs: list[int], method: s
     try:
         if event_for(cfg.reduce.event).joint_fit:
             tables = [read_table(p) for p in table_paths]
+            starts = ([_reduction(p) for p in result_paths] if result_paths is not None
+                      else None)
             result = fit_reduce.reduce_joint(tables, method, options=cfg.reduce, system=system,
                                              seed=cfg.challenge.seed, epochs=epochs,
-                                             method_options=method_options)
+                                             method_options=method_options, starts=starts)
             out = {**base, "how": "joint fit: one depth, each epoch its own eclipse time, "
                                   "phase and systematics (fit/joint.py)",
                    **{k: v for k, v in result.to_dict().items() if k not in base}}
@@ -455,6 +464,13 @@ def joint_task(cfg: Config, table_paths: list[str], epochs: list[int], method: s
         out = {**base, "failed": True, "error": str(exc), "depth_ppm": None,
                "depth_err_ppm": None}
     write_json(Path(out_path), json_safe(out))
+
+
+def _reduction(path: str) -> EpochResult | None:
+    """A reduction's result written at ``path`` (without its light curve), None for a
+    recorded failure."""
+    data = json.loads(Path(path).read_text())
+    return None if data.get("failed") else EpochResult.from_dict(data)
 
 
 def joint_ok(method: str, path: Path) -> bool:
@@ -536,11 +552,19 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
             out = layout.joint(_joint_name(m, group))
             key = f"joint/{_joint_name(m, group)}"
             opts = fit_reduce.resolve_method_options(m, gcfg.reduce, configured=configured)
+            # an eclipse's joint fit starts from the controlled least-squares reductions
+            # (not fitted alone again); with MCMC, or a method with maximum-likelihood
+            # settings, they are not its start (fit.joint.start_of), so not waited for
+            seeded = (gcfg.reduce.event == "eclipse" and "controlled" in cfg.run.profiles
+                      and gcfg.reduce.resolved_sampler() == "leastsq"
+                      and not has_hyperparameters(get_method(m)))
+            starts = [str(layout.result(m, n)) for n in members] if seeded else None
+            deps = tuple(photometry_key(n) for n in members) + (
+                tuple(reduce_key(m, n) for n in members) if seeded else ())
             tasks.append(Task(key, "joint", joint_task,
                               (gcfg, [str(layout.photometry(n)) for n in members], members, m,
-                               opts, str(out)),
-                              (out,), tuple(photometry_key(n) for n in members),
-                              check=lambda p, m=m: joint_ok(m, p)))
+                               opts, str(out), starts),
+                              (out,), deps, check=lambda p, m=m: joint_ok(m, p)))
             joints[group][m] = str(out)
     twin_files: dict[str, str] = {}
     for e in epochs if twins else ():

@@ -6,7 +6,8 @@ depth is shared. :func:`reduce_joint` returns a :class:`JointResult`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -15,14 +16,19 @@ from scipy.optimize import least_squares
 from ..astro.events import event_for
 from ..config.reduce import ReduceSection
 from ..errors import InputError
+from ..io.plain import json_safe
+from .astro_model import AstroModel
 from .leastsq import (
     _covariance,
     _Problem,
     _summarise,
     fit_leastsq,
+    has_hyperparameters,
+    joint_names,
 )
 from .prepare import (
     _DEFAULT_OPTIONS,
+    PreparedEpoch,
     _read,
     _resources,
     _source,
@@ -30,9 +36,68 @@ from .prepare import (
     resolve_method_options,
     resolve_system,
 )
-from .result import JointResult
+from .result import EpochResult, JointResult
 
-__all__ = ["reduce_joint"]
+__all__ = ["reduce_joint", "start_of"]
+
+
+@dataclass(frozen=True)
+class _Alone:
+    """What the joint fit takes from an epoch fitted alone: the least-squares parameters
+    (``theta``: astro then systematics, :func:`~eclipsebench.fit.leastsq.joint_names`), the
+    depth's Jacobian error (fraction, not yet times beta) and the red-noise factor."""
+
+    theta: np.ndarray
+    depth_err: float
+    beta_red: float
+
+    @property
+    def depth(self) -> float:
+        return float(self.theta[0])
+
+
+def start_of(result: EpochResult | None, prep: PreparedEpoch, astro_model: AstroModel,
+             method: str, seed: int) -> _Alone | None:
+    """The epoch's fit alone taken from ``result`` (a :func:`reduce_epoch` of it), or None
+    when ``result`` is not the fit :func:`reduce_joint` would make.
+
+    It is that fit when it is of the same method, epoch, planet and seed, in the
+    controlled profile (the ``[reduce]`` settings as given, no team's choices), with the
+    least-squares sampler (so ``params`` are the least-squares solution and
+    ``param_errors`` its Jacobian errors: with MCMC they are the posterior's), the same
+    method options, phase, ramp and eclipse shape, on the same points, with the same
+    parameters (by name). A method that sets maximum-likelihood settings between fits
+    (:func:`~eclipsebench.fit.leastsq.has_hyperparameters`: GP's kernel, PLD's bin size,
+    SegPoly) is never started from a result: its fit alone leaves those settings on the
+    method, the joint fit uses them, and a result does not record them (started without
+    them, PLD's joint depth on a two-epoch campaign moved by 125 ppm). The ``[reduce]`` settings a result does
+    not record (``max_nfev``, ``beta_bin_minutes``, the limb darkening ...) are the
+    caller's to keep equal: give results made with the ``options`` given to
+    :func:`reduce_joint`.
+    """
+    if result is None or has_hyperparameters(prep.systematics):
+        return None
+    names = joint_names(astro_model, prep.systematics)
+    same = (result.method == method and result.epoch == prep.epoch and result.seed == seed
+            and result.profile == "controlled" and result.sampler == "leastsq"
+            and result.system == str(getattr(prep.system, "name", prep.system))
+            and result.options == json_safe(prep.systematics.options.to_dict(),
+                                            nonfinite="keep")
+            and (result.phase, result.ramp, result.eclipse_shape)
+            == (astro_model.phase, astro_model.ramp, astro_model.eclipse_shape)
+            and result.n_points == len(prep.systematics.data.time_bmjd)
+            # by name: a result read back from its JSON has its keys sorted
+            and sorted(result.params) == sorted(names)
+            and sorted(result.param_errors) == sorted(names)
+            and len(set(names)) == len(names)
+            and names[0] == "depth")
+    if not same:
+        return None
+    theta = np.array([result.params[n] for n in names], dtype=float)
+    depth_err = float(result.param_errors["depth"])
+    if not (np.all(np.isfinite(theta)) and np.isfinite(depth_err) and depth_err > 0):
+        return None
+    return _Alone(theta=theta, depth_err=depth_err, beta_red=float(result.beta_red))
 
 
 class _JointProblem:
@@ -81,7 +146,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
                  time_format: str | None = None,
                  time_options: Mapping[str, Any] | None = None, system_section: Any = None,
-                 labels: Mapping[str, str] | None = None) -> JointResult:
+                 labels: Mapping[str, str] | None = None,
+                 starts: Sequence[EpochResult | None] | None = None) -> JointResult:
     """Fit several epochs with one common depth (per-epoch eclipse time, phase, ramp, method).
 
     Each epoch is first fitted alone (its solution starts the joint fit), then
@@ -96,6 +162,17 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     The fit is of one planet: ``system``, else the one every table names
     (``system_section`` and ``labels`` as :func:`~eclipsebench.fit.prepare.prepare_epoch`
     takes them); tables naming two planets are refused before any fit.
+
+    ``starts``, one per table (None where there is none), are the epochs' fits alone
+    already made: :func:`~eclipsebench.fit.reduce.reduce_epoch` of the same table with the
+    same ``options``, ``method_options``, ``seed`` and epoch, in the controlled profile
+    with the least-squares sampler (``campaign`` passes its own reductions). A start is
+    used only where :func:`start_of` finds it is the fit this function would make (its
+    recorded method, epoch, seed, profile, sampler, method options, models, points and
+    parameters); that epoch is then not fitted again, and its least-squares parameters,
+    Jacobian depth error and ``beta_red`` are those of the fit alone. Any other epoch is
+    fitted alone here. The answer is the same either way: the fit alone is deterministic
+    and a result keeps its numbers exactly (JSON floats round-trip).
     """
     tables = list(tables)
     if not tables:
@@ -106,13 +183,18 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     epochs = list(epochs) if epochs is not None else [None] * len(tables)
     if len(epochs) != len(tables):
         raise InputError("reduce_joint: give one epoch number per table")
+    starts = list(starts) if starts is not None else [None] * len(tables)
+    if len(starts) != len(tables):
+        raise InputError("reduce_joint: give one start (or None) per table")
     method_options = resolve_method_options(method, options, method_options)  # once, for all
     hint = dict(labels or {}).get("system", "system=NAME")
     if system is None:
         tables = [_read(table) for table in tables]
         system = _one_planet(tables, system_section, hint)
-    problems, fits, preps = [], [], []
-    for table, ep in zip(tables, epochs, strict=True):
+    problems: list[_Problem] = []
+    fits: list[_Alone] = []
+    preps: list[PreparedEpoch] = []
+    for table, ep, start in zip(tables, epochs, starts, strict=True):
         prep = prepare_epoch(table, method, options=options, system=system, epoch=ep, seed=seed,
                              method_options=method_options,
                              resources=_resources(resources, pmap), columns=columns,
@@ -120,15 +202,19 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                              time_options=time_options, system_section=system_section,
                              labels=labels)
         astro_model = prep.astro_model(options)
-        theta0 = astro_model.initial(depth=1e-3, t_event_bmjd=prep.t_event_predicted_bmjd)
-        fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,
-                          beta_bin_minutes=tuple(options.beta_bin_minutes))
+        alone = start_of(start, prep, astro_model, method, seed)
+        if alone is None:   # the fit alone of fit_prepared (epoch_fit.py), made here
+            theta0 = astro_model.initial(depth=1e-3, t_event_bmjd=prep.t_event_predicted_bmjd)
+            fit = fit_leastsq(prep.systematics, astro_model, theta0, max_nfev=options.max_nfev,
+                              beta_bin_minutes=tuple(options.beta_bin_minutes))
+            alone = _Alone(theta=fit.theta, depth_err=fit.error("depth"),
+                           beta_red=fit.beta_red)
         preps.append(prep)
-        fits.append(fit)
+        fits.append(alone)
         problems.append(_Problem(prep.systematics, astro_model))
     joint = _JointProblem(problems)
-    weights = np.array([1.0 / max(f.error("depth"), 1e-12) ** 2 for f in fits])
-    depth0 = float(np.sum(weights * [f.value("depth") for f in fits]) / np.sum(weights))
+    weights = np.array([1.0 / max(f.depth_err, 1e-12) ** 2 for f in fits])
+    depth0 = float(np.sum(weights * [f.depth for f in fits]) / np.sum(weights))
     theta0 = np.concatenate([[depth0]] + [f.theta[1:] for f in fits])
     theta0 = np.clip(theta0, joint.lower, joint.upper)
     sol = least_squares(joint.residuals, theta0, jac=lambda th: joint.jacobian(th),
@@ -149,8 +235,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
         per_epoch.append({"epoch": prep.epoch, "t_ecl_bmjd": s.value("t_ecl_bmjd"),
                           "rms_ppm": s.rms_ppm, "beta_red": s.beta_red, "chi2_red": s.chi2_red,
                           "n_points": s.n_data,
-                          "depth_alone_ppm": fits[i].value("depth") * 1e6,
-                          "depth_alone_err_ppm": fits[i].error("depth") * 1e6
+                          "depth_alone_ppm": fits[i].depth * 1e6,
+                          "depth_alone_err_ppm": fits[i].depth_err * 1e6
                           * (max(1.0, fits[i].beta_red) if np.isfinite(fits[i].beta_red)
                              else 1.0)})
     chi2_red = chi2 / (n - k)

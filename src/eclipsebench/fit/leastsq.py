@@ -305,9 +305,11 @@ def fit_leastsq(systematics: Systematics, astro_model: AstroModel, theta0_astro,
                       beta_bin_minutes)
 
 
-def has_hyperparameters(systematics: Systematics) -> bool:
-    """Whether the method sets parameters by maximum likelihood between fits (GP)."""
-    return type(systematics).optimise_hyperparameters is not Systematics.optimise_hyperparameters
+def has_hyperparameters(systematics: Systematics | type[Systematics]) -> bool:
+    """Whether the method (an instance or its class) sets parameters by maximum likelihood
+    between fits (GP)."""
+    cls = systematics if isinstance(systematics, type) else type(systematics)
+    return cls.optimise_hyperparameters is not Systematics.optimise_hyperparameters
 
 
 def has_own_likelihood(systematics: Systematics) -> bool:
