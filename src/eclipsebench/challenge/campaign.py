@@ -555,7 +555,7 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
             # an eclipse's joint fit starts from the controlled least-squares reductions
             # (not fitted alone again); with MCMC, or a method with maximum-likelihood
             # settings, they are not its start (fit.joint.start_of), so not waited for
-            seeded = (gcfg.reduce.event == "eclipse" and "controlled" in cfg.run.profiles
+            seeded = (event_for(gcfg.reduce.event).joint_fit and "controlled" in cfg.run.profiles
                       and gcfg.reduce.resolved_sampler() == "leastsq"
                       and not has_hyperparameters(get_method(m)))
             starts = [str(layout.result(m, n)) for n in members] if seeded else None
