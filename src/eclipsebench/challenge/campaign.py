@@ -534,10 +534,15 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
         tasks.append(Task(photometry_key(e.number), "photometry", photometry_task,
                           (e, system, cfg.photometry, str(out)), (out,),
                           check=table_ok))
+    reductions: list[Task] = []
     for profile in cfg.run.profiles:
         for e in epochs:
-            tasks += plan_reduce_tasks(_event_of(cfg, e), layout, [e.number], methods,
-                                       profile=profile)
+            reductions += plan_reduce_tasks(_event_of(cfg, e), layout, [e.number], methods,
+                                            profile=profile)
+    # a joint fit that waits for no reduction is submitted before them, so that the longest
+    # (GP's, which fits every epoch alone) overlaps them instead of running after them
+    early: list[Task] = []
+    late: list[Task] = []
     groups = channel_groups(epochs, channels)
     joints: dict[str, dict[str, str]] = {}
     by_number = {e.number: e for e in epochs}
@@ -561,11 +566,13 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
             starts = [str(layout.result(m, n)) for n in members] if seeded else None
             deps = tuple(photometry_key(n) for n in members) + (
                 tuple(reduce_key(m, n) for n in members) if seeded else ())
-            tasks.append(Task(key, "joint", joint_task,
-                              (gcfg, [str(layout.photometry(n)) for n in members], members, m,
-                               opts, str(out), starts),
-                              (out,), deps, check=lambda p, m=m: joint_ok(m, p)))
+            (late if seeded else early).append(Task(
+                key, "joint", joint_task,
+                (gcfg, [str(layout.photometry(n)) for n in members], members, m, opts,
+                 str(out), starts),
+                (out,), deps, check=lambda p, m=m: joint_ok(m, p)))
             joints[group][m] = str(out)
+    tasks += early + reductions + late
     twin_files: dict[str, str] = {}
     for e in epochs if twins else ():
         out = layout.root / "twins" / f"epoch_{e.number:02d}.json"
