@@ -169,7 +169,8 @@ def test_combined_depth_adds_the_methods_spread():
 def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
     """A result lost, another's light curve lost (the one resume rule,
     :func:`eclipsebench.fit.result.result_ok`) and a joint fit cut short: only they (and
-    what is made from them: the stats and the report) are redone."""
+    what is made from them: the stats, the two epochs' light-curve figures and the report)
+    are redone."""
     _, _, tables, camp_root, _, _ = tiny
     root = tmp_path / "c"
     shutil.copytree(camp_root, root)
@@ -182,7 +183,9 @@ def test_an_interrupted_campaign_resumes_to_the_same_bytes(tiny, tmp_path):
     # BLISS's joint fit starts from its reductions (redone with them); PLD's does not
     # (its bin size is a maximum-likelihood setting, fit.joint.start_of)
     assert sorted(report.ran) == ["joint/bliss_ch2", "reduce/bliss/epoch_01",
-                                  "reduce/pld/epoch_02", "report", "stats"]
+                                  "reduce/pld/epoch_02", "report",
+                                  "report/lightcurves/epoch_01",
+                                  "report/lightcurves/epoch_02", "stats"]
     assert (root / "results" / "bliss" / "epoch_01.lc.ecsv").is_file()
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
@@ -234,7 +237,8 @@ def test_the_joint_fits_start_from_the_reductions_and_answer_as_if_fitted_alone(
 def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, monkeypatch):
     """Ctrl-C at BLISS's joint fit (the last task before the statistics: it waits for the
     reductions, PLD's joint fit, which waits for none, runs before them): the rerun does only
-    that joint fit, the statistics and the report."""
+    that joint fit, the light-curve figure not drawn before it (epoch 2's: in one process
+    the tasks run in the plan's dependency order), the statistics and the report."""
     import eclipsebench.challenge.campaign as campaign
 
     _, _, tables, camp_root, _, _ = tiny
@@ -253,7 +257,8 @@ def test_a_campaign_stopped_by_ctrl_c_resumes_where_it_stopped(tiny, tmp_path, m
     monkeypatch.setattr(campaign, "joint_task", real)
     _, report = run_campaign(load_config(None, CAMPAIGN), root, epochs_from_inputs(tables),
                              workers=1)
-    assert sorted(report.ran) == ["joint/bliss_ch2", "report", "stats"]
+    assert sorted(report.ran) == ["joint/bliss_ch2", "report", "report/lightcurves/epoch_02",
+                                  "stats"]
     assert (root / "summary.json").read_bytes() == (camp_root / "summary.json").read_bytes()
 
 

@@ -593,9 +593,20 @@ def build_campaign_tasks(cfg: Config, root: str | Path, epochs: Sequence[EpochIn
                                                                      "twins")),
                       check=campaign_summary_ok))
     if cfg.run.report:
+        first = cfg.run.profiles[0]
+        figures = []
+        for n in numbers:
+            record = _figure_record(layout, n)
+            figures.append(Task(f"report/lightcurves/epoch_{n:02d}", "report",
+                                lightcurve_figure_task,
+                                (cfg, str(layout.root), methods, n, str(record)), (record,),
+                                tuple(t.key for t in reductions
+                                      if t.key in {reduce_key(m, n, profile=first)
+                                                   for m in methods})))
+        tasks += figures
         tasks.append(Task("report", "report", campaign_report_task,
                           (cfg, str(layout.root), methods, numbers, twin_files),
-                          (layout.report,), ("stats",)))
+                          (layout.report,), ("stats", *(t.key for t in figures))))
     return tasks
 
 
@@ -763,22 +774,8 @@ def campaign_report_task(cfg: Config, root: str, methods: list[str], epochs: lis
 
     layout = Layout(Path(root))
     summary = json.loads(layout.summary.read_text())
-    profile = cfg.run.profiles[0]
-    curves: dict[int, dict[str, dict[str, np.ndarray]]] = {}
-    since: dict[int, str] = {}
-    for e in epochs:
-        curves[e] = {}
-        for m in methods:
-            path = layout.result(m, e, profile=profile)
-            lc_path = lightcurve_path(path)
-            if not (path.is_file() and lc_path.is_file()):
-                continue
-            lc = Table.read(lc_path, format="ascii.ecsv")
-            hours, since[e] = _event_hours(json.loads(path.read_text()),
-                                           np.asarray(lc["time_bmjd"], float))
-            curves[e][m] = {"hours": hours,
-                            "flux_corrected": np.asarray(lc["flux_corrected"], float),
-                            "astro_model": np.asarray(lc["astro_model"], float)}
+    drawn = {e: [Path(f) for f in json.loads(_figure_record(layout, e).read_text())["files"]]
+             for e in epochs}
     trust: dict[int, tuple[dict[str, Any], Path | None]] = {}
     for number, answer_path in twin_files.items():
         page = Path(answer_path).with_suffix("") / "report" / "index.html"
@@ -789,8 +786,38 @@ def campaign_report_task(cfg: Config, root: str, methods: list[str], epochs: lis
              "eclipsebench": __version__}
     if command:
         notes["command"] = command
-    build_campaign_report(layout.report.parent, summary=summary, lightcurves=curves,
-                          event_names=since, trust=trust, notes=notes)
+    build_campaign_report(layout.report.parent, summary=summary, lightcurves={},
+                          trust=trust, notes=notes, drawn=drawn)
+
+
+def _figure_record(layout: Layout, epoch: int) -> Path:
+    """What :func:`lightcurve_figure_task` drew for ``epoch`` (JSON: ``files``)."""
+    return layout.report.parent / "lightcurves" / f"lightcurves_epoch_{epoch:02d}.json"
+
+
+def lightcurve_figure_task(cfg: Config, root: str, methods: list[str], epoch: int,
+                           out_path: str) -> None:
+    """Epoch ``epoch``'s decorrelated light curves of the first profile
+    (:func:`eclipsebench.report.campaign.draw_epoch_lightcurves`), drawn as soon as its
+    reductions are done, so that the report only links them; ``out_path`` records the
+    files (none where no method reduced the epoch)."""
+    from ..report.campaign import draw_epoch_lightcurves  # matplotlib: only for a report
+
+    layout = Layout(Path(root))
+    curves: dict[str, dict[str, np.ndarray]] = {}
+    since = "mid-eclipse"
+    for m in methods:
+        path = layout.result(m, epoch, profile=cfg.run.profiles[0])
+        lc_path = lightcurve_path(path)
+        if not (path.is_file() and lc_path.is_file()):
+            continue
+        lc = Table.read(lc_path, format="ascii.ecsv")
+        hours, since = _event_hours(json.loads(path.read_text()),
+                                    np.asarray(lc["time_bmjd"], float))
+        curves[m] = {"hours": hours, "flux_corrected": np.asarray(lc["flux_corrected"], float),
+                     "astro_model": np.asarray(lc["astro_model"], float)}
+    files = draw_epoch_lightcurves(layout.report.parent, epoch, curves, since)
+    write_json(Path(out_path), {"epoch": epoch, "files": [str(f) for f in files]})
 
 
 def campaign_summary_ok(*paths: Path) -> bool:

@@ -552,6 +552,10 @@ def _run_dask(run: _Run, todo: list[str], *, workers: int, scheduler: str | None
     client, cluster, run.report.executor = open_client(workers, scheduler, options)
     waiting = list(todo)
     futures = {}
+    # Dask runs the queued task of highest priority first: the plan's order (a campaign puts a
+    # long joint fit that waits for no reduction before the reductions), not the order in
+    # which dependencies happened to finish
+    rank = {k: len(run.by_key) - i for i, k in enumerate(run.by_key)}
     try:
         ac = as_completed()
 
@@ -568,7 +572,7 @@ def _run_dask(run: _Run, todo: list[str], *, workers: int, scheduler: str | None
                     run.in_flight[key] = time.time_ns()
                     fut = client.submit(_call_pickled, cloudpickle.dumps(task.func), task.args,
                                         run.root, key=f"{key}#{time.time_ns()}",
-                                        pure=False)
+                                        pure=False, priority=rank[key])
                     futures[fut.key] = key
                     ac.add(fut)
 

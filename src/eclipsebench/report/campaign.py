@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import html
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +30,7 @@ from .build import result_figures, with_units
 from .page import figure_html, html_table, notes_html, page_folder, page_html
 from .tables import anova_lines, display_rows
 
-__all__ = ["build_campaign_report", "trust_rows", "TRUST_COLUMNS"]
+__all__ = ["build_campaign_report", "draw_epoch_lightcurves", "trust_rows", "TRUST_COLUMNS"]
 
 #: An epoch's trust table: ``(trust.json key, heading)``, depths and errors in ppm.
 TRUST_COLUMNS = (("depth_ppm", "depth (ppm)"), ("honest_err_ppm", "honest err (ppm)"),
@@ -107,12 +107,26 @@ def _stats_html(title: str, entry: Mapping[str, Any]) -> list[str]:
     return parts
 
 
+def draw_epoch_lightcurves(root: Path, epoch: int,
+                           curves: Mapping[str, Mapping[str, np.ndarray]], since: str
+                           ) -> list[Path]:
+    """Epoch ``epoch``'s decorrelated light curves (``{method: {"hours", "flux_corrected",
+    "astro_model"}}``) as ``root/lightcurves/lightcurves_epoch_NN.{png,pdf}``, the hours
+    counted from ``since``; no curves: nothing drawn (an empty list)."""
+    if not curves:
+        return []
+    fig = F.decorrelated_lightcurves(curves, x="hours", xlabel=f"hours from {since}",
+                                     title=f"Epoch {epoch}: decorrelated light curves")
+    return F.save_figure(fig, Path(root) / "lightcurves" / f"lightcurves_epoch_{epoch:02d}")
+
+
 def build_campaign_report(dest: str | os.PathLike[str], *, summary: Mapping[str, Any],
                           lightcurves: Mapping[int, Mapping[str, Mapping[str, np.ndarray]]],
                           event_names: Mapping[int, str] | None = None,
                           trust: Mapping[int, tuple[Mapping[str, Any], Path | None]]
                           | None = None,
-                          notes: Mapping[str, object] | None = None) -> Path:
+                          notes: Mapping[str, object] | None = None,
+                          drawn: Mapping[int, Sequence[Path]] | None = None) -> Path:
     """Write a campaign's report into ``dest`` and return the path of ``index.html``.
 
     Parameters
@@ -132,6 +146,10 @@ def build_campaign_report(dest: str | os.PathLike[str], *, summary: Mapping[str,
         ``{epoch: (trust answer, path of that trust run's page or None)}`` where twins ran.
     notes : mapping, optional
         ``name: value`` lines at the top (seed, version, command line...).
+    drawn : mapping, optional
+        ``{epoch: files}`` of light-curve figures already drawn into ``dest``
+        (:func:`draw_epoch_lightcurves`, by a campaign's task per epoch while other
+        tasks ran; no files: none drawn); they are linked, not drawn again.
 
     Returns
     -------
@@ -164,19 +182,19 @@ def build_campaign_report(dest: str | os.PathLike[str], *, summary: Mapping[str,
     parts.append("<h2>Figures</h2>")
     parts += [figure_html(n, c, f, root) for n, c, f in figures]
     parts.append("<h2>Each epoch's decorrelated light curves</h2>")
-    for epoch in sorted(lightcurves):
-        curves = lightcurves[epoch]
-        if not curves:
+    for epoch in sorted(set(lightcurves) | set(drawn or {})):
+        if drawn and epoch in drawn:
+            files = list(drawn[epoch])
+        else:
+            files = draw_epoch_lightcurves(root, epoch, lightcurves[epoch],
+                                           (event_names or {}).get(epoch, "mid-eclipse"))
+        if not files:
             skipped.append(f"epoch {epoch}'s light curves (no method reduced it)")
             continue
-        since = (event_names or {}).get(epoch, "mid-eclipse")
-        name = f"lightcurves_epoch_{epoch:02d}"
-        fig = F.decorrelated_lightcurves(curves, x="hours", xlabel=f"hours from {since}",
-                                         title=f"Epoch {epoch}: decorrelated light curves")
-        files = F.save_figure(fig, root / "lightcurves" / name)
-        parts.append(figure_html(name, f"Epoch {epoch}: each method's decorrelated flux, binned "
-                                       f"to about {F.LIGHTCURVE_POINTS} points; red: its fitted "
-                                       "model.", files, root))
+        parts.append(figure_html(f"lightcurves_epoch_{epoch:02d}",
+                                 f"Epoch {epoch}: each method's decorrelated flux, binned "
+                                 f"to about {F.LIGHTCURVE_POINTS} points; red: its fitted "
+                                 "model.", files, root))
     if trust:
         parts.append("<h2>Each epoch's digital twins (trust)</h2>")
         for epoch in sorted(trust):
