@@ -14,14 +14,12 @@ import eclipsebench.api as api_module
 from eclipsebench.cli import main
 from eclipsebench.errors import InputError
 
-from ..conftest import simulate_eclipse_epoch
-from .test_trust import SETS
-
 
 @pytest.fixture(scope="module")
-def table(tmp_path_factory):
-    """A short simulated epoch's photometry table (this package's)."""
-    return simulate_eclipse_epoch(tmp_path_factory.mktemp("doors"), SETS, 0.12)
+def table(small_observation_table):
+    """A short simulated epoch's photometry table (this package's; tests/conftest.py's
+    small observation, shared with tests/trust)."""
+    return small_observation_table
 
 
 def _cli(capsys, argv: list[str]) -> str:
