@@ -16,6 +16,8 @@ from __future__ import annotations
 import fcntl
 import os
 import shutil
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -127,6 +129,21 @@ def built_once(tmp_path_factory: pytest.TempPathFactory, name: str,
             build(folder)
             (base / f"{name}.done").touch()
     return folder
+
+
+def page_built_in_an_svg_process(body: str) -> Path:
+    """Run ``body`` (Python that builds a page and binds its path to ``page``) in a fresh
+    process whose matplotlib backend is svg; check that the backend is still svg afterwards
+    and that pyplot was never imported, and return the page's path."""
+    script = ("import sys\nimport matplotlib\nbefore = matplotlib.get_backend()\n" + body
+              + "\nprint(before, matplotlib.get_backend(), 'matplotlib.pyplot' in sys.modules, "
+              "page)\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          env={**os.environ, "MPLBACKEND": "svg"}, check=False)
+    assert done.returncode == 0, done.stderr
+    before, after, pyplot, page = done.stdout.split()
+    assert before.lower() == "svg" and after.lower() == "svg" and pyplot == "False"
+    return Path(page)
 
 
 @pytest.fixture(scope="session")
