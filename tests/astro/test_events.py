@@ -15,7 +15,7 @@ from eclipsebench.astro.orbit import eclipse_time_bmjd, transit_time_bmjd
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.simulation import ObservationSection
 from eclipsebench.errors import InputError
-from eclipsebench.fit.astro_model import AstroModel
+from eclipsebench.fit.model import AstroModel
 from eclipsebench.fit.names import EVENTS
 from eclipsebench.fit.prepare import predicted_event_bmjd
 

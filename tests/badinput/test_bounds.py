@@ -323,7 +323,7 @@ def test_the_depth_limit_is_the_fit_s_bound(event):
     import numpy as np
 
     from eclipsebench.astro.catalogue import get_system
-    from eclipsebench.fit.astro_model import AstroModel, depth_limit_ppm
+    from eclipsebench.fit.model import AstroModel, depth_limit_ppm
 
     phase = "harmonic1" if event == "phase-curve" else "flat"
     model = AstroModel(57000.0 + np.arange(200) / 500.0, get_system("XO-3b"), phase=phase,

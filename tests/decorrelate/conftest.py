@@ -168,8 +168,8 @@ def fit_depth(model, time, *, t_ecl_guess, depth_guess=1500.0, phase="flat"):
 
     Returns (depth_ppm, t_ecl_bmjd).
     """
-    from eclipsebench.fit.astro_model import AstroModel
     from eclipsebench.fit.leastsq import fit_leastsq
+    from eclipsebench.fit.model import AstroModel
 
     astro = AstroModel(time, None, phase=phase, shape=TrapezoidShape(time))
     fit = fit_leastsq(model, astro, astro.initial(depth=depth_guess * 1e-6,

@@ -12,8 +12,8 @@ import eclipsebench as eb
 from eclipsebench.decorrelate.base import EpochData
 from eclipsebench.decorrelate.poly import legendre_design, polynomial_terms
 from eclipsebench.errors import InputError
-from eclipsebench.fit.astro_model import AstroModel
 from eclipsebench.fit.leastsq import fit_leastsq
+from eclipsebench.fit.model import AstroModel
 
 ORDERS = (2, 3, 4, 5)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from eclipsebench.errors import InputError
-from eclipsebench.fit.astro_model import AstroModel, box_visible_fraction
+from eclipsebench.fit.model import AstroModel, box_visible_fraction
 
 TIME = 57000.0 + np.linspace(0.0, 0.3, 3001)
 T_ECL = 57000.16
@@ -108,7 +108,7 @@ def test_the_model_is_one_class_per_event_built_by_astro_model(shape):
     import pickle
 
     from eclipsebench.astro.catalogue import get_system
-    from eclipsebench.fit.astro_model import (
+    from eclipsebench.fit.model import (
         PHASE_CURVE_MODELS,
         PHASE_MODELS,
         RAMP_MODELS,
@@ -116,7 +116,7 @@ def test_the_model_is_one_class_per_event_built_by_astro_model(shape):
         PhaseCurveModel,
         TransitModel,
     )
-    from eclipsebench.fit.astro_parts import PHASE_TERMS, RAMPS
+    from eclipsebench.fit.model.parts import PHASE_TERMS, RAMPS
 
     # every name the command line offers has its phase term or ramp
     assert set(PHASE_TERMS) == set(PHASE_MODELS) | set(PHASE_CURVE_MODELS)

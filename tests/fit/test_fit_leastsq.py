@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from eclipsebench.decorrelate.base import EpochData
-from eclipsebench.fit.astro_model import AstroModel
 from eclipsebench.fit.data import epoch_data_from_table
 from eclipsebench.fit.leastsq import (
     fit_leastsq,
@@ -15,6 +14,7 @@ from eclipsebench.fit.leastsq import (
     red_noise_beta,
     rms_vs_bin_size,
 )
+from eclipsebench.fit.model import AstroModel
 
 
 def test_information_criteria_by_hand():

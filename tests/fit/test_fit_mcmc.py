@@ -116,7 +116,7 @@ def _method_options(name):
 def test_batch_likelihood_equals_the_loop(name, psf_epoch):
     """Every method's log_likelihood_batch returns log_likelihood of each row (to rounding)."""
     from eclipsebench.astro.catalogue import get_system
-    from eclipsebench.fit.astro_model import AstroModel
+    from eclipsebench.fit.model import AstroModel
 
     cls = base.get_method(name)
     model = cls.build(psf_epoch, _method_options(name), seed=1,
@@ -167,7 +167,7 @@ def test_a_subclass_that_redefines_predict_gets_the_loop(psf_epoch):
 @pytest.mark.parametrize("phase", ["flat", "linear", "quadratic", "sinusoid"])
 @pytest.mark.parametrize("ramp", ["none", "linear", "exponential"])
 def test_astro_batch_is_the_model_of_each_row(xo3_epoch, shape, phase, ramp):
-    from eclipsebench.fit.astro_model import AstroModel
+    from eclipsebench.fit.model import AstroModel
 
     time = xo3_epoch["time"][::4]
     model = AstroModel(time, xo3_epoch["system"], phase=phase, ramp=ramp, eclipse_shape=shape)

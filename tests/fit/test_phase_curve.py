@@ -27,7 +27,7 @@ from eclipsebench.cli import main
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.system import SystemSection
 from eclipsebench.errors import ConfigError, InputError
-from eclipsebench.fit.astro_model import AstroModel, integration_offsets_d
+from eclipsebench.fit.model import AstroModel, integration_offsets_d
 from eclipsebench.fit.reduce import predicted_event_bmjd, reduce_epoch
 
 SYSTEM = get_system(SystemSection().name)   # the 2015 challenge's XO-3b (e = 0.29)

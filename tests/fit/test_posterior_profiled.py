@@ -41,9 +41,9 @@ from eclipsebench.astro.orbit import eclipse_time_bmjd
 from eclipsebench.decorrelate.base import EpochData, Systematics, get_method
 from eclipsebench.decorrelate.linear import binned_design_batch
 from eclipsebench.decorrelate.pmap import CalibrationSet
-from eclipsebench.fit.astro_model import AstroModel
 from eclipsebench.fit.leastsq import fit_leastsq
 from eclipsebench.fit.mcmc import run_mcmc
+from eclipsebench.fit.model import AstroModel
 from eclipsebench.seeding import rng
 
 DEPTH = 2.0e-3

@@ -24,8 +24,8 @@ from eclipsebench.config import load_config
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.system import SystemSection
 from eclipsebench.errors import ConfigError, InputError
-from eclipsebench.fit.astro_model import AstroModel, q_from_u, u_from_q
 from eclipsebench.fit.leastsq import _Problem
+from eclipsebench.fit.model import AstroModel, q_from_u, u_from_q
 from eclipsebench.fit.reduce import reduce_epoch, reduce_joint
 
 SYSTEM = get_system(SystemSection().name)   # the default planet (2015 challenge's XO-3b)

@@ -2,7 +2,7 @@
 
 :mod:`eclipsebench.astro.eclipse` uses batman's public ``TransitModel`` to
 tabulate an event's shape once. The fit's transit model
-(:class:`eclipsebench.fit.astro_model.AstroModel`) evaluates the transit
+(:class:`eclipsebench.fit.model.AstroModel`) evaluates the transit
 thousands of times per second with the orbit fixed or free, where building a
 ``TransitModel`` per call (it re-derives the geometry and its integration
 settings each time) costs more than the curve itself. It therefore calls the

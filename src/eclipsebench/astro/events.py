@@ -8,7 +8,7 @@ window holds), its size parameter of a depth, what a result's printout adds for 
 what the rest of the package offers it (a joint fit over epochs, a run's scoring, the
 analytic photon limit, the default sampler). Callers ask the event
 (``event_for(options.event).time_key``) instead of comparing its name; the fitted
-models (:mod:`eclipsebench.fit.astro_model`, one class per event) and the simulator's
+models (:mod:`eclipsebench.fit.model`, one class per event) and the simulator's
 plans read the same objects.
 
 Plain classes, no numpy at import: the configuration (which the command line's parser

@@ -38,8 +38,8 @@ def _x(time, t_ref: float) -> np.ndarray:
 
 
 # The one definition of each phase model, used by the astro bias tool and by the fitter
-# (fit/astro_parts.py), whose coefficients may be arrays of shape (m, 1) against times of
-# shape (m, n); fit/astro_kernels.py holds a compiled copy of flat, linear and quadratic,
+# (fit/model/parts.py), whose coefficients may be arrays of shape (m, 1) against times of
+# shape (m, n); fit/model/kernels.py holds a compiled copy of flat, linear and quadratic,
 # held equal by tests/fit/test_fit_mcmc.py::test_astro_batch_is_the_model_of_each_row.
 def flat(time, coeffs: Sequence[float], *, t_ref: float = 0.0, period: float = 1.0):
     """``c0`` at every time."""

@@ -203,7 +203,7 @@ class ReduceSection:
         for key in ("systematics_per_aor", "nonnegative_planet"):
             check(not getattr(self, key) or key in event_for(self.event).own_settings, key,
                   "true only with event = 'phase-curve'")
-        free = ("a_rs", "b", "q1", "q2")   # eclipsebench.fit.astro_model.TRANSIT_FREE
+        free = ("a_rs", "b", "q1", "q2")   # eclipsebench.fit.model.TRANSIT_FREE
         check(all(n in free for n in self.transit_free)
               and len(set(self.transit_free)) == len(self.transit_free), "transit_free",
               "distinct names among " + ", ".join(free))

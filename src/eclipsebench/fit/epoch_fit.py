@@ -16,7 +16,6 @@ import numpy as np
 from ..config.reduce import ReduceSection
 from ..decorrelate.base import Systematics
 from ..io.plain import json_safe
-from .astro_model import AstroModel
 from .data import median_cadence_s
 from .error_rule import largest_estimate, reported_depth_error
 from .leastsq import (
@@ -26,6 +25,7 @@ from .leastsq import (
     prayer_bead,
 )
 from .mcmc import McmcResult, run_mcmc
+from .model import AstroModel
 from .prepare import PreparedEpoch
 from .profiles import paper_profile
 from .result import EpochResult, lightcurve_errors

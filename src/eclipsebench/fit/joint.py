@@ -17,7 +17,6 @@ from ..astro.events import event_for
 from ..config.reduce import ReduceSection
 from ..errors import InputError
 from ..io.plain import json_safe
-from .astro_model import AstroModel
 from .leastsq import (
     _covariance,
     _Problem,
@@ -26,6 +25,7 @@ from .leastsq import (
     has_hyperparameters,
     joint_names,
 )
+from .model import AstroModel
 from .prepare import (
     _DEFAULT_OPTIONS,
     PreparedEpoch,

@@ -1,6 +1,6 @@
 """Least-squares fit of the joint model, and its error estimates.
 
-The astrophysical parameters (:class:`~eclipsebench.fit.astro_model.AstroModel`)
+The astrophysical parameters (:class:`~eclipsebench.fit.model.AstroModel`)
 and the method's own nonlinear parameters (``Systematics.param_names``) are
 fitted together with :func:`scipy.optimize.least_squares` on
 ``Systematics.residuals``. Linear or non-parametric pieces (BLISS knots,
@@ -33,7 +33,7 @@ from scipy.optimize import least_squares
 from ..decorrelate.base import Systematics
 from ..errors import InputError
 from ..progress import progress
-from .astro_model import AstroModel
+from .model import AstroModel
 
 __all__ = ["FitResult", "fit_leastsq", "information_criteria", "rms_vs_bin_size",
            "red_noise_beta", "prayer_bead", "joint_names", "has_hyperparameters",

@@ -37,7 +37,7 @@ from threadpoolctl import threadpool_limits
 
 from ..decorrelate.base import Systematics
 from ..progress import progress
-from .astro_model import AstroModel
+from .model import AstroModel
 
 __all__ = ["McmcResult", "run_mcmc", "make_moves"]
 
@@ -179,7 +179,7 @@ def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, sca
     --------
     >>> from eclipsebench.decorrelate import get_method
     >>> from eclipsebench.decorrelate.base import EpochData
-    >>> from eclipsebench.fit.astro_model import AstroModel
+    >>> from eclipsebench.fit.model import AstroModel
     >>> class Box:   # a 0.1-day eclipse at t_ecl
     ...     def __init__(self, t):
     ...         self.t = t

@@ -3,7 +3,7 @@
 Plain tuples and dicts, no imports but ``typing`` and the plain :mod:`eclipsebench.astro.times`:
 the command line's parser offers them as choices without loading the fitter (numba, batman,
 astropy).
-:mod:`.astro_model` and :mod:`.data` re-export them.
+:mod:`.model` and :mod:`.data` re-export them.
 """
 
 from __future__ import annotations

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..config.reduce import ReduceSection
-from .astro_model import PHASE_MODELS, AstroModel
 from .epoch_fit import fit_prepared
+from .model import PHASE_MODELS, AstroModel
 from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch
 
 __all__ = ["PhaseSelection", "select_phase_model"]

@@ -24,9 +24,9 @@ from ..decorrelate.base import MethodOptions, Systematics, parse_method_options,
 from ..errors import ConfigError, InputError
 from ..io.pmap_files import check_pmap_path
 from ..photometry.table import read_table
-from .astro_model import PHASE_CURVE_MODELS, AstroModel
 from .data import check_columns, epoch_data_from_table, standardise_table
 from .frames import per_aor_systematics, settling_aor
+from .model import PHASE_CURVE_MODELS, AstroModel
 from .profiles import centroid_columns, paper_profile
 from .target import system_of_table
 

@@ -16,8 +16,8 @@ from typing import Any
 from ..astro.events import event_for
 from ..config.reduce import ReduceSection
 from ..errors import InputError
-from .astro_model import PHASE_CURVE_MODELS
 from .epoch_fit import fit_prepared
+from .model import PHASE_CURVE_MODELS
 from .prepare import (
     _DEFAULT_OPTIONS,
     PreparedEpoch,

@@ -4,7 +4,7 @@
 with one common depth, and :func:`select_phase_model` fits every phase-curve
 model and reports BIC and AIC for each so that a user can bracket the choice
 (paper Section 4.2). All three share one astrophysical model
-(:class:`~eclipsebench.fit.astro_model.AstroModel`); methods differ only in
+(:class:`~eclipsebench.fit.model.AstroModel`); methods differ only in
 their systematics model.
 
 The fit is split by concern, one module each: preparing a table

@@ -231,7 +231,7 @@ def check_several_aors(table, obs: Observation, source: str) -> None:
     :func:`complete_table` would infer from gaps, counts as none) or a single AOR.
 
     A phase curve's fit gives every AOR after the first its own flux offset
-    (:mod:`eclipsebench.fit.astro_phase_curve`), so its twins are made only of
+    (:mod:`eclipsebench.fit.model.phase_curve`), so its twins are made only of
     a table that names each frame's AOR, and of more than one.
     """
     inferred = json.loads(str((table.meta or {}).get("INFERRED") or "{}"))

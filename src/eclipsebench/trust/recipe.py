@@ -1,12 +1,12 @@
 """The twins' astrophysics and shared recipe, from the real table and its first fit.
 
 The twins' L(t) is the reduction's own astrophysical model
-(:class:`eclipsebench.fit.astro_model.AstroModel`, the physical eclipse
+(:class:`eclipsebench.fit.model.AstroModel`, the physical eclipse
 shape of the planet) evaluated at every real frame with the first method's
 fitted mid-time and phase-curve coefficients and a known depth: by default
 that fit's depth, or the one asked for. No ramp: a ramp is the detector's,
 and the twins' detector is the simulator's. A whole phase curve's L(t) is
-``T(t) + v(t) p(t)`` (:mod:`eclipsebench.fit.astro_phase_curve`) with the
+``T(t) + v(t) p(t)`` (:mod:`eclipsebench.fit.model.phase_curve`) with the
 fit's ``rp_rs`` and harmonics and no AOR offsets (the repointing's steps are
 the detector's too); its injected amplitude and peak offset are that
 model's :func:`~eclipsebench.astro.phase_curves.harmonic_summary`
@@ -26,7 +26,7 @@ import numpy as np
 from ..config.base import from_mapping
 from ..config.photometry import PhotometrySection
 from ..errors import InputError
-from ..fit.astro_model import AstroModel
+from ..fit.model import AstroModel
 from ..fit.names import EVENTS as MODEL_EVENTS
 from ..instrument.prf import GainPolynomial
 from ..io.atomic import atomic_path, write_json
@@ -49,7 +49,7 @@ __all__ = ["twin_light_curve", "twin_truth", "phase_truth", "build_recipe", "twi
            "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin", "with_real_noise"]
 
 #: The events a twin can carry: one eclipse or transit observation, or a whole phase curve
-#: of several AORs (the models of :mod:`eclipsebench.fit.astro_model`).
+#: of several AORs (the models of :mod:`eclipsebench.fit.model`).
 EVENTS = MODEL_EVENTS
 
 
@@ -95,7 +95,7 @@ def twin_light_curve(time_bmjd: np.ndarray, system: Any, fit: Mapping[str, Any],
 
 def phase_truth(model: AstroModel, theta: np.ndarray) -> dict[str, float]:
     """A whole phase curve's injected amplitude and peak offset, as its fits report them
-    (:meth:`~eclipsebench.fit.astro_phase_curve.PhaseCurveModel.phase_summary`, that is
+    (:meth:`~eclipsebench.fit.model.phase_curve.PhaseCurveModel.phase_summary`, that is
     :func:`~eclipsebench.astro.phase_curves.harmonic_summary`); empty for an event that is
     not a whole orbit.
 

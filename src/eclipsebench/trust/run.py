@@ -441,14 +441,14 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
         cannot be twinned (another pipeline's, fewer than 100 good frames), a
         twin count outside 10-10,000, a depth that is not finite and positive or
         not below what a fit can return (named ``depth_name``,
-        :func:`~eclipsebench.fit.astro_model.depth_limit_ppm`),
+        :func:`~eclipsebench.fit.model.depth_limit_ppm`),
         an unknown method, a whole phase curve (``reduce.event``) of a table
         without the column ``aorkey`` or with one AOR, a table naming no planet, or
         a ``pmap`` that holds no readable map.
     """
     from ..decorrelate import available_methods
     from ..decorrelate.base import unknown_methods
-    from ..fit.astro_model import AstroModel, depth_limit_ppm
+    from ..fit.model import AstroModel, depth_limit_ppm
     from ..fit.prepare import table_epoch
     from ..fit.target import system_of_table
     from ..io.pmap_files import find_pmap_path, pmap_files

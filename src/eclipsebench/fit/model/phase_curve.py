@@ -5,21 +5,21 @@ model over several AORs::
 
     A(t) = R(t) O(t) [T(t) + v(t) p(t)]
 
-- ``T(t)`` is the transit's stellar flux (:mod:`.astro_transit`; ``rp_rs``
+- ``T(t)`` is the transit's stellar flux (:mod:`.transit`; ``rp_rs``
   free; a_rs, b and limb darkening fixed), its mid-transit at ``t_ecl`` plus
   the catalogue orbit's transit-minus-eclipse time; ``v(t)`` the eclipse's
-  physical shape (:mod:`.astro_eclipse`), which repeats every period;
+  physical shape (:mod:`.eclipse`), which repeats every period;
 - ``p(t)`` the harmonic phase curve of :func:`eclipsebench.astro.phase_curves.harmonic_curve`
   (``harmonic1``: ``D + a1 (cos phi - 1) + b1 sin phi``; ``harmonic2`` adds
   ``a2 (cos 2 phi - 1) + b2 sin 2 phi``; ``phi = 2 pi (t - t_ecl) / P``), the
   first and second harmonic of SPCA (Bell et al. 2021, MNRAS 504, 3316);
-- ``R(t)`` the detector ramp (:mod:`.astro_parts`);
+- ``R(t)`` the detector ramp (:mod:`.parts`);
 - ``O(t)`` a flux offset ``1 + o_k`` for each AOR after the first (the step
   at each repointing, as SPCA fits it), from the table's ``aorkey``.
 
 Its parameter vector is ``[depth, t_ecl_bmjd, rp_rs, phase_a1, phase_b1,
 (phase_a2, phase_b2), ramp..., aor_offset_1, ...]``; each row is averaged
-over its exposure (binned tables; :func:`~.astro_parts.integration_offsets_d`).
+over its exposure (binned tables; :func:`~.parts.integration_offsets_d`).
 """
 
 from __future__ import annotations
@@ -29,12 +29,13 @@ from typing import Any
 
 import numpy as np
 
-from ..astro.eclipse import EclipseShape
-from ..astro.orbit import eclipse_time_bmjd, transit_time_bmjd
-from ..astro.phase_curves import harmonic_summary
-from ..errors import InputError
-from .astro_base import AstroModel, EventSettings
-from .astro_parts import (
+from ...astro.eclipse import EclipseShape
+from ...astro.orbit import eclipse_time_bmjd, transit_time_bmjd
+from ...astro.phase_curves import harmonic_summary
+from ...errors import InputError
+from ..names import PHASE_CURVE_MODELS
+from .base import AstroModel, EventSettings
+from .parts import (
     NONNEGATIVE_SCALE,
     TRANSIT_BOUNDS,
     VisibleFraction,
@@ -42,8 +43,7 @@ from .astro_parts import (
     integration_offsets_d,
     system_period_days,
 )
-from .astro_transit import TransitGeometry, _TransitCurve
-from .names import PHASE_CURVE_MODELS
+from .transit import TransitGeometry, _TransitCurve
 
 __all__ = ["PhaseCurveModel"]
 

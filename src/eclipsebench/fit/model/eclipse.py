@@ -10,11 +10,11 @@ The model of the stellar-system flux, normalised so that 1 is the star alone
   or a box of the same duration.
 - ``p(t)`` is the planet-to-star flux ratio, a phase curve written so that
   ``p(t_ecl) = D`` exactly for every phase model (flat, linear, quadratic,
-  sinusoid: :mod:`.astro_parts`); then ``F_out = 1 + D`` at the centre of
+  sinusoid: :mod:`.parts`); then ``F_out = 1 + D`` at the centre of
   occultation and ``F_in = 1``, so ``D`` is the paper's depth (Eq.
   ``eclipse_depth``: ``D = (F_out - F_in) / F_in``).
 - ``R(t)`` is the multiplicative detector ramp (none, linear, exponential:
-  :mod:`.astro_parts`).
+  :mod:`.parts`).
 
 The parameter vector is ``[depth, t_ecl_bmjd, phase coefficients..., ramp
 coefficients...]`` (depth as a fraction, not ppm).
@@ -26,11 +26,11 @@ from typing import Any
 
 import numpy as np
 
-from ..astro.eclipse import EclipseShape
-from ..errors import InputError
-from .astro_base import AstroModel, EventSettings
-from .astro_kernels import _NO_TABLE, _astro_rows, _interp_table, _search_table
-from .astro_parts import (
+from ...astro.eclipse import EclipseShape
+from ...errors import InputError
+from .base import AstroModel, EventSettings
+from .kernels import _NO_TABLE, _astro_rows, _interp_table, _search_table
+from .parts import (
     VisibleFraction,
     box_visible_fraction,
     half_depth_duration,

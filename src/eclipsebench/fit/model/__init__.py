@@ -17,19 +17,19 @@ coefficients and the ramp's (a phase curve's AOR offsets last).
 The model is one class per event, composed with a phase term and a ramp
 instead of one class switching on their names:
 
-- :mod:`.astro_base`: :class:`AstroModel`, the base with what every event
+- :mod:`.base`: :class:`AstroModel`, the base with what every event
   shares. It is also the one constructor: ``AstroModel(...)`` returns the
   subclass of its ``event`` (its ``__new__`` picks it), so
   ``isinstance(m, AstroModel)`` holds for every model and callers need not
   know the subclasses; each subclass may also be called directly.
-- :mod:`.astro_eclipse`: :class:`EclipseModel` (physical or box shape, the
-  compiled batch); :mod:`.astro_transit`: :class:`TransitModel` (batman's
-  transit, free a_rs, b, q1, q2 and their priors); :mod:`.astro_phase_curve`:
+- :mod:`.eclipse`: :class:`EclipseModel` (physical or box shape, the
+  compiled batch); :mod:`.transit`: :class:`TransitModel` (batman's
+  transit, free a_rs, b, q1, q2 and their priors); :mod:`.phase_curve`:
   :class:`PhaseCurveModel` (harmonics, exposure integration, AOR offsets).
   Each module gives its event's equations.
-- :mod:`.astro_parts`: the phase terms and ramps (:data:`~.astro_parts.PHASE_TERMS`,
-  :data:`~.astro_parts.RAMPS`, with their equations) and the pure helpers;
-  :mod:`.astro_kernels`: the eclipse batch's numba kernels.
+- :mod:`.parts`: the phase terms and ramps (:data:`~.parts.PHASE_TERMS`,
+  :data:`~.parts.RAMPS`, with their equations) and the pure helpers;
+  :mod:`.kernels`: the eclipse batch's numba kernels.
 
 This module imports every event's model (so that ``AstroModel`` knows them
 all) and keeps the public names: import from here.
@@ -48,9 +48,10 @@ Examples
 
 from __future__ import annotations
 
-from .astro_base import AstroModel
-from .astro_eclipse import EclipseModel
-from .astro_parts import (
+from ..names import ECLIPSE_SHAPES, EVENTS, PHASE_CURVE_MODELS, PHASE_MODELS, RAMP_MODELS
+from .base import AstroModel
+from .eclipse import EclipseModel
+from .parts import (
     TRANSIT_FREE,
     aor_order,
     box_visible_fraction,
@@ -59,9 +60,8 @@ from .astro_parts import (
     system_period_days,
     u_from_q,
 )
-from .astro_phase_curve import PhaseCurveModel
-from .astro_transit import TransitModel
-from .names import ECLIPSE_SHAPES, EVENTS, PHASE_CURVE_MODELS, PHASE_MODELS, RAMP_MODELS
+from .phase_curve import PhaseCurveModel
+from .transit import TransitModel
 
 __all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES",
            "EVENTS", "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u",

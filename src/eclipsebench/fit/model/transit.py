@@ -29,7 +29,7 @@ limb-darkened flux drop at mid-transit).
 
 :class:`TransitGeometry` (the transit's fixed values, free parameters and
 limb darkening) is shared with the whole phase curve
-(:mod:`.astro_phase_curve`), whose transits are this model's ``T(t)``.
+(:mod:`.phase_curve`), whose transits are this model's ``T(t)``.
 """
 
 from __future__ import annotations
@@ -40,10 +40,10 @@ from typing import Any
 
 import numpy as np
 
-from ..astro.batman_core import quadratic_transit, sky_separation
-from ..errors import InputError
-from .astro_base import AstroModel, EventSettings
-from .astro_parts import (
+from ...astro.batman_core import quadratic_transit, sky_separation
+from ...errors import InputError
+from .base import AstroModel, EventSettings
+from .parts import (
     TRANSIT_BOUNDS,
     TRANSIT_FREE,
     inclination_deg,
@@ -138,7 +138,7 @@ class TransitGeometry:
     """The transit's geometry: fixed values, free parameters, orbit and limb darkening.
 
     A mixin of the models that have transits (:class:`TransitModel`,
-    :class:`~.astro_phase_curve.PhaseCurveModel`): ``transit_free`` (the free
+    :class:`~.phase_curve.PhaseCurveModel`): ``transit_free`` (the free
     ones among a_rs, b, q1, q2, which follow the size and the time in the
     parameter vector) is set by the model before :meth:`transit_values` is
     called.

@@ -1,11 +1,11 @@
 """What every event's astrophysical model shares: :class:`AstroModel`, their base.
 
-The model is built per event, one subclass each: :class:`~.astro_eclipse.EclipseModel`
-(``event="eclipse"``), :class:`~.astro_transit.TransitModel` (``"transit"``) and
-:class:`~.astro_phase_curve.PhaseCurveModel` (``"phase-curve"``), each composed
-with a phase term and a ramp (:mod:`.astro_parts`). ``AstroModel(..., event=...)``
+The model is built per event, one subclass each: :class:`~.eclipse.EclipseModel`
+(``event="eclipse"``), :class:`~.transit.TransitModel` (``"transit"``) and
+:class:`~.phase_curve.PhaseCurveModel` (``"phase-curve"``), each composed
+with a phase term and a ramp (:mod:`.parts`). ``AstroModel(..., event=...)``
 builds the event's subclass (``__new__`` picks it by its ``event``), so every
-caller keeps one constructor; import it from :mod:`.astro_model`, which loads
+caller keeps one constructor; import it from :mod:`eclipsebench.fit.model`, which loads
 every event's module.
 
 The base holds the times, the parameter names and their scales, the checks of
@@ -28,9 +28,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ..astro.events import Event, event_for
-from ..errors import InputError
-from .astro_parts import (
+from ...astro.events import Event, event_for
+from ...errors import InputError
+from ..names import ECLIPSE_SHAPES, EVENTS, PHASE_MODELS, RAMP_MODELS
+from .parts import (
     DEPTH_BOUNDS,
     PHASE_TERMS,
     RAMPS,
@@ -38,7 +39,6 @@ from .astro_parts import (
     VisibleFraction,
     known_period,
 )
-from .names import ECLIPSE_SHAPES, EVENTS, PHASE_MODELS, RAMP_MODELS
 
 __all__ = ["AstroModel", "EventSettings"]
 
@@ -87,9 +87,9 @@ class AstroModel(ABC):
     box_duration_d : float, optional
         Duration of the box eclipse (default: measured from the physical shape).
     event : {"eclipse", "transit", "phase-curve"}
-        The event fitted: :class:`~.astro_eclipse.EclipseModel`,
-        :class:`~.astro_transit.TransitModel` or
-        :class:`~.astro_phase_curve.PhaseCurveModel`. A transit needs
+        The event fitted: :class:`~.eclipse.EclipseModel`,
+        :class:`~.transit.TransitModel` or
+        :class:`~.phase_curve.PhaseCurveModel`. A transit needs
         ``system`` (its orbit) and ignores ``eclipse_shape``, ``shape`` and
         ``box_duration_d``. A whole phase curve (``phase`` "harmonic1" or
         "harmonic2") needs ``system`` and the physical eclipse shape. A
@@ -121,7 +121,7 @@ class AstroModel(ABC):
     Examples
     --------
     >>> import numpy as np
-    >>> from eclipsebench.fit.astro_model import AstroModel
+    >>> from eclipsebench.fit.model import AstroModel
     >>> class Flat:  # a planet that is always fully visible
     ...     def visible_fraction(self, t_ecl_bmjd):
     ...         return np.ones(3)
@@ -181,7 +181,7 @@ class AstroModel(ABC):
             raise InputError(f"--event {event!r}: expected one of {', '.join(EVENTS)}")
         if event not in AstroModel._event_classes:
             raise InputError(f"event {event!r}: its model is not loaded (import AstroModel "
-                             "from eclipsebench.fit.astro_model)")
+                             "from eclipsebench.fit.model)")
         return AstroModel._event_classes[event]
 
     @classmethod
@@ -224,7 +224,7 @@ class AstroModel(ABC):
         self.system = system
         self.phase = phase
         self.ramp = ramp
-        #: The phase model's p(t) and the ramp's R(t) (:mod:`.astro_parts`).
+        #: The phase model's p(t) and the ramp's R(t) (:mod:`.parts`).
         self.phase_term = PHASE_TERMS[phase]
         self.ramp_term = RAMPS[ramp]
         self.n_phase = len(self.phase_term.names)
@@ -395,7 +395,7 @@ class AstroModel(ABC):
 
         Each row equals ``self(theta)``: the same arithmetic, element by
         element. An eclipse is computed for all rows at once
-        (:meth:`.astro_eclipse.EclipseModel.batch`); a transit or a phase
+        (:meth:`.eclipse.EclipseModel.batch`); a transit or a phase
         curve row by row (:meth:`__call__`).
 
         Parameters
@@ -405,7 +405,7 @@ class AstroModel(ABC):
         Examples
         --------
         >>> import numpy as np
-        >>> from eclipsebench.fit.astro_model import AstroModel
+        >>> from eclipsebench.fit.model import AstroModel
         >>> class Flat:
         ...     def visible_fraction(self, t_ecl_bmjd):
         ...         return np.ones(3)

@@ -4,7 +4,7 @@
 compiled pass over the frames; :func:`_interp_table` is :func:`numpy.interp`
 of the physical eclipse shape's table with an O(1) search. Both repeat the
 expressions of the numpy code, in the same order, so the values are
-identical (the eclipse model of :mod:`.astro_model` calls them; the names
+identical (the eclipse model of :mod:`eclipsebench.fit.model` calls them; the names
 keep their leading underscore: they are that model's internals, not an API).
 """
 

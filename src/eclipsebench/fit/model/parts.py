@@ -40,8 +40,8 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from ..astro.phase_curves import PHASE_MODELS, harmonic_curve
-from ..errors import InputError
+from ...astro.phase_curves import PHASE_MODELS, harmonic_curve
+from ...errors import InputError
 
 __all__ = ["TRANSIT_FREE", "SCALES", "TRANSIT_BOUNDS", "MAX_SUBEXPOSURE_S", "NONNEGATIVE_SCALE",
            "VisibleFraction", "integration_offsets_d", "aor_order", "system_period_days",
