@@ -381,7 +381,7 @@ def test_literal_text_draws_the_dollar():
     from matplotlib.cbook import is_math_text
     from matplotlib.figure import Figure
 
-    from eclipsebench.fit.plot import literal_text
+    from eclipsebench.fit.result.plot import literal_text
 
     for name in ("XO-3$b$", "X$O\\x$b", "a $x$ and $y$"):
         assert is_math_text(name) and not is_math_text(literal_text(name))

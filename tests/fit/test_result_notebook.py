@@ -18,7 +18,7 @@ from astropy.time import Time
 
 import eclipsebench as eb
 from eclipsebench.cli import main
-from eclipsebench.fit.display import html_repr, text_repr
+from eclipsebench.fit.result.display import html_repr, text_repr
 
 pytestmark = pytest.mark.shared_data
 

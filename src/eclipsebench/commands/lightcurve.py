@@ -218,7 +218,7 @@ def _plot(path: str, lc, time: np.ndarray, flux: np.ndarray) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from ..fit.plot import literal_text
+    from ..fit.result.plot import literal_text
 
     fig = Figure(figsize=(7, 3.5))
     FigureCanvasAgg(fig)

@@ -222,7 +222,7 @@ def _write(args: argparse.Namespace, result, summary: dict, out: Path, lc_path: 
             result.write_chain(chain)
             summary["chain_file"] = str(chain)
         if args.plot:
-            from ..fit.plot import plot_corner, plot_reduced_lightcurve  # matplotlib: --plot
+            from ..fit.result.plot import plot_corner, plot_reduced_lightcurve  # matplotlib: --plot
             plot_reduced_lightcurve(result, args.plot)
             summary["plot_file"] = str(args.plot)
             if result.chain is not None:

@@ -30,7 +30,7 @@ from matplotlib.figure import Figure
 
 from .. import __version__
 from ..astro.events import event_for
-from ..fit.plot import literal_text
+from ..fit.result.plot import literal_text
 from ..photometry.binning import bin_indices, bin_values
 from ..photometry.table import read_table
 from ..report import figures as F

@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from ..io.atomic import atomic_path
+from ...io.atomic import atomic_path
 
 __all__ = ["bin_series", "lightcurve_figure", "corner_figure", "plot_reduced_lightcurve",
            "plot_corner", "save_png", "literal_text"]

@@ -2,8 +2,8 @@
 
 :class:`EpochResult` is what :func:`eclipsebench.fit.reduce.reduce_epoch`
 returns; ``to_dict()`` is what ``RESULT.json`` holds (``docs/fitting.md``
-lists the keys), :meth:`EpochResult.lightcurve_table` what ``RESULT.lc.ecsv``
-holds, and :func:`read_result` gives the result back from those files. In a
+lists the keys) and :meth:`EpochResult.from_dict` reads it back,
+:meth:`EpochResult.lightcurve_table` is what ``RESULT.lc.ecsv`` holds. In a
 notebook a result shows itself (``_repr_html_``), draws itself
 (:meth:`EpochResult.plot`) and gives its light curve as an astropy ``QTable``
 with units and a ``Time`` column (:meth:`EpochResult.to_table`).
@@ -11,28 +11,23 @@ with units and a ``Time`` column (:meth:`EpochResult.to_table`).
 
 from __future__ import annotations
 
-import json
-import math
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from astropy.table import QTable, Table
 from astropy.time import Time
 
-from .. import __version__
-from ..astro.events import event_for
-from ..errors import InputError
-from ..io.atomic import atomic_path, write_json
-from ..io.plain import json_safe
+from ... import __version__
+from ...astro.events import event_for
+from ...errors import InputError
+from ...io.atomic import atomic_path
+from ...io.plain import json_safe
+from . import plot as figures  # light: matplotlib is imported when a figure is made
 from .display import html_repr, text_repr
 
-__all__ = ["EpochResult", "lightcurve_errors", "lightcurve_path", "chain_path",
-           "read_result", "bic_data", "JointResult", "write_result", "write_failure",
-           "result_ok", "LIGHTCURVE_COLUMNS"]
+__all__ = ["EpochResult", "lightcurve_errors", "bic_data", "LIGHTCURVE_COLUMNS", "TIME_META"]
 
 #: ``RESULT.lc.ecsv``'s columns: their description (all relative fluxes, units of the star).
 LIGHTCURVE_COLUMNS = {
@@ -124,7 +119,7 @@ class EpochResult:
                 object.__setattr__(self, name, json_safe(value, nonfinite="keep"))
 
     def _fields_shown(self) -> dict[str, Any]:
-        """The fields of the text and HTML summaries (:mod:`eclipsebench.fit.display`)."""
+        """The fields of the text and HTML summaries (:mod:`eclipsebench.fit.result.display`)."""
         return {"method": self.method, "epoch": self.epoch, "system": self.system,
                 "profile": self.profile, "depth_ppm": self.depth_ppm,
                 "depth_err_ppm": self.depth_err_ppm, "error from": self.depth_err_method,
@@ -148,7 +143,6 @@ class EpochResult:
             An unknown ``kind``; ``"corner"`` of a fit without MCMC; a result
             read without its light curve.
         """
-        from . import plot as figures  # matplotlib only when a figure is asked for
 
         if kind == "corner":
             if self.chain is None:
@@ -349,232 +343,3 @@ def bic_data(result: Mapping[str, Any]) -> str:
     if frames is None or n == frames:
         return f"{n} frames"
     return f"{n} bins of {frames} frames"
-
-
-def lightcurve_path(result_path: str | os.PathLike) -> Path:
-    """``RESULT.json`` -> ``RESULT.lc.ecsv`` (the decorrelated light curve beside it).
-
-    Examples
-    --------
-    >>> lightcurve_path("results/pld/epoch_01.json").as_posix()
-    'results/pld/epoch_01.lc.ecsv'
-    """
-    p = Path(result_path)
-    stem = p.name[:-len(p.suffix)] if p.suffix else p.name
-    return p.with_name(stem + ".lc.ecsv")
-
-
-def chain_path(result_path: str | os.PathLike) -> Path:
-    """``RESULT.json`` -> ``RESULT.chain.npz`` (the posterior samples).
-
-    Examples
-    --------
-    >>> chain_path("r.json").as_posix()
-    'r.chain.npz'
-    """
-    lc = lightcurve_path(result_path)
-    return lc.with_name(lc.name.replace(".lc.ecsv", ".chain.npz"))
-
-
-def write_result(result: EpochResult, path: str | os.PathLike) -> None:
-    """Write one reduction's files: ``RESULT.lc.ecsv`` first, then ``RESULT.json`` (``path``).
-
-    The one result writer of every runner (``run``, ``trust``, ``campaign``): the
-    JSON is written last, so a result whose JSON exists has its light curve
-    (:func:`result_ok`).
-    """
-    with atomic_path(lightcurve_path(path)) as tmp:
-        result.lightcurve_table().write(tmp, format="ascii.ecsv")
-    write_json(Path(path), result.to_dict())
-
-
-def write_failure(path: str | os.PathLike, method: str, epoch: int | None, error: str,
-                  **extra: Any) -> None:
-    """Record at ``path`` that ``method`` refused epoch ``epoch`` (an InputError's message).
-
-    A refusal is an outcome, not a crash: the JSON has ``failed``, the ``error``
-    and null depths, and :func:`result_ok` accepts it, so a rerun does not retry it.
-    ``extra`` keys (the profile) are added.
-    """
-    write_json(Path(path), {"method": method, "epoch": epoch, "failed": True, "error": error,
-                            "depth_ppm": None, "depth_err_ppm": None, **extra,
-                            "eclipsebench_version": __version__})
-
-
-def _number_or_none(v: Any) -> bool:
-    return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
-
-
-def result_ok(method: str, epoch: int | None, path: str | os.PathLike) -> bool:
-    """The one resume rule of a reduction (``run``, ``trust``'s real and twin reductions,
-    ``campaign``): the result JSON parses and matches its schema for (method, epoch).
-
-    A result has ``method``, ``epoch`` (None for a table without an epoch number:
-    trust's real table may have none), ``depth_ppm`` and ``depth_err_ppm`` (numbers,
-    or null with ``failed`` and an ``error`` message); a finished one also has its
-    decorrelated light curve beside it (:func:`lightcurve_path`).
-
-    Examples
-    --------
-    >>> import json, tempfile
-    >>> path = Path(tempfile.mkdtemp()) / "epoch_01.json"
-    >>> _ = path.write_text(json.dumps({"method": "pld", "epoch": 1, "failed": True,
-    ...                                 "error": "no stamps", "depth_ppm": None,
-    ...                                 "depth_err_ppm": None}))
-    >>> result_ok("pld", 1, path), result_ok("bliss", 1, path), result_ok("pld", 2, path)
-    (True, False, False)
-    """
-    res = json.loads(Path(path).read_text())
-    if not (isinstance(res, dict) and res.get("method") == method and "epoch" in res
-            and res["epoch"] == epoch
-            and _number_or_none(res.get("depth_ppm"))
-            and _number_or_none(res.get("depth_err_ppm"))):
-        return False
-    if res.get("failed"):
-        return isinstance(res.get("error"), str)
-    return lightcurve_path(path).is_file()
-
-
-def read_result(path: str | os.PathLike):
-    """The result written to ``path`` (a RESULT.json), with its light curve and chain.
-
-    ``RESULT.lc.ecsv`` and ``RESULT.chain.npz`` beside it are read when present
-    (else the result has no light curve, or no chain). A joint fit's JSON gives
-    a ``JointResult``. Every field ``to_dict`` writes comes back equal.
-
-    Raises
-    ------
-    InputError
-        Naming the file: missing, unreadable, not JSON, not a result, a failed
-        reduction, or written by an older eclipsebench (no ``params``).
-    """
-    path = Path(path)
-    data = _read_json(path)
-    if data.get("joint"):
-        return JointResult.from_dict(data, path)
-    lc_file, chain_file = lightcurve_path(path), chain_path(path)
-    lightcurve = _read_lightcurve(lc_file) if lc_file.is_file() else {}
-    chain = _read_chain(chain_file) if chain_file.is_file() else None
-    try:
-        return EpochResult.from_dict(data, lightcurve, chain)
-    except (KeyError, TypeError) as exc:
-        raise InputError(f"{path}: not a result of this eclipsebench ({__version__}): "
-                         f"{type(exc).__name__} {exc} (written by an older version? "
-                         "reduce again)") from None
-
-
-def _read_json(path: Path) -> dict[str, Any]:
-    """A result file's dict; InputError naming the file when it is not one."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such result file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot read the result file "
-                         f"({type(exc).__name__}: {exc})") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{path}: not a result file (invalid JSON: {exc.msg}, line "
-                         f"{exc.lineno})") from None
-    if not isinstance(data, dict) or "method" not in data or "depth_ppm" not in data:
-        raise InputError(f"{path}: not a result file (no 'method' and 'depth_ppm')")
-    if data.get("failed"):
-        raise InputError(f"{path}: a failed reduction, no result: {data.get('error')}")
-    return data
-
-
-def _read_lightcurve(path: Path) -> dict[str, np.ndarray]:
-    try:
-        table = Table.read(path, format="ascii.ecsv")
-    except Exception as exc:
-        raise InputError(f"{path}: not a readable light curve "
-                         f"({type(exc).__name__}: {exc})") from None
-    return {name: np.asarray(table[name], dtype=float) for name in table.colnames}
-
-
-def _read_chain(path: Path) -> dict[str, np.ndarray]:
-    try:
-        with np.load(path, allow_pickle=False) as npz:
-            return {"names": npz["names"], "samples": npz["samples"]}
-    except Exception as exc:
-        raise InputError(f"{path}: not a readable chain ({type(exc).__name__}: {exc})") \
-            from None
-
-
-@dataclass(frozen=True)
-class JointResult:
-    """One depth common to several epochs; every other parameter per epoch."""
-
-    method: str
-    epochs: tuple[int | None, ...]
-    depth_ppm: float
-    depth_err_ppm: float
-    depth_err_jacobian_ppm: float
-    beta_red: float
-    chi2_red: float
-    bic: float
-    aic: float
-    k: int
-    n_points: int
-    phase: str
-    converged: bool
-    t_ecl_bmjd: tuple[float, ...]
-    per_epoch: tuple[dict[str, Any], ...]
-
-    @property
-    def depth_combined_ppm(self) -> float:
-        """Inverse-variance mean of the epochs' depths fitted alone."""
-        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
-        return float(np.sum(w * [e["depth_alone_ppm"] for e in self.per_epoch]) / np.sum(w))
-
-    @property
-    def depth_combined_err_ppm(self) -> float:
-        """``1 / sqrt(sum 1 / sigma_i^2)`` of the epochs' errors fitted alone."""
-        w = 1.0 / np.array([e["depth_alone_err_ppm"] for e in self.per_epoch]) ** 2
-        return float(1.0 / np.sqrt(np.sum(w)))
-
-    def to_dict(self) -> dict[str, Any]:
-        """The result as JSON-ready data (:meth:`from_dict` reads it back); with its BIC's
-        points (every epoch's, summed; bins for a binned method) and the software version."""
-        return {"method": self.method, "joint": True, "epochs": list(self.epochs),
-                "depth_ppm": self.depth_ppm,
-                "depth_combined_ppm": self.depth_combined_ppm,
-                "depth_combined_err_ppm": self.depth_combined_err_ppm,
-                "depth_err_ppm": self.depth_err_ppm,
-                "depth_err_jacobian_ppm": self.depth_err_jacobian_ppm,
-                "beta_red": self.beta_red, "chi2_red": self.chi2_red, "bic": self.bic,
-                "aic": self.aic, "k": self.k, "n_points": self.n_points, "phase": self.phase,
-                "converged": self.converged, "t_ecl_bmjd": list(self.t_ecl_bmjd),
-                "per_epoch": list(self.per_epoch), "bic_n_points": self.n_points,
-                "bic_data": f"{self.n_points} points of {len(self.epochs)} epochs",
-                "eclipsebench_version": __version__}
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any], source: object = "joint result"
-                  ) -> JointResult:
-        """The result :meth:`to_dict` wrote; InputError naming ``source`` when a field is
-        missing."""
-        try:
-            kw = {f.name: data[f.name] for f in fields(cls)}
-        except KeyError as exc:
-            raise InputError(f"{source}: not a joint result (no {exc})") from None
-        for name in ("epochs", "t_ecl_bmjd", "per_epoch"):
-            kw[name] = tuple(kw[name])
-        for name in ("beta_red", "chi2_red", "bic", "aic"):
-            kw[name] = math.nan if kw[name] is None else kw[name]
-        return cls(**kw)
-
-    def _shown(self) -> dict[str, Any]:
-        """The fields :func:`~eclipsebench.fit.display.text_repr` and
-        :func:`~eclipsebench.fit.display.html_repr` show."""
-        return {"method": self.method, "epoch": ", ".join(str(e) for e in self.epochs),
-                "depth_ppm": self.depth_ppm, "depth_err_ppm": self.depth_err_ppm,
-                "combined_ppm": self.depth_combined_ppm, "beta_red": self.beta_red,
-                "chi2_red": self.chi2_red,
-                "BIC": f"{self.bic:.1f} on {self.n_points} points",
-                "phase": self.phase, "converged": self.converged}
-
-    def __repr__(self) -> str:
-        return text_repr("JointResult", self._shown())
-
-    def _repr_html_(self) -> str:
-        return html_repr("JointResult", self._shown())
