@@ -21,7 +21,7 @@ def test_noiseless_epoch_gives_the_injected_depth_exactly(kit, polygain, xo3_epo
     res = reduce_epoch(xo3_epoch["table"](noise=0.0), polygain.name,
                        options=ReduceSection(prayer_bead_shifts=0), system=xo3_epoch["system"])
     assert res.depth_ppm == pytest.approx(kit.TRUE_DEPTH * 1e6, abs=0.5)
-    assert res.t_ecl_bmjd == pytest.approx(xo3_epoch["t_true"], abs=2e-6)
+    assert res.t_event_bmjd == pytest.approx(xo3_epoch["t_true"], abs=2e-6)
     assert res.params["c2_per_day2"] == pytest.approx(kit.TRUE_C2, rel=1e-3)
 
 
@@ -60,8 +60,8 @@ def test_recovers_depth_within_its_error(kit, polygain, xo3_epoch):
     assert d["method"] == polygain.name and d["epoch"] == 3 and d["sampler"] == "leastsq"
     assert d["n_frames"] == len(xo3_epoch["time"])
     assert abs(res.depth_ppm - kit.TRUE_DEPTH * 1e6) < 3 * res.depth_err_ppm
-    assert abs(res.t_ecl_bmjd - xo3_epoch["t_true"]) < 3 * res.t_ecl_err_d
-    assert res.t_ecl_predicted_bmjd == pytest.approx(xo3_epoch["t_pred"])
+    assert abs(res.t_event_bmjd - xo3_epoch["t_true"]) < 3 * res.t_event_err_d
+    assert res.t_event_predicted_bmjd == pytest.approx(xo3_epoch["t_pred"])
     # the reported error is the largest available estimate
     jac_beta = res.depth_err_jacobian_ppm * max(1.0, res.beta_red)
     assert res.depth_err_ppm == pytest.approx(max(jac_beta, res.depth_err_prayer_bead_ppm))

@@ -27,7 +27,7 @@ from eclipsebench.cli import main
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.system import SystemSection
 from eclipsebench.errors import ConfigError, InputError
-from eclipsebench.fit.model import AstroModel, integration_offsets_d
+from eclipsebench.fit.model import AstroModel, PhaseCurveSettings, integration_offsets_d
 from eclipsebench.fit.reduce import predicted_event_bmjd, reduce_epoch
 
 SYSTEM = get_system(SystemSection().name)   # the 2015 challenge's XO-3b (e = 0.29)
@@ -81,8 +81,8 @@ def _truth(model: AstroModel, harmonics, *, depth=2.0e-3, rp_rs=0.0906, offsets=
 def test_the_model_is_transit_plus_visible_planet_and_the_batch_is_bit_identical():
     time = _times(60.0)
     aor = _aors(time)
-    m = AstroModel(time, SYSTEM, phase="harmonic2", event="phase-curve", aorkey=aor,
-                   exposure_s=0.0)
+    m = AstroModel(time, SYSTEM, phase="harmonic2", event="phase-curve",
+                   settings=PhaseCurveSettings(aorkey=aor, exposure_s=0.0))
     assert m.names == ("depth", "t_ecl_bmjd", "rp_rs", "phase_a1", "phase_b1", "phase_a2",
                        "phase_b2", *(f"aor_offset_{k}" for k in range(1, 7)))
     theta = _truth(m, (3e-4, -1.2e-4, 5e-5, 2e-5), offsets=(1e-4, -2e-4, 3e-4, 0.0, 5e-5, 1e-5))
@@ -120,11 +120,13 @@ def test_long_rows_are_averaged_over_their_exposure():
     assert len(integration_offsets_d(128.0)) == 13
     fine = _times(2.0, start=-0.06, span=0.12)               # 2 s frames across ingress
     rows = fine[:len(fine) // 64 * 64].reshape(-1, 64).mean(axis=1)
-    binned = AstroModel(rows, SYSTEM, phase="harmonic1", event="phase-curve", exposure_s=128.0)
+    binned = AstroModel(rows, SYSTEM, phase="harmonic1", event="phase-curve",
+                         settings=PhaseCurveSettings(exposure_s=128.0))
     frames = AstroModel(fine, SYSTEM, phase="harmonic1", event="phase-curve")
     theta = _truth(frames, (3e-4, -1e-4))
     mean = frames(theta)[:len(rows) * 64].reshape(-1, 64).mean(axis=1)
-    instant = AstroModel(rows, SYSTEM, phase="harmonic1", event="phase-curve", exposure_s=0.0)
+    instant = AstroModel(rows, SYSTEM, phase="harmonic1", event="phase-curve",
+                          settings=PhaseCurveSettings(exposure_s=0.0))
     # the exposure-averaged model of a 64-frame row is the mean of its frames to ~1e-7
     assert np.max(np.abs(binned(theta) - mean)) < 2e-7
     assert np.max(np.abs(instant(theta) - mean)) > 10 * np.max(np.abs(binned(theta) - mean))
@@ -134,8 +136,9 @@ def test_bad_phase_curve_settings_are_one_line_errors():
     time = _times(600.0)
     with pytest.raises(InputError, match="harmonic1, harmonic2"):
         AstroModel(time, SYSTEM, phase="quadratic", event="phase-curve")
-    with pytest.raises(InputError, match="'phase-curve' only"):
-        AstroModel(time, SYSTEM, phase="flat", aorkey=_aors(time))
+    with pytest.raises(InputError, match="PhaseCurveSettings: the settings of another event; "
+                                         "event 'eclipse' takes EclipseSettings"):
+        AstroModel(time, SYSTEM, phase="flat", settings=PhaseCurveSettings(aorkey=_aors(time)))
     with pytest.raises(InputError, match="use 'physical'"):
         AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", eclipse_shape="box")
     with pytest.raises(ConfigError, match="exposure_s"):
@@ -152,7 +155,7 @@ def test_bad_phase_curve_settings_are_one_line_errors():
                                               ("harmonic2", (4e-4, -1.5e-4, 6e-5, -3e-5))])
 def test_a_noiseless_phase_curve_is_recovered_exactly(phase, harmonics, polygain, kit):
     model = AstroModel(_times(16.0), SYSTEM, phase=phase, event="phase-curve",
-                       aorkey=_aors(_times(16.0)))
+                       settings=PhaseCurveSettings(aorkey=_aors(_times(16.0))))
     offsets = (2e-4, -3e-4, 1e-4, 4e-4, -1e-4, 2.5e-4)
     theta = _truth(model, harmonics, offsets=offsets)
     table = _table(model, theta, noise=0.0, seed=3, kit=kit)
@@ -179,7 +182,8 @@ def test_a_noiseless_phase_curve_is_recovered_exactly(phase, harmonics, polygain
 
 def test_the_planet_flux_can_be_kept_non_negative(polygain, kit):
     time = _times(64.0)
-    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time))
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time)))
     theta = _truth(model, (6e-4, 0.0), depth=8e-4)             # minimum 8e-4 - 2 x 6e-4 < 0
     table = _table(model, theta, noise=1e-3, seed=5, kit=kit)
     free = reduce_epoch(table, polygain.name, options=OPTIONS, system=SYSTEM).to_dict()
@@ -190,7 +194,7 @@ def test_the_planet_flux_can_be_kept_non_negative(polygain, kit):
     assert kept["chi2_red"] > free["chi2_red"]
     # the MCMC's prior is -inf where the planet goes negative
     prior = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
-                       nonnegative_planet=True)
+                       settings=PhaseCurveSettings(nonnegative_planet=True))
     rows = np.array([prior.initial(t_event_bmjd=T_ECL, depth=8e-4) for _ in range(2)])
     rows[0, 3] = 6e-4
     assert prior.log_prior_batch(rows).tolist() == [-np.inf, 0.0]
@@ -201,7 +205,8 @@ def test_the_planet_flux_can_be_kept_non_negative(polygain, kit):
 def test_a_binned_csv_gives_the_unbinned_amplitude_and_offset(tmp_path, polygain, kit):
     """Issue 17 acceptance: one row per 64-frame cube, written to CSV, read back by reduce."""
     time = _times(2.0, start=-0.05, span=PERIOD + 0.1)
-    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time))
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time)))
     theta = _truth(model, (4e-4, -1.5e-4), offsets=(2e-4, -3e-4, 1e-4, 4e-4, -1e-4, 2.5e-4))
     frames = _table(model, theta, noise=4e-3, seed=11, kit=kit)
     n = len(frames) // 64 * 64
@@ -227,7 +232,8 @@ def test_a_binned_csv_gives_the_unbinned_amplitude_and_offset(tmp_path, polygain
 
 def test_reduce_command_fits_a_phase_curve(tmp_path, polygain, kit, capsys):
     time = _times(128.0)
-    model = AstroModel(time, SYSTEM, phase="harmonic2", event="phase-curve", aorkey=_aors(time))
+    model = AstroModel(time, SYSTEM, phase="harmonic2", event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time)))
     table = _table(model, _truth(model, (4e-4, -1e-4, 0.0, 0.0)), noise=1e-3, seed=2, kit=kit)
     path = tmp_path / "pc.ecsv"
     table.write(path)
@@ -248,7 +254,8 @@ def test_reduce_command_fits_a_phase_curve(tmp_path, polygain, kit, capsys):
 def test_one_systematics_model_per_aor(polygain, kit):
     """[reduce] systematics_per_aor: each AOR its own method (and flux level), no offsets."""
     time = _times(16.0)
-    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time))
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time)))
     theta = _truth(model, (4e-4, -1.5e-4), offsets=(2e-4, -3e-4, 1e-4, 4e-4, -1e-4, 2.5e-4))
     table = _table(model, theta, noise=0.0, seed=3, kit=kit)
     opts = replace(OPTIONS, systematics_per_aor=True, settling_aor="keep")
@@ -273,7 +280,8 @@ def test_one_systematics_model_per_aor(polygain, kit):
 def test_map_and_neighbour_methods_fit_a_binned_phase_curve(method, kit):
     """One row per 64-frame cube: BLISS's knots and KR's neighbours work on the cubes."""
     time = _times(128.0)
-    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time))
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time)))
     theta = _truth(model, (4e-4, -1.5e-4))
     table = _table(model, theta, noise=5e-4, seed=7, kit=kit)
     table["noise_pixels"] = np.full(len(table), 7.0)
@@ -317,8 +325,8 @@ def test_per_aor_systematics_batch_and_refits_equal_their_parts(kit):
 
 def test_errors_from_mcmc_samples_agree_with_the_delta_method(polygain, kit):
     time = _times(900.0)   # instantaneous rows (exposure 1 s): one sample each, a quick model
-    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve", aorkey=_aors(time),
-                       exposure_s=1.0)
+    model = AstroModel(time, SYSTEM, phase="harmonic1", event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time), exposure_s=1.0))
     table = _table(model, _truth(model, (4e-4, -1.5e-4)), noise=5e-4, seed=9, kit=kit)
     options = replace(OPTIONS, exposure_s=1.0)
     delta = reduce_epoch(table, polygain.name, options=options, system=SYSTEM).to_dict()
@@ -338,7 +346,8 @@ def test_the_harmonic_order_is_chosen_by_bic(polygain, kit):
     for harmonics, expected in (((4e-4, -1.5e-4), "harmonic1"),
                                 ((4e-4, -1.5e-4, 3e-4, 2e-4), "harmonic2")):
         phase = "harmonic2" if len(harmonics) == 4 else "harmonic1"
-        model = AstroModel(time, SYSTEM, phase=phase, event="phase-curve", aorkey=_aors(time))
+        model = AstroModel(time, SYSTEM, phase=phase, event="phase-curve",
+                       settings=PhaseCurveSettings(aorkey=_aors(time)))
         table = _table(model, _truth(model, harmonics), noise=5e-4, seed=4, kit=kit)
         res = reduce_epoch(table, polygain.name, system=SYSTEM,
                            options=replace(OPTIONS, phase_curve_model="bic")).to_dict()

@@ -25,7 +25,7 @@ from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.system import SystemSection
 from eclipsebench.errors import ConfigError, InputError
 from eclipsebench.fit.leastsq import _Problem
-from eclipsebench.fit.model import AstroModel, q_from_u, u_from_q
+from eclipsebench.fit.model import AstroModel, TransitSettings, q_from_u, u_from_q
 from eclipsebench.fit.reduce import reduce_epoch, reduce_joint
 
 SYSTEM = get_system(SystemSection().name)   # the default planet (2015 challenge's XO-3b)
@@ -58,7 +58,8 @@ def test_the_transit_is_batmans_and_the_simulators():
     ref = _batman(TIME, T_TR + 0.001 + offset, SYSTEM.rp_rs, SYSTEM.a_rs, SYSTEM.inc_deg,
                   SYSTEM.ld_quadratic)
     assert np.max(np.abs(m(theta) - ref)) < 1e-9          # the tabulated separation
-    free = AstroModel(TIME, SYSTEM, phase="flat", event="transit", transit_free=("a_rs", "b"))
+    free = AstroModel(TIME, SYSTEM, phase="flat", event="transit",
+                      settings=TransitSettings(free=("a_rs", "b")))
     theta_free = free.initial(t_event_bmjd=T_TR + 0.001)
     assert theta_free[2:].tolist() == pytest.approx([SYSTEM.a_rs, SYSTEM.impact_parameter])
     assert np.max(np.abs(free(theta_free) - ref)) < 1e-12  # batman's rsky at the data times
@@ -75,7 +76,7 @@ def test_the_transit_is_batmans_and_the_simulators():
 
 def test_free_limb_darkening_phase_and_ramp_and_the_batch_is_bit_identical():
     m = AstroModel(TIME, SYSTEM, phase="quadratic", ramp="linear", event="transit",
-                   transit_free=("q2", "q1"))
+                   settings=TransitSettings(free=("q2", "q1")))
     assert m.names == ("rp_rs", "t_transit_bmjd", "q1", "q2", "c1_per_day", "c2_per_day2",
                        "ramp_slope_per_day")
     theta = m.initial(t_event_bmjd=T_TR)
@@ -108,8 +109,8 @@ def test_the_depth_is_rp_rs_squared_and_errors_propagate():
 
 
 def test_gaussian_priors_enter_residuals_and_log_prior():
-    m = AstroModel(TIME, SYSTEM, phase="flat", event="transit", transit_free=("q1", "q2"),
-                   transit_priors={"q1": (0.05, 0.01)})
+    m = AstroModel(TIME, SYSTEM, phase="flat", event="transit",
+                   settings=TransitSettings(free=("q1", "q2"), priors={"q1": (0.05, 0.01)}))
     assert m.n_priors == 1
     theta = m.initial(t_event_bmjd=T_TR)
     assert theta[2] == 0.05                       # a prior's mean starts the parameter
@@ -133,18 +134,20 @@ def test_gaussian_priors_enter_residuals_and_log_prior():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"transit_free": ("rp",)}, "transit_free"),
-    ({"transit_free": ("q1",), "transit_priors": {"q2": (0.1, 0.1)}}, "transit_priors.q2"),
-    ({"transit_free": ("q1",), "transit_priors": {"q1": (0.1, 0.0)}}, "sigma > 0"),
+    ({"free": ("rp",)}, "transit_free"),
+    ({"free": ("q1",), "priors": {"q2": (0.1, 0.1)}}, "transit_priors.q2"),
+    ({"free": ("q1",), "priors": {"q1": (0.1, 0.0)}}, "sigma > 0"),
     ({"limb_darkening_q": (1.2, 0.3)}, "limb_darkening_q"),
 ])
 def test_bad_transit_settings_are_one_line_errors(kwargs, message):
     with pytest.raises(InputError, match=message):
-        AstroModel(TIME, SYSTEM, event="transit", **kwargs)
+        AstroModel(TIME, SYSTEM, event="transit", settings=TransitSettings(**kwargs))
     with pytest.raises(InputError, match="event"):
         AstroModel(TIME, SYSTEM, event="occultation")
-    with pytest.raises(InputError, match="apply to event 'transit'"):
-        AstroModel(TIME, SYSTEM, transit_free=("q1",))
+    # a transit's settings given to an eclipse are refused, not ignored
+    with pytest.raises(InputError, match="TransitSettings: the settings of another event; "
+                                         "event 'eclipse' takes EclipseSettings"):
+        AstroModel(TIME, SYSTEM, settings=TransitSettings(free=("q1",)))
 
 
 def test_reduce_section_keys_are_checked():
@@ -279,4 +282,9 @@ def test_a_transit_result_read_back_equals_it(transit_table, polygain, tmp_path)
     write_json(tmp_path / "t.json", res.to_dict())
     back = read_result(tmp_path / "t.json")
     assert back == res and back.event_detail["event"] == "transit"
-    assert back.t_ecl_bmjd == res.event_detail["t_transit_bmjd"]
+    assert back.t_event_bmjd == res.event_detail["t_transit_bmjd"]
+    # the event time's old attribute name reads the same value (issue 39: a transit's time
+    # is an event time); the file keeps its keys
+    assert back.t_ecl_bmjd == back.t_event_bmjd and back.t_ecl_err_d == back.t_event_err_d
+    assert back.t_ecl_predicted_bmjd == back.t_event_predicted_bmjd
+    assert "t_event_bmjd" not in res.to_dict() and "t_ecl_bmjd" not in res.to_dict()

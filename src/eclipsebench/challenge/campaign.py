@@ -755,12 +755,12 @@ def _twins_answer(path: str, root: Path) -> dict[str, Any]:
 
 
 def _event_hours(result: Mapping[str, Any], time_bmjd: np.ndarray) -> tuple[np.ndarray, str]:
-    """Hours from the fitted mid-eclipse (or mid-transit) time of a result, else from the
-    middle of the visit; and what they count from."""
-    for key, what in (("t_ecl_bmjd", "mid-eclipse"), ("t_transit_bmjd", "mid-transit")):
-        t0 = result.get(key)
-        if isinstance(t0, (int, float)) and np.isfinite(t0):
-            return (time_bmjd - float(t0)) * 24.0, what
+    """Hours from the fitted event time of a result (its event's mid-eclipse or
+    mid-transit), else from the middle of the visit; and what they count from."""
+    event = event_for(result.get("event"))
+    t0 = result.get(event.time_key)
+    if isinstance(t0, (int, float)) and np.isfinite(t0):
+        return (time_bmjd - float(t0)) * 24.0, event.mid_label
     return (time_bmjd - float(np.median(time_bmjd))) * 24.0, "the middle of the visit"
 
 

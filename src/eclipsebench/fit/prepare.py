@@ -148,27 +148,17 @@ class PreparedEpoch:
         return self.systematics.n_frames
 
     def astro_model(self, options: ReduceSection, *, phase: str | None = None) -> AstroModel:
-        """The shared astrophysical model at the method's data times."""
-        shape = options.eclipse_shape
+        """The shared astrophysical model at the method's data times, with its event's own
+        settings read from ``options`` (:mod:`eclipsebench.fit.model.settings`)."""
+        data = self.systematics.data
+        model = AstroModel.event_class(options.event)
         if event_for(options.event).whole_orbit:
             # a whole phase curve: its own phase models, the physical eclipse repeated each
             # orbit, an offset per AOR unless each AOR has its own systematics
-            data = self.systematics.data
-            return AstroModel.build(
-                data.time_bmjd, self.system, event="phase-curve",
-                phase=phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model,
-                ramp=options.ramp, eclipse_shape=shape,
-                limb_darkening_q=options.limb_darkening_q,
-                aorkey=(data.aorkey if options.aor_offsets and not options.systematics_per_aor
-                        else None),
-                exposure_s=options.exposure_s or None,
-                nonnegative_planet=options.nonnegative_planet)
-        return AstroModel.build(self.systematics.data.time_bmjd, self.system,
-                                phase=phase or options.phase, ramp=options.ramp,
-                                eclipse_shape=shape, event=options.event,
-                                transit_free=options.transit_free,
-                                transit_priors=options.transit_priors,
-                                limb_darkening_q=options.limb_darkening_q)
+            phase = phase if phase in PHASE_CURVE_MODELS else options.phase_curve_model
+        return model(data.time_bmjd, self.system, phase=phase or options.phase,
+                     ramp=options.ramp, eclipse_shape=options.eclipse_shape,
+                     settings=model.settings_class.from_options(options, data.aorkey))
 
 
 def configured_method_options(options: ReduceSection) -> dict[str, MethodOptions]:

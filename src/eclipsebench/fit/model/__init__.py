@@ -30,6 +30,9 @@ instead of one class switching on their names:
 - :mod:`.parts`: the phase terms and ramps (:data:`~.parts.PHASE_TERMS`,
   :data:`~.parts.RAMPS`, with their equations) and the pure helpers;
   :mod:`.kernels`: the eclipse batch's numba kernels.
+- :mod:`.settings`: each event's own settings (:class:`TransitSettings`,
+  :class:`PhaseCurveSettings`, :class:`EclipseSettings`), one object given as
+  ``settings=`` instead of keywords that only one event reads.
 
 This module imports every event's model (so that ``AstroModel`` knows them
 all) and keeps the public names: import from here.
@@ -61,12 +64,14 @@ from .parts import (
     u_from_q,
 )
 from .phase_curve import PhaseCurveModel
+from .settings import EclipseSettings, PhaseCurveSettings, TransitSettings
 from .transit import TransitModel
 
 __all__ = ["AstroModel", "PHASE_MODELS", "PHASE_CURVE_MODELS", "RAMP_MODELS", "ECLIPSE_SHAPES",
            "EVENTS", "TRANSIT_FREE", "box_visible_fraction", "system_period_days", "q_from_u",
            "u_from_q", "integration_offsets_d", "aor_order", "EclipseModel", "TransitModel",
-           "PhaseCurveModel", "depth_limit_ppm"]
+           "PhaseCurveModel", "depth_limit_ppm", "EclipseSettings", "TransitSettings",
+           "PhaseCurveSettings"]
 
 
 def depth_limit_ppm(event: str) -> float:

@@ -22,7 +22,6 @@ its setup, ``visible_fraction``, ``stellar_flux`` and the model itself
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -39,24 +38,21 @@ from .parts import (
     VisibleFraction,
     known_period,
 )
+from .settings import EclipseSettings, OwnSettings
 
 __all__ = ["AstroModel", "EventSettings"]
 
 
 @dataclass(frozen=True)
 class EventSettings:
-    """The settings of :class:`AstroModel` that one event or another reads (its keyword
-    arguments after ``eclipse_shape``, but ``event``), handed to the event's setup."""
+    """What :class:`AstroModel` hands to its event's setup: the keywords every event may
+    read (``shape``, ``period_d``, ``box_duration_d``) and the event's own settings
+    (``own``, :mod:`.settings`)."""
 
-    shape: VisibleFraction | None = None
-    period_d: float | None = None
-    box_duration_d: float | None = None
-    transit_free: Sequence[str] = ()
-    transit_priors: Mapping[str, Sequence[float]] | None = None
-    limb_darkening_q: Sequence[float] | None = None
-    aorkey: Any = None
-    exposure_s: float | None = None
-    nonnegative_planet: bool = False
+    shape: VisibleFraction | None
+    period_d: float | None
+    box_duration_d: float | None
+    own: Any
 
 
 class AstroModel(ABC):
@@ -95,28 +91,11 @@ class AstroModel(ABC):
         "harmonic2") needs ``system`` and the physical eclipse shape. A
         subclass called directly models its own event (``event`` may be left
         out).
-    transit_free : sequence of {"a_rs", "b", "q1", "q2"}
-        The transit's parameters fitted besides ``rp_rs`` and
-        ``t_transit_bmjd``; the others stay at the catalogue's ``a_rs``, impact
-        parameter and limb darkening (or ``limb_darkening_q``).
-    transit_priors : mapping, optional
-        ``{name: (mean, sigma)}``: a Gaussian prior on a free transit
-        parameter (added to the least-squares residuals and the MCMC's
-        log-probability); a free parameter without one has a uniform prior
-        within its bounds.
-    limb_darkening_q : (float, float), optional
-        Kipping's q1, q2 (fixed values, or the start of free ones); default
-        those of the catalogue's quadratic coefficients (:func:`q_from_u`).
-    aorkey : array_like, shape (n,), optional
-        A phase curve's AOR of each frame: every AOR after the first gets a
-        flux offset ``aor_offset_<k>`` (a phase curve only).
-    exposure_s : float, optional
-        A phase curve's integration time of one row (default: the median
-        cadence); rows longer than 10 s are averaged over sub-exposures
-        (:func:`integration_offsets_d`).
-    nonnegative_planet : bool
-        A phase curve's prior ``p(t) >= 0`` over the orbit (a penalty residual
-        for least squares, ``-inf`` log-prior for the MCMC).
+    settings : EclipseSettings, TransitSettings or PhaseCurveSettings, optional
+        The event's own settings (:mod:`.settings`: a transit's free
+        parameters, priors and limb darkening; a phase curve's limb darkening,
+        AOR offsets, exposure and non-negative planet); default: the event's
+        class with its defaults. Another event's settings are refused.
 
     Examples
     --------
@@ -136,7 +115,9 @@ class AstroModel(ABC):
     >>> from eclipsebench.astro.catalogue import get_system
     >>> xo3 = get_system("XO-3b (2015 challenge)")
     >>> t = xo3.t_transit_bmjd + np.linspace(-0.1, 0.1, 5)
-    >>> tr = AstroModel(t, xo3, phase="flat", event="transit", transit_free=("q1", "q2"))
+    >>> from eclipsebench.fit.model import TransitSettings
+    >>> tr = AstroModel(t, xo3, phase="flat", event="transit",
+    ...                 settings=TransitSettings(free=("q1", "q2")))
     >>> tr.names
     ('rp_rs', 't_transit_bmjd', 'q1', 'q2')
     >>> tr(tr.initial()).round(5).tolist()
@@ -149,6 +130,8 @@ class AstroModel(ABC):
     event: ClassVar[str] = ""
     #: The phase models the event offers.
     phase_models: ClassVar[tuple[str, ...]] = PHASE_MODELS
+    #: The class of the event's own settings (:mod:`.settings`), given as ``settings``.
+    settings_class: ClassVar[type[OwnSettings]] = EclipseSettings
     #: Each event's subclass, registered as it is defined (:meth:`__init_subclass__`).
     _event_classes: ClassVar[dict[str, type[AstroModel]]] = {}
     #: The facts of the event that callers branch on (:mod:`eclipsebench.astro.events`):
@@ -200,10 +183,7 @@ class AstroModel(ABC):
                  ramp: str = "none", eclipse_shape: str = "physical",
                  shape: VisibleFraction | None = None, period_d: float | None = None,
                  box_duration_d: float | None = None, event: str | None = None,
-                 transit_free: Sequence[str] = (),
-                 transit_priors: Mapping[str, Sequence[float]] | None = None,
-                 limb_darkening_q: Sequence[float] | None = None, aorkey=None,
-                 exposure_s: float | None = None, nonnegative_planet: bool = False) -> None:
+                 settings: OwnSettings | None = None) -> None:
         if event is not None and event != self.event:
             raise InputError(f"event {event!r}: {type(self).__name__} models event "
                              f"'{self.event}'")
@@ -212,9 +192,10 @@ class AstroModel(ABC):
                              f"(event '{self.event}')")
         if ramp not in RAMP_MODELS:
             raise InputError(f"--ramp {ramp!r}: expected one of {', '.join(RAMP_MODELS)}")
-        settings = EventSettings(shape, period_d, box_duration_d, transit_free, transit_priors,
-                                 limb_darkening_q, aorkey, exposure_s, nonnegative_planet)
-        self._check_exposure_options(settings)
+        own = self.settings_class() if settings is None else settings
+        if not isinstance(own, self.settings_class):
+            raise InputError(f"{type(own).__name__}: the settings of another event; event "
+                             f"'{self.event}' takes {self.settings_class.__name__}")
         if eclipse_shape not in ECLIPSE_SHAPES:
             raise InputError(f"eclipse_shape {eclipse_shape!r}: expected one of "
                              f"{', '.join(ECLIPSE_SHAPES)}")
@@ -245,14 +226,7 @@ class AstroModel(ABC):
         self.period_d: float | None = None
         self.shape: VisibleFraction | None = None
         self.names: tuple[str, ...] = ()
-        self._setup(system, settings)
-
-    def _check_exposure_options(self, settings: EventSettings) -> None:
-        """Refuse a phase curve's own settings (every event but the phase curve)."""
-        if (settings.aorkey is not None or settings.exposure_s is not None
-                or settings.nonnegative_planet):
-            raise InputError("aorkey, exposure_s, nonnegative_planet: apply to event "
-                             "'phase-curve' only")
+        self._setup(system, EventSettings(shape, period_d, box_duration_d, own))
 
     @abstractmethod
     def _setup(self, system: Any, settings: EventSettings) -> None:
@@ -339,8 +313,8 @@ class AstroModel(ABC):
 
     # ------------------------------------------------------------------ the model's parts
     @abstractmethod
-    def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
-        """v(t): 1 = planet fully visible, 0 = fully eclipsed."""
+    def visible_fraction(self, t_event_bmjd: float) -> np.ndarray:
+        """v(t) about the event time: 1 = planet fully visible, 0 = fully eclipsed."""
 
     @abstractmethod
     def stellar_flux(self, theta) -> np.ndarray:

@@ -156,8 +156,6 @@ class EclipseModel(AstroModel):
 
     def _setup(self, system: Any, settings: EventSettings) -> None:
         """The eclipse shape (physical or box), the period and the parameter names."""
-        if settings.transit_free or settings.transit_priors:
-            raise InputError("transit_free, transit_priors: apply to event 'transit' only")
         shape = settings.shape
         if shape is None:
             if system is None:

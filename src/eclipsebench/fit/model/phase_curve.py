@@ -43,6 +43,7 @@ from .parts import (
     integration_offsets_d,
     system_period_days,
 )
+from .settings import PhaseCurveSettings
 from .transit import TransitGeometry, _TransitCurve
 
 __all__ = ["PhaseCurveModel"]
@@ -52,23 +53,18 @@ class PhaseCurveModel(TransitGeometry, AstroModel):
     """A whole phase curve at fixed times: ``A = R O [T + v p]``, averaged over each exposure.
 
     ``AstroModel(time, system, event="phase-curve", phase="harmonic1", ...)``
-    builds one; the parameters are :class:`AstroModel`'s (``aorkey``,
-    ``exposure_s`` and ``nonnegative_planet`` are the phase curve's own).
+    builds one; the parameters are :class:`AstroModel`'s (its own ``settings`` a
+    :class:`~.settings.PhaseCurveSettings`: limb darkening, AOR offsets, exposure,
+    non-negative planet; a/R*, b and the limb darkening stay fixed).
     """
 
     event = "phase-curve"
     phase_models = PHASE_CURVE_MODELS
-
-    def _check_exposure_options(self, settings: EventSettings) -> None:
-        """A phase curve's own settings: all accepted."""
+    settings_class = PhaseCurveSettings
 
     def _setup(self, system: Any, settings: EventSettings) -> None:
         """T(t) as the transit's, v(t) as the eclipse's, p(t) harmonic, and the AOR
         offsets O(t)."""
-        if settings.transit_free or settings.transit_priors:
-            raise InputError("transit_free, transit_priors: apply to event 'transit' only "
-                             "(a phase curve fits Rp/R* with a/R*, b and limb darkening "
-                             "fixed)")
         if system is None:
             raise InputError("event 'phase-curve': give the planetary system (its orbit)")
         if self.eclipse_shape != "physical":
@@ -81,16 +77,16 @@ class PhaseCurveModel(TransitGeometry, AstroModel):
         # the transit exactly as event "transit" makes it, with Rp/R* free and a/R*, b and
         # the limb darkening fixed (their defaults there)
         self.transit_free = ()
-        self._set_transit_geometry(system, settings.limb_darkening_q)
-        self._set_exposures(system, settings.shape, settings.exposure_s)
+        self._set_transit_geometry(system, settings.own.limb_darkening_q)
+        self._set_exposures(system, settings.shape, settings.own.exposure_s)
         # the catalogue orbit's mid-transit minus mid-eclipse (observed, light travel included);
         # the fitted eclipse time carries every transit with it (one orbit, period fixed)
         t_e = eclipse_time_bmjd(system, self.t_start_bmjd)
         self.transit_minus_eclipse_d = float(transit_time_bmjd(system, t_e - 0.5 * self.period_d)
                                              - t_e)
         self.transit_phase_rad = 2.0 * math.pi * self.transit_minus_eclipse_d / self.period_d
-        self._set_aors(settings.aorkey)
-        self.nonnegative_planet = bool(settings.nonnegative_planet)
+        self._set_aors(settings.own.aorkey)
+        self.nonnegative_planet = bool(settings.own.nonnegative_planet)
         self.n_priors = 1 if self.nonnegative_planet else 0
         self.n_shape = 1   # rp_rs
         self.names = ("depth", "t_ecl_bmjd", "rp_rs") + self.phase_term.names \

@@ -51,6 +51,7 @@ from .parts import (
     system_period_days,
     u_from_q,
 )
+from .settings import TransitSettings
 
 __all__ = ["TransitModel", "TransitGeometry"]
 
@@ -174,8 +175,9 @@ class TransitModel(TransitGeometry, AstroModel):
     """The transit, phase-variation and ramp model at fixed times: ``A = R [T + p]``.
 
     ``AstroModel(time, system, event="transit", ...)`` builds one; the
-    parameters are :class:`AstroModel`'s (``transit_free``, ``transit_priors``
-    and ``limb_darkening_q`` are the transit's own; ``eclipse_shape``,
+    parameters are :class:`AstroModel`'s (its own ``settings`` a
+    :class:`~.settings.TransitSettings`: free parameters, priors, limb
+    darkening; ``eclipse_shape``,
     ``shape`` and ``box_duration_d`` are ignored).
 
     Examples
@@ -184,7 +186,7 @@ class TransitModel(TransitGeometry, AstroModel):
     >>> from eclipsebench.astro.catalogue import get_system
     >>> xo3 = get_system("XO-3b (2015 challenge)")
     >>> t = xo3.t_transit_bmjd + np.linspace(-0.1, 0.1, 5)
-    >>> tr = TransitModel(t, xo3, phase="flat", transit_free=("q1", "q2"))
+    >>> tr = TransitModel(t, xo3, phase="flat", settings=TransitSettings(free=("q1", "q2")))
     >>> tr.event, tr.names
     ('transit', ('rp_rs', 't_transit_bmjd', 'q1', 'q2'))
     >>> tr(tr.initial()).round(5).tolist()
@@ -192,6 +194,7 @@ class TransitModel(TransitGeometry, AstroModel):
     """
 
     event = "transit"
+    settings_class = TransitSettings
 
     def _setup(self, system: Any, settings: EventSettings) -> None:
         """The transit's fixed values, free parameters, priors and precomputed curve."""
@@ -201,15 +204,15 @@ class TransitModel(TransitGeometry, AstroModel):
             raise InputError("event 'transit': give the planetary system (its orbit)")
         if self.phase_term.needs_period and not self.period_d:
             raise InputError("--phase sinusoid: the orbital period is unknown (give period_d)")
-        free = settings.transit_free
+        free = settings.own.free
         unknown = [n for n in free if n not in TRANSIT_FREE]
         if unknown or len(set(free)) != len(tuple(free)):
             raise InputError(f"transit_free {list(free)!r}: expected distinct names among "
                              f"{', '.join(TRANSIT_FREE)}")
         self.transit_free = tuple(n for n in TRANSIT_FREE if n in free)
         self.n_shape = len(self.transit_free)
-        self._set_transit_geometry(system, settings.limb_darkening_q)
-        self._set_priors(settings.transit_priors)
+        self._set_transit_geometry(system, settings.own.limb_darkening_q)
+        self._set_priors(settings.own.priors)
         self._transit = _TransitCurve(self.time_bmjd, system,
                                       fixed_orbit=not {"a_rs", "b"} & set(self.transit_free))
         self.names = ("rp_rs", "t_transit_bmjd") + self.transit_free \
@@ -257,7 +260,7 @@ class TransitModel(TransitGeometry, AstroModel):
                 "t_transit_err_d": t_err_d, "t_transit_predicted_bmjd": t_predicted_bmjd,
                 "transit_model": self.describe()}
 
-    def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
+    def visible_fraction(self, t_event_bmjd: float) -> np.ndarray:
         """v(t): 1 throughout a transit (the planet is never hidden)."""
         return np.ones_like(self.time_bmjd)
 

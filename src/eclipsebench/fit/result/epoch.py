@@ -65,9 +65,11 @@ class EpochResult:
     depth_err_prayer_bead_ppm: float | None
     depth_err_mcmc_ppm: float | None
     depth_err_separation_ppm: float
-    t_ecl_bmjd: float
-    t_ecl_err_d: float
-    t_ecl_predicted_bmjd: float
+    #: The fitted event time (mid-eclipse, or a transit's mid-transit), its error and the
+    #: predicted one; ``to_dict`` writes them as the event's keys (``t_ecl_bmjd``...).
+    t_event_bmjd: float
+    t_event_err_d: float
+    t_event_predicted_bmjd: float
     bic: float
     aic: float
     k: int
@@ -101,7 +103,7 @@ class EpochResult:
     chain: dict[str, np.ndarray] | None = field(default=None, repr=False, compare=False)
     #: A transit's keys (``rp_rs``, ``rp_rs_err``, ``t_transit_bmjd``, ...; empty for an
     #: eclipse): its ``depth_*`` fields then hold the transit depth rp_rs^2 and
-    #: ``t_ecl_*`` the mid-transit time, which ``to_dict`` names ``t_transit_*``.
+    #: ``t_event_*`` the mid-transit time, which ``to_dict`` names ``t_transit_*``.
     event_detail: dict[str, Any] = field(default_factory=dict)
     #: The points BIC and AIC were computed on: frames, or a binned method's bins.
     bic_n_points: int | None = None
@@ -117,6 +119,21 @@ class EpochResult:
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, json_safe(value, nonfinite="keep"))
+
+    @property
+    def t_ecl_bmjd(self) -> float:
+        """The old name of :attr:`t_event_bmjd` (read-only; kept for callers of 0.2)."""
+        return self.t_event_bmjd
+
+    @property
+    def t_ecl_err_d(self) -> float:
+        """The old name of :attr:`t_event_err_d` (read-only)."""
+        return self.t_event_err_d
+
+    @property
+    def t_ecl_predicted_bmjd(self) -> float:
+        """The old name of :attr:`t_event_predicted_bmjd` (read-only)."""
+        return self.t_event_predicted_bmjd
 
     def _fields_shown(self) -> dict[str, Any]:
         """The fields of the text and HTML summaries (:mod:`eclipsebench.fit.result.display`)."""
@@ -180,8 +197,8 @@ class EpochResult:
             "depth_err_prayer_bead_ppm": self.depth_err_prayer_bead_ppm,
             "depth_err_mcmc_ppm": self.depth_err_mcmc_ppm,
             "depth_err_separation_ppm": self.depth_err_separation_ppm,
-            "t_ecl_bmjd": self.t_ecl_bmjd, "t_ecl_err_d": self.t_ecl_err_d,
-            "t_ecl_predicted_bmjd": self.t_ecl_predicted_bmjd,
+            "t_ecl_bmjd": self.t_event_bmjd, "t_ecl_err_d": self.t_event_err_d,
+            "t_ecl_predicted_bmjd": self.t_event_predicted_bmjd,
             "bic": self.bic, "aic": self.aic, "k": self.k,
             "log_likelihood": self.log_likelihood, "chi2_red": self.chi2_red,
             "rms_ppm": self.rms_ppm, "beta_red": self.beta_red, "cadence_s": self.cadence_s,
@@ -275,8 +292,8 @@ class EpochResult:
 
 #: Fields that to_dict writes as they are (the rest are rebuilt by _fields_from_dict).
 _NOT_FLAT = ("params", "param_errors", "mcmc", "depth_err_own_ppm", "event_detail",
-             "profile_detail", "lightcurve", "chain", "t_ecl_bmjd", "t_ecl_err_d",
-             "t_ecl_predicted_bmjd")
+             "profile_detail", "lightcurve", "chain", "t_event_bmjd", "t_event_err_d",
+             "t_event_predicted_bmjd")
 
 
 def _fields_from_dict(cls, data: Mapping[str, Any]) -> dict[str, Any]:
@@ -292,8 +309,8 @@ def _fields_from_dict(cls, data: Mapping[str, Any]) -> dict[str, Any]:
         out[f.name] = float("nan") if value is None and f.type == "float" else value
     event = {k: data[k] for k in data.get("event_keys", [])}
     prefix = event_for(event.get("event")).time_prefix
-    out.update(t_ecl_bmjd=data[f"{prefix}_bmjd"], t_ecl_err_d=data[f"{prefix}_err_d"],
-               t_ecl_predicted_bmjd=data[f"{prefix}_predicted_bmjd"])
+    out.update(t_event_bmjd=data[f"{prefix}_bmjd"], t_event_err_d=data[f"{prefix}_err_d"],
+               t_event_predicted_bmjd=data[f"{prefix}_predicted_bmjd"])
     mcmc = {k[5:]: v for k, v in data.items() if k.startswith("mcmc_")}
     out.update(params=dict(data["params"]), param_errors=dict(data["param_errors"]),
                mcmc=mcmc or None, depth_err_own_ppm=dict(data["depth_err_own_ppm"]),

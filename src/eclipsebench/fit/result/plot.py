@@ -70,7 +70,7 @@ def lightcurve_figure(result, *, bin_minutes: float = 5.0):
     from matplotlib.figure import Figure
 
     lc = result.lightcurve
-    t0 = result.t_ecl_bmjd
+    t0 = result.t_event_bmjd
     hours = (np.asarray(lc["time_bmjd"]) - t0) * 24.0
     width_h = bin_minutes / 60.0
     tb, fb, eb = bin_series(hours, lc["flux_corrected"], width_h)
