@@ -89,7 +89,7 @@ def test_depth_recovered_on_noiseless_data_with_systematics(method, epoch_sys, s
             data, flux=data.flux + np.sqrt(data.flux) * g.standard_normal(len(data)),
             pixels=data.pixels + np.sqrt(np.clip(data.pixels, 1, None))
             * g.standard_normal(data.pixels.shape))
-    model = method.build(data, _opts(method.name))
+    model = method.build(data, **_opts(method.name))
     depth, t_ecl = synth.fit_depth(model, model.data.time_bmjd,
                                    t_ecl_guess=epoch_sys.t_ecl_bmjd + 5.0 / 1440)
     bound = NOISY_DEPTH_BOUND_PPM.get(method.name,
@@ -104,7 +104,7 @@ def test_refit_path_equals_a_fresh_build(method, epoch_small):
         # A GP refits per bin with its kernel fixed: compare on unbinned frames, kernel given.
         data = data.subset(np.arange(1500))
         options = {"bin_seconds": 0.0, "hyperparameters": [-7.0, -3.0, -3.0, -3.0, 0.0]}
-    model = method.build(data, options, seed=3, epoch=2)
+    model = method.build(data, seed=3, epoch=2, **options)
     g = np.random.default_rng(0)
     flux = model.data.flux * (1 + 1e-4 * g.standard_normal(len(model.data)))
     refit = model.with_flux(flux)
@@ -127,7 +127,7 @@ def test_refit_path_equals_a_fresh_build(method, epoch_small):
 @pytest.mark.parametrize("method", METHODS, indirect=True)
 def test_seed_reaches_stochastic_methods_only(method, epoch_small, synth):
     def state(seed):
-        m = method.build(epoch_small.data, _opts(method.name), seed=seed, epoch=1)
+        m = method.build(epoch_small.data, seed=seed, epoch=1, **_opts(method.name))
         return json.dumps(m.diagnostics(), sort_keys=True), m.predict(
             synth.kept_frames(m, epoch_small)[1])
 
@@ -145,7 +145,7 @@ def test_seed_reaches_stochastic_methods_only(method, epoch_small, synth):
 
 @pytest.mark.parametrize("method", METHODS, indirect=True)
 def test_diagnostics_and_options_are_json(method, epoch_small):
-    model = method.build(epoch_small.data, _opts(method.name))
+    model = method.build(epoch_small.data, **_opts(method.name))
     diag = model.diagnostics()
     assert isinstance(diag, dict)
     json.dumps(diag)
@@ -158,6 +158,20 @@ def test_diagnostics_and_options_are_json(method, epoch_small):
 @pytest.mark.parametrize("method", METHODS, indirect=True)
 def test_unknown_option_is_one_line_naming_it(method, epoch_small):
     with pytest.raises(InputError) as info:
-        method.build(epoch_small.data, {"no_such_option": 1})
+        method.build(epoch_small.data, no_such_option=1)
     message = str(info.value)
     assert "\n" not in message and "no_such_option" in message and method.name in message
+
+
+def test_options_are_resolved_once_at_the_edge(epoch_small):
+    """Issue 39: a method takes its options dataclass, resolved once at the edge; a raw
+    mapping handed to it (a second resolution inside) is refused, while ``eb.reduce``
+    still resolves a plain dict at its door."""
+    from eclipsebench.fit.reduce import resolve_method_options
+
+    cls = eb.method_class("kr-data")
+    with pytest.raises(TypeError, match="KrDataOptions"):
+        cls.build(epoch_small.data, {"k": 12})
+    opts = resolve_method_options("kr-data", method_options={"k": 12})
+    assert cls.build(epoch_small.data, opts).options.k == 12
+    assert cls.build(epoch_small.data, opts, k=13).options.k == 13

@@ -25,7 +25,7 @@ from eclipsebench.io.pmap_files import (
 
 def _kr_pmap(data, pmap, **options):
     """KR/Pmap built as the reducer builds it: the calibration set loaded into the context."""
-    return get_method("kr-pmap").build(data, options, resources={"pmap": pmap})
+    return get_method("kr-pmap").build(data, resources={"pmap": pmap}, **options)
 
 
 def _random_epoch(n=400, seed=3, meta=None):

@@ -27,7 +27,7 @@ def test_exact_pixel_gain_is_fitted_exactly(stamp, epoch_sys, synth):
     c = 1e5 * (1 + 0.2 * np.random.default_rng(stamp).standard_normal(stamp * stamp))
     flux = epoch.astro * (phat @ c)
     data = dataclasses.replace(epoch.data, flux=flux, flux_err=np.sqrt(flux))
-    model = eb.method_class("pld-aper").build(data, {"stamp": stamp})
+    model = eb.method_class("pld-aper").build(data, stamp=stamp)
     np.testing.assert_allclose(model.predict(epoch.astro), flux, rtol=1e-10)
     depth, t_ecl = synth.fit_depth(model, data.time_bmjd,
                                    t_ecl_guess=epoch.t_ecl_bmjd + 5.0 / 1440)
@@ -39,7 +39,7 @@ def test_the_fitted_flux_is_the_aperture_flux_not_the_stamp_sum(epoch_small):
     """PLDAper regresses the aperture flux: the stamp sum is not the target."""
     data, astro = epoch_small.data, epoch_small.astro
     phat = _phat(data.pixels, 3)
-    model = eb.method_class("pld-aper").build(data, {"bin_frames": 1})
+    model = eb.method_class("pld-aper").build(data, bin_frames=1)
     design = astro[:, None] * phat
     for target in (data.flux, 0.9 * data.flux + 0.1 * data.pixels.sum(axis=1)):
         got = model.with_flux(target).predict(astro)
@@ -65,7 +65,7 @@ def test_spca_pca_basis_gives_the_same_model(stamp, epoch_small):
     design = astro[:, None] * pcs
     c = np.linalg.lstsq(design / data.flux_err[:, None], data.flux / data.flux_err,
                         rcond=None)[0]
-    model = eb.method_class("pld-aper").build(data, {"stamp": stamp, "bin_frames": 1})
+    model = eb.method_class("pld-aper").build(data, stamp=stamp, bin_frames=1)
     got = model.predict(astro)
     if stamp == 3:
         np.testing.assert_allclose(got, design @ c, rtol=1e-9)
@@ -81,13 +81,13 @@ def test_options_and_refusals(epoch_small):
     model = eb.method_class("pld-aper").build(data)
     assert model.diagnostics()["stamp"] == 3 and model.diagnostics()["bin_frames"] == 64
     with pytest.raises(InputError) as info:
-        eb.method_class("pld-aper").build(data, {"psf_width": True})
+        eb.method_class("pld-aper").build(data, psf_width=True)
     assert "pld-aper" in str(info.value) and "width_x" in str(info.value)
     with pytest.raises(InputError, match="stamp"):
-        eb.method_class("pld-aper").build(data, {"stamp": 4})
+        eb.method_class("pld-aper").build(data, stamp=4)
     no_pixels = dataclasses.replace(data, pixels=None)
     with pytest.raises(InputError, match="pixels"):
         eb.method_class("pld-aper").build(no_pixels)
     three = dataclasses.replace(data, pixels=_phat(data.pixels, 3))
     with pytest.raises(InputError, match="5x5"):
-        eb.method_class("pld-aper").build(three, {"stamp": 5})
+        eb.method_class("pld-aper").build(three, stamp=5)

@@ -71,7 +71,7 @@ def test_predict_is_spca_weighted_least_squares_on_monomials(order, epoch_small)
     """bin_frames=1: the model equals a weighted lstsq on SPCA's monomial basis."""
     data = epoch_small.data
     astro = epoch_small.astro
-    model = eb.method_class(f"poly{order}").build(data, {"bin_frames": 1})
+    model = eb.method_class(f"poly{order}").build(data, bin_frames=1)
     design = astro[:, None] * _monomials(data.x, data.y, order)
     c = np.linalg.lstsq(design / data.flux_err[:, None], data.flux / data.flux_err,
                         rcond=None)[0]
@@ -140,7 +140,7 @@ def test_exact_polynomial_gain_is_fitted_exactly_by_its_order(order, epoch_sys, 
 
 def test_psf_width_needs_the_widths(epoch_small):
     with pytest.raises(InputError) as info:
-        eb.method_class("poly3").build(epoch_small.data, {"psf_width": True})
+        eb.method_class("poly3").build(epoch_small.data, psf_width=True)
     msg = str(info.value)
     assert "\n" not in msg and "poly3" in msg and "psf_width" in msg and "width_x" in msg
     model = eb.method_class("poly3").build(epoch_small.data)
@@ -172,7 +172,7 @@ def test_psf_width_term_multiplies_the_polynomial_exactly(epoch_sys, synth):
     """SPCA's poly x (1 + d_x wx + d_y wy): slopes and depth recovered exactly."""
     d_true = (0.35, -0.25)     # relative flux per pixel of width
     data = _width_epoch(epoch_sys, d_true)
-    model = eb.method_class("poly3").build(data, {"psf_width": True})
+    model = eb.method_class("poly3").build(data, psf_width=True)
     assert model.param_names == ("psfw_x_per_px", "psfw_y_per_px")
     assert model.n_effective_params() == 10 + 2
     np.testing.assert_allclose(model.predict(epoch_sys.astro, np.array(d_true)), data.flux,
@@ -190,7 +190,7 @@ def test_psf_width_term_multiplies_the_polynomial_exactly(epoch_sys, synth):
 
 def test_psf_width_refit_equals_fresh_build(epoch_sys):
     data = _width_epoch(epoch_sys, (0.2, 0.1))
-    model = eb.method_class("poly4").build(data, {"psf_width": True})
+    model = eb.method_class("poly4").build(data, psf_width=True)
     flux = data.flux * (1 + 1e-4 * np.random.default_rng(1).standard_normal(len(data)))
     refit = model.with_flux(flux)
     fresh = type(model)(dataclasses.replace(data, flux=flux), model.options)

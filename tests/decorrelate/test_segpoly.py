@@ -126,7 +126,7 @@ def test_the_box_eclipse_is_the_paper_profile_s_not_the_controlled_one():
 
 
 def test_default_is_blind_and_the_options_say_so(epoch_small):
-    m = SegmentedPolynomial.build(epoch_small.data, {})
+    m = SegmentedPolynomial.build(epoch_small.data)
     opts = m.options.to_dict()
     assert opts["mask_eclipse"] is False and opts["divide_astro"] is False
     assert m.diagnostics()["blind"] is True and m.diagnostics()["n_masked"] == 0

@@ -119,8 +119,9 @@ def test_batch_likelihood_equals_the_loop(name, psf_epoch):
     from eclipsebench.fit.model import AstroModel
 
     cls = base.get_method(name)
-    model = cls.build(psf_epoch, _method_options(name), seed=1,
-                      resources={"pmap": _calibration()} if "pmap" in cls.resources else None)
+    model = cls.build(psf_epoch, seed=1,
+                      resources={"pmap": _calibration()} if "pmap" in cls.resources else None,
+                      **_method_options(name))
     t = model.data.time_bmjd
     astro_model = AstroModel(t, get_system("XO-3b"), phase="quadratic",
                              shape=_ShiftedShape(t))

@@ -9,7 +9,12 @@ import pytest
 
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.errors import InputError
-from eclipsebench.fit.reduce import reduce_epoch, reduce_joint, select_phase_model
+from eclipsebench.fit.reduce import (
+    reduce_epoch,
+    reduce_joint,
+    resolve_method_options,
+    select_phase_model,
+)
 
 CONTRACT_KEYS = {"method", "epoch", "depth_ppm", "depth_err_ppm", "t_ecl_bmjd", "t_ecl_err_d",
                  "bic", "aic", "rms_ppm", "beta_red", "n_frames", "phase", "sampler", "chi2_red",
@@ -187,6 +192,7 @@ def test_gp_hyperparameters_given_are_held_by_the_fit(xo3_epoch):
     given = [-6.0, -2.0, -2.5, 1.0, 0.0]
     res = reduce_epoch(table, "gp", options=replace(ReduceSection(), sampler="leastsq",
                                                     prayer_bead_shifts=0),
-                       method_options={"hyperparameters": given})
+                       method_options=resolve_method_options("gp", method_options={
+                           "hyperparameters": given}))
     held = res.diagnostics["hyperparameters"]
     assert [held[n] for n in HYPER_NAMES] == given

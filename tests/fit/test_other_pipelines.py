@@ -25,7 +25,7 @@ from eclipsebench.cli import main
 from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.errors import DataError, InputError
 from eclipsebench.fit.data import epoch_data_from_table, median_cadence_s, standardise_table
-from eclipsebench.fit.reduce import reduce_epoch
+from eclipsebench.fit.reduce import reduce_epoch, resolve_method_options
 from eclipsebench.photometry.table import read_table, table_format
 
 #: No prayer bead: the comparisons are of the least-squares depths, and fast.
@@ -59,7 +59,7 @@ def csv_path(full, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def full_depths(full):
-    return {m: reduce_epoch(full, m, options=FAST, system="XO-3b", method_options=o).depth_ppm
+    return {m: reduce_epoch(full, m, options=FAST, system="XO-3b", method_options=resolve_method_options(m, FAST, o)).depth_ppm
             for m, o in METHODS.items()}
 
 
@@ -68,7 +68,7 @@ def full_depths(full):
 def test_minimal_csv_gives_the_full_tables_depth(method, csv_path, full_depths):
     assert read_table(csv_path).colnames == list(MINIMAL)
     res = reduce_epoch(str(csv_path), method, options=FAST, system="XO-3b",
-                       method_options=METHODS[method])
+                       method_options=resolve_method_options(method, FAST, METHODS[method]))
     assert abs(res.depth_ppm - full_depths[method]) < 1.0
     assert res.cadence_s == pytest.approx(12.0, abs=1e-3)
     assert res.to_dict()["cadence_s"] == res.cadence_s
@@ -249,14 +249,15 @@ def test_poly_psf_width_uses_the_tables_widths(full, csv_path, tmp_path):
     path = tmp_path / "widths.csv"
     Table({c: np.asarray(full[c]) for c in MINIMAL + ("width_x", "width_y")}).write(
         path, format="ascii.csv")
+    psf_width = resolve_method_options("poly2", FAST, {"psf_width": True})
     res = reduce_epoch(str(path), "poly2", options=FAST, system="XO-3b",
-                       method_options={"psf_width": True})
+                       method_options=psf_width)
     assert res.diagnostics["psf_width"] is True
     assert {"sys_psfw_x_per_px", "sys_psfw_y_per_px"} <= set(res.params)
     assert abs(res.depth_ppm - 1875.0) < 4 * res.depth_err_ppm
     with pytest.raises(InputError, match="option 'psf_width'.*width_x, width_y"):
         reduce_epoch(str(csv_path), "poly2", options=FAST, system="XO-3b",
-                     method_options={"psf_width": True})
+                     method_options=psf_width)
 
 
 # --------------------------------------------------------------------------- binned tables
@@ -275,7 +276,8 @@ def test_binned_table_is_fitted_at_its_cadence(full, kit, tmp_path):
     assert median_cadence_s(table["time_bmjd"]) == pytest.approx(384.0, abs=1e-3)
     for method, opts in (("poly2", {"bin_frames": 1}), ("bliss", None)):
         res = reduce_epoch(str(path), method, options=ReduceSection(sampler="leastsq"),
-                           system="XO-3b", method_options=opts)
+                           system="XO-3b",
+                           method_options=resolve_method_options(method, FAST, opts))
         assert res.cadence_s == pytest.approx(384.0, abs=1e-3)
         assert res.n_points + sum(res.n_frames_dropped.values()) == len(table)
         assert np.isfinite(res.beta_red) and res.depth_err_prayer_bead_ppm is not None

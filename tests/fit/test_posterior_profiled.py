@@ -177,8 +177,8 @@ FAST = ("kr-pmap", "segpoly", "poly2", "gp")
 def _chains(epoch, name):
     options, kind, design = CASES[name]
     cls = get_method(name)
-    method = cls.build(epoch["data"], options, seed=1, resources={"pmap": epoch["pmap"]}
-                       if "pmap" in cls.resources else None)
+    method = cls.build(epoch["data"], seed=1, resources={"pmap": epoch["pmap"]}
+                       if "pmap" in cls.resources else None, **options)
     t = method.data.time_bmjd
     astro_model = AstroModel(t, epoch["system"], phase="flat")
     fit = fit_leastsq(method, astro_model, astro_model.initial(depth=1.5e-3,

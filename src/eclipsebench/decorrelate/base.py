@@ -362,14 +362,16 @@ class Systematics(ABC, Generic[OptionsT]):
     ----------
     data : EpochData
         The frames to model. Never modified.
-    options : Mapping or MethodOptions, optional
+    options : MethodOptions, optional
         The method's options: an instance of ``cls.Options``, taken as it is
-        (the caller's edge parsed it), or a mapping, parsed here
-        (:func:`parse_method_options`); unknown names are refused.
+        (the caller's edge resolved it once: :func:`parse_method_options`,
+        ``eclipsebench.fit.prepare.resolve_method_options``); a mapping is
+        refused (TypeError). Default: the class's defaults.
     context : MethodContext, optional
         Random streams and loaded resources (default: seed 0, epoch 0).
     **kwargs
-        Options given as keywords, merged over ``options``.
+        Options given as keywords (a notebook's ``Bliss(data, knot_spacing_px=0.1)``),
+        checked and merged over ``options``.
     """
 
     name: ClassVar[str] = ""
@@ -390,9 +392,15 @@ class Systematics(ABC, Generic[OptionsT]):
     #: The method's options: an instance of ``type(self).Options``.
     options: OptionsT
 
-    def __init__(self, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
+    def __init__(self, data: EpochData, options: MethodOptions | None = None,
                  *, context: MethodContext | None = None, **kwargs: Any) -> None:
         cls = type(self)
+        if options is not None and not isinstance(options, MethodOptions):
+            # options are resolved once, at the edge (eb.reduce, the commands, the planners):
+            # a raw mapping here would be a second resolution
+            raise TypeError(f"method '{cls.name}': options must be its {cls.Options.__name__} "
+                            "(eclipsebench.fit.prepare.resolve_method_options) or keywords, "
+                            f"not {type(options).__name__}")
         self.options = parse_method_options(cls, options)
         if kwargs:
             self.options = parse_method_options(cls, kwargs, base=self.options)
@@ -427,17 +435,18 @@ class Systematics(ABC, Generic[OptionsT]):
         """
 
     @classmethod
-    def build(cls, data: EpochData, options: Mapping[str, Any] | MethodOptions | None = None,
+    def build(cls, data: EpochData, options: MethodOptions | None = None,
               *, seed: int = 0, epoch: int = 0,
-              resources: Mapping[str, Any] | None = None) -> Self:
+              resources: Mapping[str, Any] | None = None, **kwargs: Any) -> Self:
         """Build the method as the reducer does: resources loaded, streams from ``seed``.
 
         Parameters
         ----------
         data : EpochData
             The frames.
-        options : Mapping or MethodOptions, optional
-            The method's options.
+        options : MethodOptions, optional
+            The method's options (an instance of ``cls.Options``, resolved at the
+            edge); ``kwargs`` override them by name, checked as the constructor's.
         seed, epoch : int
             Run seed and epoch number of the random streams.
         resources : Mapping, optional
@@ -445,7 +454,7 @@ class Systematics(ABC, Generic[OptionsT]):
         """
         context = MethodContext(seed=int(seed), epoch=int(epoch), method=cls.name,
                                 resources=cls.load_resources(data, dict(resources or {})))
-        return cls(data, options, context=context)
+        return cls(data, options, context=context, **kwargs)
 
     @classmethod
     def load_resources(cls, data: EpochData, sources: Mapping[str, Any]) -> dict[str, Any]:

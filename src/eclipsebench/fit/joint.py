@@ -15,6 +15,7 @@ from scipy.optimize import least_squares
 
 from ..astro.events import event_for
 from ..config.reduce import ReduceSection
+from ..decorrelate.base import MethodOptions
 from ..errors import InputError
 from ..io.plain import json_safe
 from .leastsq import (
@@ -141,7 +142,7 @@ class _JointProblem:
 
 
 def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
-                 seed: int = 0, epochs=None, method_options=None,
+                 seed: int = 0, epochs=None, method_options: MethodOptions | None = None,
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
                  time_format: str | None = None,
@@ -186,7 +187,8 @@ def reduce_joint(tables, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
     starts = list(starts) if starts is not None else [None] * len(tables)
     if len(starts) != len(tables):
         raise InputError("reduce_joint: give one start (or None) per table")
-    method_options = resolve_method_options(method, options, method_options)  # once, for all
+    if method_options is None:   # else resolved at the caller's edge, once for all epochs
+        method_options = resolve_method_options(method, options)
     hint = dict(labels or {}).get("system", "system=NAME")
     if system is None:
         tables = [_read(table) for table in tables]

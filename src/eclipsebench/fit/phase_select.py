@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..config.reduce import ReduceSection
+from ..decorrelate.base import MethodOptions
 from .epoch_fit import fit_prepared
 from .model import PHASE_MODELS, AstroModel
 from .prepare import _DEFAULT_OPTIONS, _resources, prepare_epoch
@@ -43,7 +44,8 @@ class PhaseSelection:
 
 
 def select_phase_model(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS,
-                       system=None, seed: int = 0, epoch: int | None = None, method_options=None,
+                       system=None, seed: int = 0, epoch: int | None = None,
+                       method_options: MethodOptions | None = None,
                        resources: Mapping[str, Any] | None = None, pmap=None,
                        phases: tuple[str, ...] = PHASE_MODELS,
                        columns: Mapping[str, str] | None = None, time_column: str | None = None,

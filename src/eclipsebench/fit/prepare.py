@@ -230,7 +230,7 @@ def resolve_method_options(method: str, options: ReduceSection = _DEFAULT_OPTION
 
 
 def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
-                  epoch=None, seed: int = 0, method_options=None,
+                  epoch=None, seed: int = 0, method_options: MethodOptions | None = None,
                   resources: Mapping[str, Any] | None = None,
                   columns: Mapping[str, str] | None = None, time_column: str | None = None,
                   time_format: str | None = None,
@@ -239,9 +239,9 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
                   labels: Mapping[str, str] | None = None) -> PreparedEpoch:
     """Read the table, keep the good frames, build the method and predict the eclipse time.
 
-    The method gets its options, ``method_options``: an options instance (the
-    caller's edge resolved it, :func:`resolve_method_options`) as it is, a
-    mapping or None resolved here over ``[reduce.options.<method>]``; and a
+    The method gets its options, ``method_options``: the instance of its options
+    dataclass that the caller's edge resolved once (:func:`resolve_method_options`),
+    as it is; None gives ``[reduce.options.<method>]`` over the defaults; and a
     :class:`~eclipsebench.decorrelate.base.MethodContext` with the run seed,
     the epoch and the resources it declares, loaded by its ``load_resources``
     from ``resources`` (paths or loaded objects). ``centroid`` ("col",
@@ -274,7 +274,8 @@ def prepare_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIO
             table["x"], table["y"] = table[cx], table[cy]
         centroid_note = f"{cx}/{cy}" + (f" ({centroid_note})" if centroid_note else "")
     cls = get_method(method)
-    method_opts = resolve_method_options(method, options, method_options)
+    method_opts = (method_options if method_options is not None
+                   else resolve_method_options(method, options))
     data = epoch_data_from_table(table, radius_px=options.radius_px or None, stamp=options.stamp)
     dropped = {"flagged": int(data.meta.get("n_frames_flagged", 0)),
                "nonfinite": int(data.meta.get("n_frames_nonfinite", 0)), "settling_aor": 0}

@@ -15,6 +15,7 @@ from typing import Any
 
 from ..astro.events import event_for
 from ..config.reduce import ReduceSection
+from ..decorrelate.base import MethodOptions
 from ..errors import InputError
 from .epoch_fit import fit_prepared
 from .model import PHASE_CURVE_MODELS
@@ -32,7 +33,8 @@ __all__ = ["reduce_epoch", "resolve_profile"]
 
 
 def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTIONS, system=None,
-                 seed: int = 0, epoch: int | None = None, method_options=None,
+                 seed: int = 0, epoch: int | None = None,
+                 method_options: MethodOptions | None = None,
                  resources: Mapping[str, Any] | None = None, pmap=None,
                  columns: Mapping[str, str] | None = None, time_column: str | None = None,
                  time_format: str | None = None, profile: str | None = None,
@@ -57,11 +59,12 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
         ``rng(seed, "reduce", epoch, method, ...)`` (the MCMC's ends in ``"mcmc"``).
     epoch : int or None
         Epoch number (default: the table's ``EPOCH`` metadata).
-    method_options : Mapping or MethodOptions, optional
-        The method's options: an instance of its options dataclass as it is (the
-        caller resolved it, :func:`~eclipsebench.fit.prepare.resolve_method_options`),
-        or a mapping over ``options.options[method]`` (``[reduce.options.<method>]``)
-        and, in the paper profile, the team's options; parsed once, here.
+    method_options : MethodOptions, optional
+        The method's options: the instance of its options dataclass that the
+        caller's edge resolved once
+        (:func:`~eclipsebench.fit.prepare.resolve_method_options`, with the
+        profile), used as it is; None gives ``options.options[method]``
+        (``[reduce.options.<method>]``) and, in the paper profile, the team's.
     resources : Mapping, optional
         Inputs a method declares in its ``resources`` (``{"pmap": path or
         loaded map}`` for ``kr-pmap``), loaded by the method's ``load_resources``.
@@ -102,7 +105,8 @@ def reduce_epoch(table, method: str, *, options: ReduceSection = _DEFAULT_OPTION
     """
     requested = options.profile if profile is None else profile
     options, team = resolve_profile(method, options, profile)
-    method_options = resolve_method_options(method, options, method_options, profile=requested)
+    if method_options is None:
+        method_options = resolve_method_options(method, options, profile=requested)
     prep = prepare_epoch(table, method, options=options, system=system, epoch=epoch, seed=seed,
                          method_options=method_options, resources=_resources(resources, pmap),
                          columns=columns, time_column=time_column, time_format=time_format,
