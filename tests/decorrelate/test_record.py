@@ -75,10 +75,10 @@ def test_a_method_takes_options_from_its_type_and_description_from_its_docstring
     assert _Short.description == "A method declared the short way."
     data = EpochData(time_bmjd=np.arange(5.0), flux=np.ones(5), flux_err=np.ones(5),
                      x=np.arange(5.0), y=None)
-    built = _Short(data, {"k": 4})
+    built = _Short(data, k=4)
     assert built.calls == 1 and built.mean_x == pytest.approx(8.0)
     with pytest.raises(InputError, match="method 'short' option 'k': expected an integer >= 2"):
-        _Short(data, {"k": 1})
+        _Short(data, k=1)
     # the bound reaches an option inherited from a parent: kr-pmap's k is KR/Data's
     with pytest.raises(ConfigError, match="'k': expected an integer >= 1"):
         get_method("kr-pmap").Options(k=0)
