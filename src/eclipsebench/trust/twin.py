@@ -651,7 +651,7 @@ def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration:
         and ``noise_pixels_cube_sd_twins`` there (interpolated over the blurs).
     """
     grid_px = tuple(float(g) for g in calibration["motion_grid_px"])
-    if len(calibration["blur_grid_px"]) == len(blur_grid_px):
+    if calibration.get("blur_fitted") and len(calibration["blur_grid_px"]) > 1:
         blurs = np.asarray(calibration["blur_grid_px"], float)
         medians = np.asarray(calibration["noise_pixels_grid"], float)
         spreads = np.asarray(calibration["noise_pixels_cube_sd_grid"], float)
