@@ -20,9 +20,13 @@ from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table
 from eclipsebench.trust.noise import add_correlated, correlated_component, twin_shift
 from eclipsebench.trust.observation import observation_from_table
+from eclipsebench.trust.recipe import bounded_recipe
 from eclipsebench.trust.twin import (
+    BLUR_GRID_PX,
+    MOTION_GRID_PX,
     background_scatter_share,
     calibrate_motion,
+    gentler_motions,
     make_recipe,
     twin_table,
 )
@@ -58,6 +62,15 @@ def test_the_calibration_finds_the_blur_and_jitter_a_simulated_epoch_was_made_wi
     assert info["target_vs_grid"] == "inside" and blur is None and not info["blur_fitted"]
     assert 0.3 < peak < 0.5, info                                 # made with A_fbm = 0.4
     assert info["noise_pixels_twins"] == pytest.approx(info["noise_pixels_real"], rel=0.01)
+    # less motion with the real median: the committed PSF's calibration spans no blurs, so the
+    # frames are rendered at each blur asked for; a sharper PSF for each smaller peak
+    gentler = gentler_motions(make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25), options,
+                              info, blur_grid_px=(0.15, 0.3, 0.46))
+    assert [c["motion_peak_px"] for c in gentler] == [0.3, 0.2, 0.1, 0.0]
+    assert all(c["noise_pixels_twins"] == pytest.approx(info["noise_pixels_real"], rel=0.02)
+               for c in gentler), gentler
+    blurs = [c["blur_px"] for c in gentler]
+    assert all(0.15 < b < 0.46 for b in blurs) and blurs == sorted(blurs)
     # the twins' background: the simulated one scatters by photon and read noise only, so
     # the twins add (almost) none of its deviations on top of their own noise
     recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25, motion_peak_px=peak,
@@ -159,3 +172,74 @@ def test_twins_of_real_epoch1_are_as_red_and_as_varied_as_it(real_epoch1_table, 
     twin_sd = np.mean([_cube_median_sd(read_table(p))
                        for p in sorted((out / "twins").glob("twin_*.fits"))])
     assert abs(twin_sd / real_sd - 1) < 0.25, (twin_sd, real_sd)
+
+
+def _grid_calibration(peak_px: float, peaks_px=MOTION_GRID_PX) -> dict:
+    """A calibration as :func:`calibrate_motion` records it where it fitted the blur, on a
+    made-up grid: median noise pixels 3 + 4 blur + 0.5 peak^2 (real 4.0), spread 0.04 +
+    0.02 peak."""
+    blurs, peaks = np.asarray(BLUR_GRID_PX), np.asarray(peaks_px)
+    return {"noise_pixels_real": 4.0, "noise_pixels_cube_sd_real": 0.05,
+            "blur_grid_px": list(blurs), "motion_grid_px": list(peaks),
+            "noise_pixels_grid": (3 + 4 * blurs[:, None] + 0.5 * peaks[None, :] ** 2).tolist(),
+            "noise_pixels_cube_sd_grid": np.broadcast_to(0.04 + 0.02 * peaks,
+                                                         (blurs.size, peaks.size)).tolist(),
+            "blur_px": (1 - 0.5 * peak_px**2) / 4, "motion_peak_px": peak_px,
+            "noise_pixels_twins": 4.0, "noise_pixels_cube_sd_twins": 0.04 + 0.02 * peak_px,
+            "rms_per_peak": 0.22, "target_vs_grid": "inside", "blur_fitted": True}
+
+
+def test_gentler_motions_keep_the_real_median_with_less_motion(small_table):
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    out = gentler_motions(recipe, PhotometrySection(), _grid_calibration(0.9))
+    assert [c["motion_peak_px"] for c in out] == [0.6, 0.45, 0.3, 0.2, 0.1, 0.0]
+    for c in out:   # the blur at which that motion gives the real median
+        assert c["blur_px"] == pytest.approx((1 - 0.5 * c["motion_peak_px"] ** 2) / 4)
+        assert c["noise_pixels_twins"] == pytest.approx(4.0)
+        assert c["noise_pixels_cube_sd_twins"] == pytest.approx(0.04 + 0.02 * c["motion_peak_px"])
+
+
+@pytest.mark.slow
+def test_the_motion_is_the_most_whose_pilot_twin_is_no_redder_than_the_real_residuals(
+        small_table, monkeypatch):
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25, motion_peak_px=0.9,
+                         blur_px=0.0475)
+    info = {"calibration": _grid_calibration(0.9, (0.0, 0.3, 0.6, 0.9, 1.25)), "blur_px": 0.0475, "motion_peak_px": 0.9,
+            "motion_rms_px": 0.9 * 0.22}
+    t = np.sort(obs.time_bmjd)
+    g = np.random.default_rng(3)
+    real = (t, g.normal(0.0, 1e-3, t.size))
+    red = 2e-3 * np.sin(2 * np.pi * (t - t[0]) * 1440.0 / 20.0)   # a 20-minute wave
+    tried: list[float] = []
+
+    def pilot(limit_px):
+        def residuals(r):
+            tried.append(r.motion_peak_px)
+            white = np.random.default_rng(len(tried)).normal(0.0, 1e-3, t.size)
+            return t, white + (red if r.motion_peak_px > limit_px else 0.0)
+        return residuals
+
+    made, out = bounded_recipe(recipe, info, None, real, pilot(0.35))
+    assert tried == [0.9, 0.6, 0.3]                  # down the ladder to the first that passes
+    bound = out["motion_bound"]
+    assert bound["bounded"] and bound["chosen"] == 2 and made.motion_peak_px == 0.3
+    assert [s["bins_twin_in_excess"] > 0 for s in bound["steps"]] == [True, True, False]
+    assert made.blur_px == pytest.approx((1 - 0.5 * 0.3**2) / 4)
+    assert out["calibration"]["motion_peak_px"] == 0.3
+    assert out["calibration"]["noise_pixels_only"]["motion_peak_px"] == 0.9
+    # none passes: the fewest bins in excess, the most motion among equals
+    tried.clear()
+    made, out = bounded_recipe(recipe, info, None, real, pilot(-1.0))
+    assert len(tried) == 4 and made.motion_peak_px == out["motion_bound"]["steps"][
+        out["motion_bound"]["chosen"]]["motion_peak_px"]
+    counts = [s["bins_twin_in_excess"] for s in out["motion_bound"]["steps"]]
+    assert out["motion_bound"]["chosen"] == counts.index(min(counts))
+    # the first passes: no gentler PSF is even looked for
+    tried.clear()
+    monkeypatch.setattr("eclipsebench.trust.recipe.gentler_motions",
+                        lambda *a, **k: pytest.fail("looked for gentler motions"))
+    made, out = bounded_recipe(recipe, info, None, real, pilot(1.0))
+    assert tried == [0.9] and made.motion_peak_px == 0.9
+    assert not out["motion_bound"]["bounded"] and "noise_pixels_only" not in out["calibration"]

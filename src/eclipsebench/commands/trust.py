@@ -136,6 +136,13 @@ def _twin_lines(twins: dict) -> list[str]:
              f"SD over cubes {cal['noise_pixels_cube_sd_twins']:.3f} (real "
              f"{cal['noise_pixels_real']:.2f}, {cal['noise_pixels_cube_sd_real']:.3f}; "
              f"{cal['target_vs_grid']})"]
+    bound = twins.get("motion_bound") or {}
+    if bound.get("bounded"):
+        first = bound["steps"][0]
+        lines.append(f"twins' motion bounded by the photometry: A_fbm {first['motion_peak_px']:.3f}"
+                     f" (blur {cal['noise_pixels_only']['blur_px']:.3f}) made a pilot twin redder"
+                     f" than the real residuals in {first['bins_twin_in_excess']} frequency bins; "
+                     f"{len(bound['steps']) - 1} gentler PSFs tried")
     bg, noise = twins.get("background") or {}, twins.get("correlated_noise") or {}
     if bg:
         lines.append(f"twins' noise  background {bg['share']:.2f} of the real frame-to-frame "

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -40,13 +40,15 @@ from .twin import (
     builtin_gain,
     calibrate_motion,
     gain_model,
+    gentler_motions,
     make_recipe,
     map_gain,
     twin_table,
 )
 
 __all__ = ["twin_light_curve", "twin_truth", "phase_truth", "build_recipe", "twin_map", "twin_gain", "write_recipe",
-           "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin", "with_real_noise"]
+           "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin", "with_real_noise",
+           "bounded_recipe"]
 
 #: The events a twin can carry: one eclipse or transit observation, or a whole phase curve
 #: of several AORs (the models of :mod:`eclipsebench.fit.model`).
@@ -163,6 +165,22 @@ def _gain_dict(gain: GainPolynomial | None) -> dict[str, Any] | None:
             "box": None if gain.box is None else [list(gain.box[0]), list(gain.box[1])]}
 
 
+def _recipe_with(obs: Observation, lc: np.ndarray, options: PhotometrySection,
+                 blur: float | None, peak: float, pmap: str | None
+                 ) -> tuple[TwinRecipe, dict[str, Any]]:
+    """The recipe for the PSF of ``blur`` and the jitter of ``peak``: the gain for that PSF
+    (:func:`twin_gain`), then the share of the real background's scatter the twins' sky
+    carries; and what these are, for the recipe's description."""
+    gain, gain_text, gain_fit = twin_gain(obs, pmap, blur)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
+                         blur_px=blur)
+    share, background = background_scatter_share(recipe, options)
+    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
+                         blur_px=blur, sky_scatter=share)
+    return recipe, {"sky_scatter": share, "background": background, "gain_model": gain_text,
+                    "gain": _gain_dict(gain), "gain_fit": gain_fit}
+
+
 def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm: float,
                  event: str = "eclipse", pmap: str | None = None
                  ) -> tuple[TwinRecipe, dict[str, Any]]:
@@ -189,21 +207,14 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
         blur, peak, calibration = None, 0.0, {
             "noise_pixels_real": None, "rms_per_peak": 0.0,
             "target_vs_grid": "no noise pixels in the table"}
-    gain, gain_text, gain_fit = twin_gain(obs, pmap, blur)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
-                         blur_px=blur)
-    share, background = background_scatter_share(recipe, options)
-    recipe = make_recipe(obs, lc, radius_px=options.radius_px, motion_peak_px=peak, gain=gain,
-                         blur_px=blur, sky_scatter=share)
+    recipe, made = _recipe_with(obs, lc, options, blur, peak, pmap)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
             "t_event_bmjd": float(fit[model.facts.time_key]),
             "from_method": fit.get("method"), "system": getattr(system, "name", str(system)),
             "flux_aperture_e": recipe.flux_aperture_e, "x_ref_px": recipe.x_ref_px,
             "y_ref_px": recipe.y_ref_px, "motion_peak_px": peak,
             "motion_rms_px": peak * calibration["rms_per_peak"], "calibration": calibration,
-            "blur_px": blur, "sky_scatter": share, "background": background,
-            "correlated_noise": None,
-            "gain_model": gain_text, "gain": _gain_dict(gain), "gain_fit": gain_fit,
+            "blur_px": blur, **made, "correlated_noise": None,
             "n_frames": obs.n_frames, "n_good": int(obs.good.sum()),
             **phase_truth(model, theta)}
     return recipe, info
@@ -235,6 +246,61 @@ def with_real_noise(recipe: TwinRecipe, info: Mapping[str, Any],
         return recipe, {**info, "correlated_noise": noise}
     return dataclasses.replace(recipe, correlated=correlated), \
         {**info, "correlated_noise": noise}
+
+
+def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None,
+                   real: tuple[np.ndarray, np.ndarray],
+                   pilot_residuals: Callable[[TwinRecipe], tuple[np.ndarray, np.ndarray]]
+                   ) -> tuple[TwinRecipe, dict[str, Any]]:
+    """``recipe`` with the real correlated noise (:func:`with_real_noise`), its motion within
+    an exposure bounded by the real photometry.
+
+    The noise pixels calibrate the motion (:func:`~eclipsebench.trust.twin.calibrate_motion`);
+    the real residuals bound it: where the pilot twin's residuals
+    (``pilot_residuals(recipe)``, the first method's fit of :func:`pilot_twin`) are
+    significantly redder than ``real`` in any frequency bin (the F test of
+    :func:`~eclipsebench.trust.noise.correlated_component`), the motion the
+    noise pixels gave makes more pointing noise than the real frames hold, and
+    the PSFs with less motion that keep the real median noise pixels
+    (:func:`~eclipsebench.trust.twin.gentler_motions`) are taken in turn until
+    a pilot is not; where none is, the one with the fewest such bins (the most
+    motion among equals). Nothing of a twin's truth enters: the test compares
+    residuals. ``info["motion_bound"]`` lists the steps.
+    """
+    options = photometry_options(recipe.obs)
+    calibration = info["calibration"]
+    made = [with_real_noise(recipe, info, real, pilot_residuals(recipe))]
+
+    def step(extra: Mapping[str, Any]) -> dict[str, Any]:
+        noise = made[-1][1]["correlated_noise"]
+        return {"blur_px": made[-1][1]["blur_px"], "motion_peak_px": made[-1][1]["motion_peak_px"],
+                "bins_twin_in_excess": noise["bins_twin_in_excess"],
+                "periods_twin_in_excess_min": noise["periods_twin_in_excess_min"], **extra}
+
+    steps = [step({})]
+    if steps[0]["bins_twin_in_excess"] > 0 and "motion_grid_px" in calibration:
+        for candidate in gentler_motions(recipe, options, calibration):
+            blur, peak = float(candidate["blur_px"]), float(candidate["motion_peak_px"])
+            twin_recipe, parts = _recipe_with(recipe.obs, recipe.light_curve, options, blur,
+                                              peak, pmap)
+            at = {**info, **parts, "blur_px": blur, "motion_peak_px": peak,
+                  "motion_rms_px": peak * calibration["rms_per_peak"]}
+            made.append(with_real_noise(twin_recipe, at, real, pilot_residuals(twin_recipe)))
+            steps.append(step({k: candidate[k] for k in ("noise_pixels_twins",
+                                                         "noise_pixels_cube_sd_twins")}))
+            if steps[-1]["bins_twin_in_excess"] == 0:
+                break
+    chosen = int(np.argmin([s["bins_twin_in_excess"] for s in steps]))
+    twin_recipe, out = made[chosen]
+    bound = {"rule": "the most motion within an exposure, among the PSFs with the real median "
+                     "noise pixels, whose pilot twin is nowhere significantly redder than the "
+                     "real residuals", "steps": steps, "chosen": chosen,
+             "bounded": chosen > 0}
+    if chosen > 0:   # the chosen PSF and its noise pixels; the noise pixels' own fit beside
+        keys = ("blur_px", "motion_peak_px", "noise_pixels_twins", "noise_pixels_cube_sd_twins")
+        out["calibration"] = {**calibration, **{k: steps[chosen][k] for k in keys},
+                              "noise_pixels_only": {k: calibration[k] for k in keys}}
+    return twin_recipe, {**out, "motion_bound": bound}
 
 
 def photometry_options(obs: Observation) -> PhotometrySection:

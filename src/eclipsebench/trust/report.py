@@ -111,7 +111,7 @@ def trust_summary(settings: Mapping[str, Any], recipe: Mapping[str, Any], real: 
             "sampler": settings["reduce"]["sampler"], "twins": {k: recipe.get(k) for k in (
                 "event", "phase", "t_event_bmjd", "from_method", "flux_aperture_e",
                 "motion_peak_px", "motion_rms_px", "calibration", "gain_model", "gain_fit",
-                "blur_px", "sky_scatter", "background", "correlated_noise")},
+                "blur_px", "sky_scatter", "background", "correlated_noise", "motion_bound")},
             "eclipsebench_version": __version__}
 
 

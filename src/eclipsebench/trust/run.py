@@ -51,11 +51,11 @@ from .layout import TrustLayout
 from .observation import OBSERVATION_FILE, adopt_observation, completed_observation
 from .recipe import (
     PILOT_TWIN,
+    bounded_recipe,
     build_recipe,
     photometry_options,
     pilot_twin,
     read_recipe,
-    with_real_noise,
     write_recipe,
 )
 from .report import score_task
@@ -147,15 +147,18 @@ def recipe_task(settings: TrustSettings, first: str, real_path: str, npz_path: s
     quick = dataclasses.replace(settings, reduce=dataclasses.replace(
         settings.reduce, sampler="leastsq", prayer_bead_shifts=0))
     extra = shared_options(first, fit, settings.method_options.get(first, {}))
+
+    def pilot_residuals(twin_recipe: TwinRecipe) -> tuple[np.ndarray, np.ndarray]:
+        return _residuals(_reduce(quick, pilot_twin(twin_recipe, seed=settings.seed), first,
+                                  seed=spawn_ints(settings.seed, "trust", "reduce")[0],
+                                  epoch=PILOT_TWIN, extra_options=extra).lightcurve_table())
+
+    real = Table.read(Path(real_path).with_suffix(".lc.ecsv"), format="ascii.ecsv")
     try:
-        pilot = _reduce(quick, pilot_twin(recipe, seed=settings.seed), first,
-                        seed=spawn_ints(settings.seed, "trust", "reduce")[0], epoch=PILOT_TWIN,
-                        extra_options=extra).lightcurve_table()
+        recipe, info = bounded_recipe(recipe, info, settings.pmap, _residuals(real),
+                                      pilot_residuals)
     except InputError as exc:
         info = {**info, "correlated_noise": {"method": None, "why": f"pilot twin: {exc}"}}
-    else:
-        real = Table.read(Path(real_path).with_suffix(".lc.ecsv"), format="ascii.ecsv")
-        recipe, info = with_real_noise(recipe, info, _residuals(real), _residuals(pilot))
     write_recipe(recipe, info, Path(npz_path), Path(json_path))
 
 

@@ -65,17 +65,19 @@ from .noise import add_correlated
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "photometry_window", "twin_star", "MOTION_GRID_PX",
+           "calibrate_motion", "gentler_motions", "photometry_window", "twin_star", "MOTION_GRID_PX",
            "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain", "builtin_prf", "builtin_gain",
            "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 3 since the PSF's blur is fitted with the motion,
+#: otherwise is refused rather than mixed): 4 since the motion within an exposure is bounded by
+#: the real photometry (a pilot twin no redder than the real residuals,
+#: :func:`~eclipsebench.trust.recipe.bounded_recipe`); 3 since the PSF's blur is fitted with the motion,
 #: the real background scatter and correlated noise are added (issue 36), and only the part of
 #: the subarray the photometry reads is rendered (:func:`photometry_window`); 2 since the
 #: motion within an exposure is the simulator's block-scaled jitter (:class:`ExposureMotion`),
 #: 1 before (one rms throughout).
-TWIN_MODEL = 3
+TWIN_MODEL = 4
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
@@ -484,6 +486,36 @@ def _solve_on_curve(target: float, values: np.ndarray, grid: tuple[float, ...]
     return float(np.interp(target, env, grid))
 
 
+def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_per_cube: int,
+                        max_frames: int, grid_px: tuple[float, ...]):
+    """What :func:`calibrate_motion` and :func:`gentler_motions` compare: the real median noise
+    pixels and their SD over cubes, the function giving for a blur the twins' median and SD at
+    each peak of ``grid_px`` (noise-free frames spread over the cubes, one draw of
+    :class:`ExposureMotion`), the motion's rms per px of peak, the rows and the cubes."""
+    obs = recipe.obs
+    rows, cube_of, cubes = _calibration_rows(obs, frames_per_cube, max_frames)
+    target = float(np.median(obs.noise_pixels[obs.good]))
+    real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
+    target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
+    model = _frame_model(obs, "none")
+    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
+
+    def curves(blur: float | None) -> tuple[np.ndarray, np.ndarray]:
+        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
+        medians, spreads = [], []
+        for peak in grid_px:
+            frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
+                                      motion=(peak * unit_x, peak * unit_y), noise_model="none",
+                                      star=star)
+            npx = _measure_rows(frames, obs, options)
+            medians.append(float(np.median(npx)))
+            spreads.append(_cube_median_sd(npx, cube_of))
+        return np.asarray(medians), np.asarray(spreads)
+
+    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
+    return target, target_sd, curves, rms_per_peak, rows, cubes
+
+
 def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
                      frames_per_cube: int = 8, max_frames: int = 2048,
                      blur_grid_px: tuple[float, ...] = BLUR_GRID_PX,
@@ -529,27 +561,9 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
         an exposure per px of peak.
     """
     obs = recipe.obs
-    rows, cube_of, cubes = _calibration_rows(obs, frames_per_cube, max_frames)
-    target = float(np.median(obs.noise_pixels[obs.good]))
-    real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
-    target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
-    model = _frame_model(obs, "none")
-    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
-
-    def curves(blur: float) -> tuple[np.ndarray, np.ndarray]:
-        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
-        medians, spreads = [], []
-        for peak in grid_px:
-            frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
-                                      motion=(peak * unit_x, peak * unit_y), noise_model="none",
-                                      star=star)
-            npx = _measure_rows(frames, obs, options)
-            medians.append(float(np.median(npx)))
-            spreads.append(_cube_median_sd(npx, cube_of))
-        return np.asarray(medians), np.asarray(spreads)
-
+    target, target_sd, curves, rms_per_peak, rows, cubes = _noise_pixel_curves(
+        recipe, options, frames_per_cube, max_frames, grid_px)
     builtin_blur = float(load_gainmap_coefficients(obs.channel)["builtin"]["blur_px"])
-    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
     # the committed PSF where it is not too broad: the motion alone on the median
     med, sd = curves(builtin_blur)
     peak_builtin = _solve_on_curve(target, med, grid_px)
@@ -608,6 +622,58 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
         "frames_calibrated": int(rows.size), "cubes_calibrated": len(cubes),
         "blur_grid_px": list(blur_grid_px), "motion_grid_px": list(grid_px),
         "noise_pixels_grid": grid_medians, "noise_pixels_cube_sd_grid": grid_spreads}
+
+
+def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration: dict, *,
+                    frames_per_cube: int = 8, max_frames: int = 2048,
+                    blur_grid_px: tuple[float, ...] = BLUR_GRID_PX) -> list[dict]:
+    """The PSFs with less motion within an exposure than :func:`calibrate_motion`'s that still
+    give the twins the real median noise pixels, the most motion first.
+
+    The median alone does not separate the PSF's width from the motion (a
+    sharper PSF with more motion is as large); the spread over cubes chose
+    between them, but what else makes the real image's size vary from cube
+    to cube (the spread is then an upper bound on the motion's share) the
+    twins give to the motion, and its block-to-block scaling then moves the
+    flux through the gain's curvature. Where a pilot twin's residuals come
+    out redder than the real ones, :func:`~eclipsebench.trust.recipe.bounded_recipe`
+    takes these in turn. For each peak of the calibration's motion grid
+    below its ``motion_peak_px``, the blur at which that motion gives the
+    real median (interpolated over ``blur_grid_px``; peaks no blur of the
+    grid reaches are left out). The calibration's own grid is used where it
+    spans the blurs; otherwise (the committed PSF was kept) the same frames
+    are rendered at each blur.
+
+    Returns
+    -------
+    list of dict
+        ``blur_px``, ``motion_peak_px``, and the twins' ``noise_pixels_twins``
+        and ``noise_pixels_cube_sd_twins`` there (interpolated over the blurs).
+    """
+    grid_px = tuple(float(g) for g in calibration["motion_grid_px"])
+    if calibration.get("blur_fitted") and len(calibration["blur_grid_px"]) > 1:
+        blurs = np.asarray(calibration["blur_grid_px"], float)
+        medians = np.asarray(calibration["noise_pixels_grid"], float)
+        spreads = np.asarray(calibration["noise_pixels_cube_sd_grid"], float)
+    else:
+        *_, curves, _, _, _ = _noise_pixel_curves(recipe, options, frames_per_cube, max_frames,
+                                                  grid_px)
+        blurs = np.asarray(blur_grid_px, float)
+        both = [curves(float(b)) for b in blurs]
+        medians = np.array([m for m, _ in both])
+        spreads = np.array([sd for _, sd in both])
+    target = float(calibration["noise_pixels_real"])
+    out = []
+    for j in np.argsort(grid_px)[::-1]:
+        if grid_px[j] >= float(calibration["motion_peak_px"]):
+            continue
+        blur = _solve_on_curve(target, medians[:, j], tuple(blurs))
+        if blur is None:
+            continue
+        out.append({"blur_px": blur, "motion_peak_px": grid_px[j],
+                    "noise_pixels_twins": float(np.interp(blur, blurs, medians[:, j])),
+                    "noise_pixels_cube_sd_twins": float(np.interp(blur, blurs, spreads[:, j]))})
+    return out
 
 
 def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
