@@ -25,7 +25,7 @@ from abc import ABC, abstractmethod
 import batman
 import numpy as np
 
-from .orbit import OrbitClock, geometric_to_observed
+from .orbit import CONJUNCTION_SIDE, OrbitClock, geometric_to_observed
 
 __all__ = ["EclipseShape", "TransitShape", "event_window"]
 
@@ -38,8 +38,7 @@ def event_window(clock: OrbitClock, which: str, t_conj_geom: float) -> tuple[flo
     span = 0.25 * clock.period
     t = np.linspace(t_conj_geom - span, t_conj_geom + span, 20001)
     x, y, z = clock.sky(t)
-    # the conjunction's name (orbit.py's word), not a branch on the event: the planet in front
-    front = z > 0 if which == "transit" else z < 0
+    front = np.sign(z) == CONJUNCTION_SIDE[which]   # the planet in front of the star, or behind
     inside = (np.hypot(x, y) < 1.0 + k) & front
     if not inside.any():
         return t_conj_geom, t_conj_geom  # no event (grazing or non-transiting)

@@ -42,7 +42,8 @@ __all__ = [
     "BMJD_OFFSET", "C_RSUN_PER_DAY",
     "bjd_to_bmjd", "bmjd_to_bjd", "jd2455000_to_bmjd",
     "solve_kepler", "mean_anomaly", "eccentric_to_true", "true_anomaly",
-    "true_anomaly_at_conjunction", "mean_anomaly_from_true",
+    "true_anomaly_at_conjunction", "CONJUNCTION_ANOMALY_RAD", "CONJUNCTION_SIDE",
+    "mean_anomaly_from_true",
     "separation", "sky_coordinates", "sky_separation",
     "periastron_angular_velocity",
     "geometric_to_observed", "observed_to_geometric",
@@ -141,14 +142,20 @@ def mean_anomaly_from_true(true_anom, ecc):
     return float(m) if np.ndim(m) == 0 else m
 
 
+#: Each conjunction's true anomaly plus the argument of periastron: inferior conjunction
+#: (``"transit"``, the planet in front of the star) at pi/2, superior (``"eclipse"``) at 3 pi/2.
+CONJUNCTION_ANOMALY_RAD = {"transit": math.pi / 2.0, "eclipse": 1.5 * math.pi}
+
+#: The sign of the planet's coordinate towards the observer at each conjunction.
+CONJUNCTION_SIDE = {"transit": 1.0, "eclipse": -1.0}
+
+
 def true_anomaly_at_conjunction(omega_rad: float, which: str) -> float:
-    """True anomaly at inferior (``"transit"``) or superior (``"eclipse"``) conjunction."""
-    # a conjunction's name (an event passes its ``conjunction``), not a branch on the event
-    if which == "transit":
-        return math.pi / 2.0 - omega_rad
-    if which == "eclipse":
-        return 1.5 * math.pi - omega_rad
-    raise ValueError(f"which must be 'transit' or 'eclipse', not {which!r}")
+    """True anomaly at inferior (``"transit"``) or superior (``"eclipse"``) conjunction
+    (:data:`CONJUNCTION_ANOMALY_RAD`; an event passes its ``conjunction``)."""
+    if which not in CONJUNCTION_ANOMALY_RAD:
+        raise ValueError(f"which must be one of {sorted(CONJUNCTION_ANOMALY_RAD)}, not {which!r}")
+    return CONJUNCTION_ANOMALY_RAD[which] - omega_rad
 
 
 class OrbitClock:
@@ -326,12 +333,11 @@ def orbital_phase(time_bmjd, system, *, reference: str = "transit"):
     """Orbital phase in [0, 1): fraction of a period since the observed mid-transit
     (``reference="transit"``) or mid-eclipse (``"eclipse"``)."""
     t = np.asarray(time_bmjd, dtype=float)
-    # a conjunction's name (an event passes its ``conjunction``), not a branch on the event
-    if reference == "transit":
-        t_ref = system.t_transit_bmjd
-    elif reference == "eclipse":
-        t_ref = eclipse_time_bmjd(system, system.t_transit_bmjd + 0.5 * system.period_days)
-    else:
+    if reference not in CONJUNCTION_ANOMALY_RAD:
         raise ValueError("reference must be 'transit' or 'eclipse'")
+    # the reference time's name (mid-transit or mid-eclipse, the caller's choice), not a
+    # branch on an observation's event: the one comparison of an event's name outside them
+    t_ref = system.t_transit_bmjd if reference == "transit" else \
+        eclipse_time_bmjd(system, system.t_transit_bmjd + 0.5 * system.period_days)
     phase = np.mod((t - t_ref) / system.period_days, 1.0)
     return float(phase) if phase.ndim == 0 else phase
