@@ -221,13 +221,17 @@ def test_the_motion_is_the_most_whose_pilot_twin_is_no_redder_than_the_real_resi
             return t, white + (red if r.motion_peak_px > limit_px else 0.0)
         return residuals
 
-    made, out = bounded_recipe(recipe, info, None, real, pilot(0.35))
-    assert tried == [0.9, 0.6, 0.3]                  # down the ladder to the first that passes
+    made, out = bounded_recipe(recipe, info, None, real, pilot(0.4))
+    # down the grid to the first that passes, then two halvings towards the last redder one
+    assert tried == pytest.approx([0.9, 0.6, 0.3, 0.45, 0.375])
     bound = out["motion_bound"]
-    assert bound["bounded"] and bound["chosen"] == 2 and made.motion_peak_px == 0.3
-    assert [s["bins_twin_in_excess"] > 0 for s in bound["steps"]] == [True, True, False]
-    assert made.blur_px == pytest.approx((1 - 0.5 * 0.3**2) / 4)
-    assert out["calibration"]["motion_peak_px"] == 0.3
+    assert bound["bounded"] and bound["chosen"] == 4
+    assert made.motion_peak_px == pytest.approx(0.375)
+    assert [s["bins_twin_in_excess"] > 0 for s in bound["steps"]] == [True, True, False, True,
+                                                                      False]
+    # the blur that keeps the real median at 0.375 px (the grid's median linear in the peak)
+    assert made.blur_px == pytest.approx((1 - 0.5 * (0.09 + 0.25 * 0.27)) / 4)
+    assert out["calibration"]["motion_peak_px"] == pytest.approx(0.375)
     assert out["calibration"]["noise_pixels_only"]["motion_peak_px"] == 0.9
     # none passes: the fewest bins in excess, the most motion among equals
     tried.clear()

@@ -220,6 +220,10 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     return recipe, info
 
 
+#: Halvings of the interval between the last grid peak whose pilot twin is redder than the real
+#: residuals and the first that is not (:func:`bounded_recipe`): 0.04 px for real epoch 1's.
+REFINE_STEPS = 2
+
 #: The pilot twin's number: made and reduced like the others to measure how red a twin's
 #: residuals are before the real correlated noise is added (:func:`with_real_noise`), never
 #: scored (the scored twins are numbered from 1).
@@ -263,8 +267,10 @@ def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None
     noise pixels gave makes more pointing noise than the real frames hold, and
     the PSFs with less motion that keep the real median noise pixels
     (:func:`~eclipsebench.trust.twin.gentler_motions`) are taken in turn until
-    a pilot is not; where none is, the one with the fewest such bins (the most
-    motion among equals). Nothing of a twin's truth enters: the test compares
+    a pilot is not, and the interval between that peak and the last redder one
+    is halved :data:`REFINE_STEPS` times (the grid is coarse); the most motion
+    whose pilot is no redder is kept, or, where none is, the fewest such bins
+    (the most motion among equals). Nothing of a twin's truth enters: the test compares
     residuals. ``info["motion_bound"]`` lists the steps.
     """
     options = photometry_options(recipe.obs)
@@ -278,19 +284,40 @@ def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None
                 "periods_twin_in_excess_min": noise["periods_twin_in_excess_min"], **extra}
 
     steps = [step({})]
+
+    def passes(candidate: Mapping[str, Any]) -> bool:
+        """Make and reduce the pilot of ``candidate``'s PSF; whether it is no redder."""
+        blur, peak = float(candidate["blur_px"]), float(candidate["motion_peak_px"])
+        twin_recipe, parts = _recipe_with(recipe.obs, recipe.light_curve, options, blur, peak,
+                                          pmap)
+        at = {**info, **parts, "blur_px": blur, "motion_peak_px": peak,
+              "motion_rms_px": peak * calibration["rms_per_peak"]}
+        made.append(with_real_noise(twin_recipe, at, real, pilot_residuals(twin_recipe)))
+        steps.append(step({k: candidate[k] for k in ("noise_pixels_twins",
+                                                     "noise_pixels_cube_sd_twins")}))
+        return steps[-1]["bins_twin_in_excess"] == 0
+
     if steps[0]["bins_twin_in_excess"] > 0 and "motion_grid_px" in calibration:
+        redder = float(calibration["motion_peak_px"])
         for candidate in gentler_motions(recipe, options, calibration):
-            blur, peak = float(candidate["blur_px"]), float(candidate["motion_peak_px"])
-            twin_recipe, parts = _recipe_with(recipe.obs, recipe.light_curve, options, blur,
-                                              peak, pmap)
-            at = {**info, **parts, "blur_px": blur, "motion_peak_px": peak,
-                  "motion_rms_px": peak * calibration["rms_per_peak"]}
-            made.append(with_real_noise(twin_recipe, at, real, pilot_residuals(twin_recipe)))
-            steps.append(step({k: candidate[k] for k in ("noise_pixels_twins",
-                                                         "noise_pixels_cube_sd_twins")}))
-            if steps[-1]["bins_twin_in_excess"] == 0:
+            if passes(candidate):
+                # the grid is coarse: halve the interval between the last redder peak and
+                # this one, REFINE_STEPS times
+                calm = float(candidate["motion_peak_px"])
+                for _ in range(REFINE_STEPS):
+                    mid = gentler_motions(recipe, options, calibration,
+                                          peaks_px=(0.5 * (calm + redder),))
+                    if not mid:
+                        break
+                    if passes(mid[0]):
+                        calm = float(mid[0]["motion_peak_px"])
+                    else:
+                        redder = float(mid[0]["motion_peak_px"])
                 break
-    chosen = int(np.argmin([s["bins_twin_in_excess"] for s in steps]))
+            redder = float(candidate["motion_peak_px"])
+    # the most motion among the pilots no redder (or, where none is, with the fewest bins)
+    chosen = min(range(len(steps)), key=lambda i: (steps[i]["bins_twin_in_excess"],
+                                                   -steps[i]["motion_peak_px"]))
     twin_recipe, out = made[chosen]
     bound = {"rule": "the most motion within an exposure, among the PSFs with the real median "
                      "noise pixels, whose pilot twin is nowhere significantly redder than the "

@@ -626,7 +626,8 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
 
 def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration: dict, *,
                     frames_per_cube: int = 8, max_frames: int = 2048,
-                    blur_grid_px: tuple[float, ...] = BLUR_GRID_PX) -> list[dict]:
+                    blur_grid_px: tuple[float, ...] = BLUR_GRID_PX,
+                    peaks_px: tuple[float, ...] | None = None) -> list[dict]:
     """The PSFs with less motion within an exposure than :func:`calibrate_motion`'s that still
     give the twins the real median noise pixels, the most motion first.
 
@@ -642,7 +643,9 @@ def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration:
     real median (interpolated over ``blur_grid_px``; peaks no blur of the
     grid reaches are left out). The calibration's own grid is used where it
     spans the blurs; otherwise (the committed PSF was kept) the same frames
-    are rendered at each blur.
+    are rendered at each blur. ``peaks_px``: these peaks instead of the grid's
+    below the calibrated one (each blur's median and spread linear between
+    the grid's peaks).
 
     Returns
     -------
@@ -663,16 +666,19 @@ def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration:
         medians = np.array([m for m, _ in both])
         spreads = np.array([sd for _, sd in both])
     target = float(calibration["noise_pixels_real"])
+    asked = sorted((g for g in grid_px if g < float(calibration["motion_peak_px"])), reverse=True) \
+        if peaks_px is None else list(peaks_px)
     out = []
-    for j in np.argsort(grid_px)[::-1]:
-        if grid_px[j] >= float(calibration["motion_peak_px"]):
-            continue
-        blur = _solve_on_curve(target, medians[:, j], tuple(blurs))
+    for peak in asked:
+        # each blur's median and spread at this peak, linear between the grid's peaks
+        med = np.array([np.interp(peak, grid_px, row) for row in medians])
+        sd = np.array([np.interp(peak, grid_px, row) for row in spreads])
+        blur = _solve_on_curve(target, med, tuple(blurs))
         if blur is None:
             continue
-        out.append({"blur_px": blur, "motion_peak_px": grid_px[j],
-                    "noise_pixels_twins": float(np.interp(blur, blurs, medians[:, j])),
-                    "noise_pixels_cube_sd_twins": float(np.interp(blur, blurs, spreads[:, j]))})
+        out.append({"blur_px": blur, "motion_peak_px": float(peak),
+                    "noise_pixels_twins": float(np.interp(blur, blurs, med)),
+                    "noise_pixels_cube_sd_twins": float(np.interp(blur, blurs, sd))})
     return out
 
 
