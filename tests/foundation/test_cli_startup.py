@@ -93,3 +93,47 @@ def test_reduce_reaches_its_fit_without_the_challenge_the_statistics_or_the_engi
     loaded = json.loads(done.stdout.strip().splitlines()[-1])
     assert loaded == [], loaded
     assert not (tmp_path / "r.json").exists()          # stopped before the fit
+
+
+@pytest.mark.parametrize("given, expected", [(None, "4"), ("8", "8")])
+def test_blas_threads_sleep_at_once_unless_the_environment_says(given, expected):
+    """OpenBLAS reads ``OPENBLAS_THREAD_TIMEOUT`` when numpy loads it: the command line sets
+    it (issue 40: idle threads spinning doubled a fit's CPU) before any command imports numpy,
+    and keeps a value the user gave."""
+    body = ("import contextlib, io, os, sys\n"
+            "from eclipsebench.cli import main\n"
+            "before = 'numpy' in sys.modules\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    code = main(['photon-limit', '--flux-net', '70858', '--flux-aperture', '70917',"
+            " '--flux-background', '463', '--frames', '14912', '--depth-ppm', '1520'])\n"
+            "print(json.dumps([code, before, 'numpy' in sys.modules,"
+            " os.environ.get('OPENBLAS_THREAD_TIMEOUT')]))")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_THREAD_TIMEOUT"}
+    env["PYTHONPATH"] = str(Path(eclipsebench.__file__).resolve().parents[1])
+    if given is not None:
+        env["OPENBLAS_THREAD_TIMEOUT"] = given
+    done = subprocess.run([sys.executable, "-c", "import json\n" + body], capture_output=True,
+                          text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == [0, False, True, expected]
+
+
+def test_the_process_command_freezes_what_it_leaves_and_an_in_process_call_does_not():
+    """``main()`` run as the process's command (no ``argv``) freezes the objects left out of
+    the garbage collector, whose last pass at exit cost about 0.3 s of CPU (issue 40); a call
+    with ``argv`` (a notebook, a test) leaves the collector alone."""
+    body = ("import contextlib, gc, io, sys\n"
+            "from eclipsebench.cli import main\n"
+            "argv = ['photon-limit', '--flux-net', '70858', '--flux-aperture', '70917',"
+            " '--flux-background', '463', '--frames', '14912', '--depth-ppm', '1520']\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    main(argv)\n"
+            "    given = gc.get_freeze_count()\n"
+            "    sys.argv = ['eclipsebench', *argv]\n"
+            "    main()\n"
+            "print(json.dumps([given, gc.get_freeze_count() > 0]))")
+    env = {**os.environ, "PYTHONPATH": str(Path(eclipsebench.__file__).resolve().parents[1])}
+    done = subprocess.run([sys.executable, "-c", "import json\n" + body], capture_output=True,
+                          text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == [0, True]

@@ -13,6 +13,7 @@ from eclipsebench.simulation.render import (
     read_intervals,
     render_frames,
     star_group_charges,
+    tick_means,
     tick_moments,
     weight_groups,
 )
@@ -171,3 +172,17 @@ def test_read_noise_stream_is_independent_of_the_pointing():
         out.append(frames)
     np.testing.assert_array_equal(out[0], out[1])
     assert out[0].std() == pytest.approx(10.0 * np.sqrt(2 / 4), rel=0.02)
+
+
+@pytest.mark.parametrize("noise_model", ["physical", "iracsim2015"])
+def test_tick_means_are_the_means_of_tick_moments(noise_model):
+    """The twins remove each exposure's mean offset with :func:`tick_means` (issue 40): the
+    same bytes as :func:`tick_moments`' means, without its moments."""
+    model = FrameModel(mode=SMALL, noise_model=noise_model, read_noise_e=10.0, subsamples=3)
+    rng = np.random.default_rng(8)
+    dx = rng.normal(0.0, 0.1, (6, model.grid_samples_per_frame))
+    dy = rng.normal(0.0, 0.1, (6, model.grid_samples_per_frame))
+    mx, my, _ = tick_moments(dx, dy, model)
+    tx, ty = tick_means(dx, dy, model)
+    assert np.array_equal(tx, mx) and np.array_equal(ty, my)
+    assert np.ptp(tx) > 0

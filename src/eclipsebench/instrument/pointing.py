@@ -444,5 +444,7 @@ def frame_windows(samples, starts: np.ndarray, n_grid: int) -> tuple[np.ndarray,
     starts = np.asarray(starts, np.int64)
     first = int(starts.min())
     gx, gy = samples(first, int(starts.max()) - first + n_grid)
-    win = (starts - first)[:, None] + np.arange(n_grid)[None, :]
-    return gx[win], gy[win]
+    # each frame's samples are one contiguous run: rows of a sliding window, copied
+    at = starts - first
+    return (np.lib.stride_tricks.sliding_window_view(gx, n_grid)[at],
+            np.lib.stride_tricks.sliding_window_view(gy, n_grid)[at])

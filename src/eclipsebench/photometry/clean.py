@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import overload
 
 import numpy as np
+from numba import njit
 from scipy.ndimage import median_filter
 
 __all__ = ["FLAG_BITS", "FLAG_DESCRIPTIONS", "FAULT_BITS", "flag_counts", "frame_faults",
@@ -131,11 +132,49 @@ def running_median(values: np.ndarray, window: int, valid: np.ndarray | None = N
     return out
 
 
+@njit(cache=True)
+def _median_in_time(values, size):
+    """``median_filter(values, size=(size, 1), mode="nearest")`` of finite ``values`` (m, k):
+    each column's running median over ``size`` (odd) samples, the first and last sample
+    repeated beyond the ends. A median of an odd count is one of the values, so this gives
+    scipy's bytes; it keeps each window sorted and moves it one sample at a time (a few
+    comparisons per sample, where scipy's 2-d filter costs 20 times more: issue 40)."""
+    m, k = values.shape
+    h = size // 2
+    out = np.empty((m, k))
+    win = np.empty(size)
+    for c in range(k):
+        for t in range(size):
+            win[t] = values[min(max(t - h, 0), m - 1), c]
+        win.sort()
+        out[0, c] = win[h]
+        for i in range(1, m):
+            old = values[max(i - 1 - h, 0), c]
+            new = values[min(i + h, m - 1), c]
+            if old != new:
+                p = 0
+                while win[p] != old:
+                    p += 1
+                if new > old:
+                    while p + 1 < size and win[p + 1] < new:
+                        win[p] = win[p + 1]
+                        p += 1
+                else:
+                    while p > 0 and win[p - 1] > new:
+                        win[p] = win[p - 1]
+                        p -= 1
+                win[p] = new
+            out[i, c] = win[h]
+    return out
+
+
 def nanmedian0(values: np.ndarray) -> np.ndarray:
     """Median along axis 0 skipping NaNs; NaN (without a warning) where all are NaN."""
     values = np.asarray(values, dtype=float)
     if values.shape[0] == 0:
         return np.full(values.shape[1:], np.nan)
+    if not np.isnan(values).any():  # the same values as numpy's nanmedian, without its loop
+        return np.median(values, axis=0)
     allnan = np.isnan(values).all(axis=0)
     out = np.nanmedian(np.where(allnan[None], 0.0, values), axis=0)
     return np.where(allnan, np.nan, out)
@@ -224,7 +263,7 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
         finite = np.isfinite(sub)
         fill = nanmedian0(np.where(finite, sub, np.nan))
         filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
-        med = median_filter(filled, size=(size, 1), mode="nearest")
+        med = _median_in_time(filled, size)
         resid = np.where(finite, sub - med, np.nan)
         sigma = robust_sigma(resid, axis=0)
         floor = np.sqrt(np.clip(med, 0.0, None) + float(read_var_e2))

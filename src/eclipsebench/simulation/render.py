@@ -134,18 +134,9 @@ def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
         over the tick's sub-samples (``n``, or ``n + 1`` for ``iracsim2015``),
         so ``m0`` is 1, with ``d`` relative to the frame mean.
     """
-    mode, n = model.mode, model.subsamples
     nf = dx.shape[0]
-    n_max = mode.n_max
-    span = model.subsamples_per_tick
-    if span == n:
-        sx = dx[:, :n_max * n].reshape(nf, n_max, n)
-        sy = dy[:, :n_max * n].reshape(nf, n_max, n)
-    else:  # sub-sample s of tick k is grid sample k n + s, s = 0 .. span - 1
-        idx = (np.arange(n_max)[:, None] * n + np.arange(span)[None, :]).ravel()
-        sx = dx[:, idx].reshape(nf, n_max, span)
-        sy = dy[:, idx].reshape(nf, n_max, span)
-    w = fowler_weights(mode).astype(float)
+    n_max = model.mode.n_max
+    sx, sy, span = _tick_samples(dx, dy, model)
     # power sums per tick, then shifted to the frame mean (offsets are < 2 px,
     # so the shift loses nothing in float64)
     s1x = sx.sum(axis=2)
@@ -153,8 +144,7 @@ def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
     sxx = np.einsum("ftk,ftk->ft", sx, sx)
     sxy = np.einsum("ftk,ftk->ft", sx, sy)
     syy = np.einsum("ftk,ftk->ft", sy, sy)
-    x_mean = (s1x @ w) / (span * w.sum())
-    y_mean = (s1y @ w) / (span * w.sum())
+    x_mean, y_mean = _weighted_means(s1x, s1y, model, span)
     mx = x_mean[:, None]
     my = y_mean[:, None]
     moments = np.empty((nf, n_max, N_MOMENTS))
@@ -167,6 +157,38 @@ def tick_moments(dx: np.ndarray, dy: np.ndarray, model: FrameModel
     moments[:, :, 4] = (sxy - mx * s1y - my * s1x + span * mx * my) / span
     moments[:, :, 5] = (syy - 2 * my * s1y + span * my * my) / span
     return x_mean, y_mean, moments
+
+
+def tick_means(dx: np.ndarray, dy: np.ndarray, model: FrameModel
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """The mean positions of :func:`tick_moments` (the same values) without its moments:
+    what removing each exposure's mean offset needs (issue 40: the twins' motion)."""
+    sx, sy, span = _tick_samples(dx, dy, model)
+    return _weighted_means(sx.sum(axis=2), sy.sum(axis=2), model, span)
+
+
+def _tick_samples(dx: np.ndarray, dy: np.ndarray, model: FrameModel
+                  ) -> tuple[np.ndarray, np.ndarray, int]:
+    """The offsets of each tick's sub-samples, shape (n_frames, n_max, span), and span."""
+    mode, n = model.mode, model.subsamples
+    nf = dx.shape[0]
+    n_max = mode.n_max
+    span = model.subsamples_per_tick
+    if span == n:
+        sx = dx[:, :n_max * n].reshape(nf, n_max, n)
+        sy = dy[:, :n_max * n].reshape(nf, n_max, n)
+    else:  # sub-sample s of tick k is grid sample k n + s, s = 0 .. span - 1
+        idx = (np.arange(n_max)[:, None] * n + np.arange(span)[None, :]).ravel()
+        sx = dx[:, idx].reshape(nf, n_max, span)
+        sy = dy[:, idx].reshape(nf, n_max, span)
+    return sx, sy, span
+
+
+def _weighted_means(s1x: np.ndarray, s1y: np.ndarray, model: FrameModel, span: int
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Fowler-weighted frame means from the per-tick sums ``s1x``, ``s1y`` (n_frames, n_max)."""
+    w = fowler_weights(model.mode).astype(float)
+    return (s1x @ w) / (span * w.sum()), (s1y @ w) / (span * w.sum())
 
 
 def weight_groups(mode: ReadoutMode) -> np.ndarray:

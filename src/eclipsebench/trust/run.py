@@ -47,6 +47,7 @@ from ..limits import MAX_TWINS
 from ..photometry.table import read_table, write_photometry
 from ..progress import get_logger
 from ..seeding import spawn_ints
+from ..simulation.star import StarImager
 from .layout import TrustLayout
 from .observation import OBSERVATION_FILE, adopt_observation, completed_observation
 from .recipe import (
@@ -172,12 +173,16 @@ def _residuals(lightcurve: Table) -> tuple[np.ndarray, np.ndarray]:
 #: (its PRF tables and gain, built once per task), and are measured in memory.
 TWINS_PER_TASK = 5
 
-#: The recipe last read in this process: ``(key, recipe)`` (:func:`_recipe`).
-_RECIPE_HELD: list[tuple[tuple, TwinRecipe]] = []
+#: The recipe last read in this process, with its star: ``(key, recipe, star)``
+#: (:func:`_recipe_and_star`).
+_RECIPE_HELD: list[tuple[tuple, TwinRecipe, StarImager]] = []
 
 
-def _recipe(table: str, npz_path: str, json_path: str) -> TwinRecipe:
-    """The recipe of ``npz_path``/``json_path`` for ``table``, read once per process.
+def _recipe_and_star(table: str, npz_path: str, json_path: str
+                     ) -> tuple[TwinRecipe, StarImager]:
+    """The recipe of ``npz_path``/``json_path`` for ``table`` and the star its twins are
+    rendered with (:func:`~eclipsebench.trust.twin.twin_star`: its PRF tables and gain,
+    0.4 s to build), both made once per process.
 
     The real table is read again only when it is another file (path, inode, size or
     modification time) or the recipe's bytes changed, so a worker's twin tasks after
@@ -188,10 +193,11 @@ def _recipe(table: str, npz_path: str, json_path: str) -> TwinRecipe:
            hashlib.sha256(Path(npz_path).read_bytes()).hexdigest(),
            hashlib.sha256(Path(json_path).read_bytes()).hexdigest())
     if _RECIPE_HELD and _RECIPE_HELD[0][0] == key:
-        return _RECIPE_HELD[0][1]
+        return _RECIPE_HELD[0][1], _RECIPE_HELD[0][2]
     recipe, _ = read_recipe(table, Path(npz_path), Path(json_path))
-    _RECIPE_HELD[:] = [(key, recipe)]
-    return recipe
+    star = twin_star(recipe, photometry_options(recipe.obs))
+    _RECIPE_HELD[:] = [(key, recipe, star)]
+    return recipe, star
 
 
 def twin_batches(n_twins: int) -> list[tuple[int, ...]]:
@@ -211,9 +217,8 @@ def twin_task(settings: TrustSettings, npz_path: str, json_path: str, twins: Seq
               out_paths: Sequence[str]) -> None:
     """Simulate and measure the twins ``twins`` in memory; write their photometry tables
     (``out_paths``, in order)."""
-    recipe = _recipe(settings.table, npz_path, json_path)
+    recipe, star = _recipe_and_star(settings.table, npz_path, json_path)
     options = photometry_options(recipe.obs)
-    star = twin_star(recipe, options)
     for twin, out in zip(twins, out_paths, strict=True):
         write_photometry(twin_table(recipe, options, seed=settings.seed, twin=twin, star=star),
                          out)

@@ -59,7 +59,7 @@ from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
 from ..simulation.plan import SECONDS_PER_DAY
-from ..simulation.render import FrameModel, render_cube, tick_moments
+from ..simulation.render import FrameModel, render_cube, tick_means
 from ..simulation.star import StarImager
 from .noise import add_correlated
 from .observation import Observation
@@ -320,7 +320,7 @@ class ExposureMotion:
             for b in np.unique(block):
                 sel = np.flatnonzero(block == b)
                 dx[sel], dy[sel] = frame_windows(self._pointing.fbm_samples, starts[sel], n_grid)
-        mx, my, _ = tick_moments(dx, dy, self.model)
+        mx, my = tick_means(dx, dy, self.model)
         return dx - mx[:, None], dy - my[:, None]
 
 
