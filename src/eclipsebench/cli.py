@@ -44,7 +44,7 @@ from .errors import (
 )
 from .io.paths import missing_folders, remove_empty_folders
 from .io.plain import json_safe
-from .progress import configure
+from .progress import command_scope, configure
 
 # Listed in the order ``--help`` shows them.
 COMMAND_MODULES = (
@@ -102,7 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
         module.add_arguments(p)
         p.add_argument("--json", action="store_true",
                        help="print one JSON object with the results on stdout")
-        p.add_argument("--quiet", action="store_true", help="no progress bars or log messages")
+        p.add_argument("--quiet", action="store_true", help="errors and the answer only: no progress bars, log "
+                            "messages or warnings (the workers' too)")
         p.add_argument("--debug", action="store_true",
                        help="show the full traceback of an internal error")
         p.set_defaults(_module=module)
@@ -226,9 +227,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     process's own command, after which the interpreter exits: everything left is then frozen
     out of the garbage collector (:func:`gc.freeze`), whose last full pass over the million
     objects numpy, scipy, astropy and numba leave cost about 0.3 s of CPU at exit (issue 40).
-    Every file a command writes is written and closed before it returns.
+    Every file a command writes is written and closed before it returns. ``--quiet`` turns
+    logging off below errors for the command only (:func:`~eclipsebench.progress.command_scope`).
     """
-    code = _main(argv)
+    with command_scope():
+        code = _main(argv)
     if argv is None:
         gc.freeze()
     return code

@@ -10,15 +10,16 @@ tasks done out of the total.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
 import threading
 import time
 import warnings
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 
 __all__ = ["configure", "progress", "get_logger", "bars_enabled", "lines_enabled",
-           "ProgressLines"]
+           "ProgressLines", "is_quiet", "errors_only", "command_scope"]
 
 _state = {"quiet": False}
 
@@ -29,12 +30,62 @@ def configure(*, quiet: bool = False, verbose: bool = False) -> None:
     Python warnings (a method plugin that failed to load, say) are logged as
     one line each (``WARNING eclipsebench.warnings: RuntimeWarning: ...``)
     instead of Python's two (the message, then the source line).
+
+    Quiet (``--quiet``, ``--json``) leaves errors only, from every logger:
+    eclipsebench's warnings, Python warnings and those of libraries with
+    their own handlers (astropy's ``WARNING: ... [astropy...]``), here and,
+    through :func:`errors_only`, in the processes that run the command's
+    tasks. What changes how to read a result is written in the result
+    itself (a method that refused an epoch in its JSON and the summary; a
+    trust caution on stdout and its page), not only logged.
     """
     _state["quiet"] = bool(quiet)
-    level = logging.DEBUG if verbose else (logging.WARNING if quiet else logging.INFO)
+    level = logging.DEBUG if verbose else (logging.ERROR if quiet else logging.INFO)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     logging.getLogger("eclipsebench").setLevel(level)
+    # a level of the manager, not of a logger: astropy's logger, made when astropy is first
+    # imported (after this), sets its own level and handler
+    logging.disable(logging.WARNING if quiet else logging.NOTSET)
     warnings.showwarning = _log_warning
+
+
+def is_quiet() -> bool:
+    """Whether :func:`configure` asked for quiet (errors only) in this process."""
+    return bool(_state["quiet"])
+
+
+@contextlib.contextmanager
+def command_scope() -> Iterator[None]:
+    """Restore, after the body (one command), the quiet flag and the logging manager's level
+    that :func:`configure` set for it, so a command called in a process that goes on (a test,
+    a notebook) does not leave logging off."""
+    quiet, disabled = _state["quiet"], logging.root.manager.disable
+    try:
+        yield
+    finally:
+        _state["quiet"] = quiet
+        logging.disable(disabled)
+
+
+@contextlib.contextmanager
+def errors_only(quiet: bool) -> Iterator[None]:
+    """While the body runs, with ``quiet``, log errors only and Python warnings as log lines
+    (as :func:`configure` does) in this process; the previous state is restored after it.
+
+    For a task run where the command did not configure logging (a Dask worker, its own
+    process, of a command run with ``--quiet``); without ``quiet`` nothing changes.
+    """
+    if not quiet:
+        yield
+        return
+    previous, shown = logging.root.manager.disable, warnings.showwarning
+    logging.disable(max(previous, logging.WARNING))
+    warnings.showwarning = _log_warning   # Python's own would print them
+    try:
+        yield
+    finally:
+        logging.disable(previous)
+        warnings.showwarning = shown
 
 
 def _log_warning(message, category, filename, lineno, file=None, line=None) -> None:

@@ -298,3 +298,33 @@ def test_a_command_that_swallowed_its_interrupt_exits_143_in_one_line(monkeypatc
     assert cli.main(["stats", "x.ecsv"]) == 143
     assert capsys.readouterr().err.splitlines() == [
         "eclipsebench stats: interrupted by SIGTERM; rerun the same command to resume"]
+
+
+def warn_and_write(path: str) -> None:
+    """Warns in three ways a task can (eclipsebench's logger, Python, astropy's logger), logs
+    an error, and writes its output."""
+    import logging
+    import warnings
+
+    from astropy.utils.exceptions import AstropyUserWarning
+
+    logging.getLogger("eclipsebench.test").warning("a logged warning from a task")
+    warnings.warn("a Python warning from a task", RuntimeWarning, stacklevel=1)
+    warnings.warn("an astropy warning from a task", AstropyUserWarning, stacklevel=1)
+    logging.getLogger("eclipsebench.test").error("a logged error from a task")
+    write_json(path, {"done": True})
+
+
+@pytest.mark.parametrize("quiet", [True, False])
+def test_quiet_reaches_the_workers_errors_only(tmp_path, capfd, monkeypatch, quiet):
+    """A command's --quiet silences its tasks' warnings in the Dask workers too (their stderr is
+    the command's), and keeps their errors; without it the warnings show."""
+    import eclipsebench.progress as progress
+
+    monkeypatch.setitem(progress._state, "quiet", quiet)
+    out = tmp_path / "w.json"
+    run_tasks([Task("w", "w", warn_and_write, (str(out),), (out,))], workers=2)
+    err = capfd.readouterr().err
+    assert out.is_file() and "a logged error from a task" in err, err
+    for text in ("a logged warning", "a Python warning", "an astropy warning"):
+        assert (text in err) is not quiet, (text, err)

@@ -11,6 +11,8 @@ import pytest
 
 from eclipsebench.cli import main
 
+from ..conftest import simulate_eclipse_epoch
+
 
 def _run(argv: list[str], capsys) -> tuple[int, str]:
     try:
@@ -83,3 +85,45 @@ def test_a_table_given_as_photometry_s_but_short_of_columns_names_them_all():
     text = str(err.value)
     assert "missing column(s) aorkey, expid, frame, background, flag" in text, text
     assert "'eclipsebench photometry'" in text
+
+
+@pytest.fixture(scope="module")
+def two_frame_cubes_table(tmp_path_factory):
+    """A simulated observation of 111 cubes of 2 frames, measured: photometry flags each
+    cube's first frame, so every cube holds one good frame (110 good frames in all, enough
+    for the count of good frames, too few per cube for the twins' calibration)."""
+    root = tmp_path_factory.mktemp("two_frame_cubes")
+    return simulate_eclipse_epoch(root, ["observation.pre_cubes=1",
+                                         "observation.frames_per_cube=2",
+                                         "observation.main_cubes=110",
+                                         "observation.cube_interval_s=220.0",
+                                         "simulation.subsamples=2"], 0.12)
+
+
+def _says_cubes_need_two_good_frames(text: str, table) -> None:
+    assert str(table) in text, text
+    assert "0 of 111 cubes (aorkey, expid) hold 2 or more good frames" in text, text
+    assert "expected at least 2 such cubes" in text and "calibrated" in text, text
+
+
+def test_a_table_of_two_frame_cubes_is_refused_in_one_line_before_any_file(
+        two_frame_cubes_table, tmp_path, capsys):
+    """It was a task failure ('recipe: ValueError: need at least one array to concatenate',
+    exit 1) after the real reduction had written to the folder."""
+    out = tmp_path / "out"
+    code, err = _run(["trust", str(two_frame_cubes_table), "--out", str(out), "--twins", "10",
+                      "--sampler", "leastsq", "--methods", "bliss", "--workers", "1"], capsys)
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    _says_cubes_need_two_good_frames(err, two_frame_cubes_table)
+    assert not out.exists()
+
+
+def test_eb_trust_refuses_a_table_of_two_frame_cubes(two_frame_cubes_table, tmp_path):
+    import eclipsebench as eb
+
+    out = tmp_path / "out"
+    with pytest.raises(eb.InputError) as err:
+        eb.trust(two_frame_cubes_table, out, twins=10, methods=["bliss"], sampler="leastsq",
+                 workers=1)
+    _says_cubes_need_two_good_frames(str(err.value), two_frame_cubes_table)
+    assert not out.exists()

@@ -56,7 +56,14 @@ from ..errors import EnvironmentFailure, InputError, raise_pending_interrupt
 from ..io.atomic import confined_to, write_json
 from ..io.digest import file_sha256
 from ..io.paths import check_inside
-from ..progress import ProgressLines, get_logger, lines_enabled, progress
+from ..progress import (
+    ProgressLines,
+    errors_only,
+    get_logger,
+    is_quiet,
+    lines_enabled,
+    progress,
+)
 from .cluster import ClusterOptions, open_client
 from .cluster import close as close_cluster
 
@@ -295,9 +302,11 @@ def _order(by_key: dict[str, Task]) -> list[str]:
     return out
 
 
-def _call_pickled(func_bytes: bytes, args: tuple, root: str | None = None
-                  ) -> tuple[float, float, str]:
-    """:func:`_call` of a function shipped as cloudpickle bytes.
+def _call_pickled(func_bytes: bytes, args: tuple, root: str | None = None,
+                  quiet: bool = False) -> tuple[float, float, str]:
+    """:func:`_call` of a function shipped as cloudpickle bytes, logging errors only when the
+    command that submitted it is quiet (``--quiet``: a worker's warnings reach the same
+    terminal; :func:`~eclipsebench.progress.errors_only`).
 
     Dask pickles a callable by reference whenever the standard pickle can, so
     a function of a module registered for pickling by value (a test module
@@ -305,7 +314,8 @@ def _call_pickled(func_bytes: bytes, args: tuple, root: str | None = None
     resolve, and the task would wait forever; cloudpickle honours the
     registration.
     """
-    return _call(cloudpickle.loads(func_bytes), args, root)
+    with errors_only(quiet):
+        return _call(cloudpickle.loads(func_bytes), args, root)
 
 
 def _call(func: Callable[..., object], args: tuple, root: str | None = None
@@ -571,7 +581,7 @@ def _run_dask(run: _Run, todo: list[str], *, workers: int, scheduler: str | None
                     # worker died is rescheduled by Dask itself (allowed-failures)
                     run.in_flight[key] = time.time_ns()
                     fut = client.submit(_call_pickled, cloudpickle.dumps(task.func), task.args,
-                                        run.root, key=f"{key}#{time.time_ns()}",
+                                        run.root, is_quiet(), key=f"{key}#{time.time_ns()}",
                                         pure=False, priority=rank[key])
                     futures[fut.key] = key
                     ac.add(fut)

@@ -37,13 +37,22 @@ from ..config.photometry import PhotometrySection
 from ..detector.constants import READOUT_MODES, ReadoutMode, readout_mode, ronoise_e
 from ..errors import InputError
 
-__all__ = ["Observation", "observation_from_table", "MIN_GOOD_FRAMES", "complete_table",
+__all__ = ["Observation", "observation_from_table", "MIN_GOOD_FRAMES", "MIN_GOOD_FRAMES_PER_CUBE",
+           "MIN_CALIBRATION_CUBES", "complete_table",
            "needs_completion", "flux_scale_from_scatter", "SUBARRAY_CUBE_FRAMES",
            "AOR_GAP_S", "completed_observation", "adopt_observation", "OBSERVATION_FILE",
            "check_several_aors"]
 
 #: Fewer good frames than this cannot be twinned (nor reduced with any confidence).
 MIN_GOOD_FRAMES = 100
+#: Good frames a cube needs for the twins' calibration to use it: the motion within an
+#: exposure and the sky's scatter are fitted on good frames spread over each such cube
+#: (:func:`~eclipsebench.trust.twin.calibrate_motion`,
+#: :func:`~eclipsebench.trust.twin.background_scatter_share`).
+MIN_GOOD_FRAMES_PER_CUBE = 2
+#: Cubes of at least :data:`MIN_GOOD_FRAMES_PER_CUBE` good frames a table needs: the
+#: calibration matches the standard deviation over cubes of each cube's median noise pixels.
+MIN_CALIBRATION_CUBES = 2
 
 _COLUMNS = ("time_bmjd", "aorkey", "expid", "frame", "x", "y", "flux", "background",
             "noise_pixels", "flag")
@@ -127,6 +136,12 @@ class Observation:
         starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
         return np.split(np.arange(self.n_frames), starts[1:])
 
+    def calibration_cubes(self) -> list[np.ndarray]:
+        """The good rows of each cube with at least :data:`MIN_GOOD_FRAMES_PER_CUBE` good
+        frames, in time order: the cubes the twins' calibration spreads its frames over."""
+        good = self.good
+        return [c[good[c]] for c in self.cubes() if good[c].sum() >= MIN_GOOD_FRAMES_PER_CUBE]
+
     def aors(self) -> list[np.ndarray]:
         """Row indices of each AOR, in time order."""
         starts = np.flatnonzero(np.r_[True, self.aorkey[1:] != self.aorkey[:-1]])
@@ -170,6 +185,23 @@ def _check_times(time_bmjd: np.ndarray, source: str) -> None:
                          f"steps back, first at row {back[0] + 2}); sort the table by time_bmjd")
 
 
+def _check_cubes(obs: Observation, source: str) -> None:
+    """One line naming the table unless :data:`MIN_CALIBRATION_CUBES` cubes hold
+    :data:`MIN_GOOD_FRAMES_PER_CUBE` good frames or more (what the twins' calibration needs)."""
+    usable = len(obs.calibration_cubes())
+    if usable >= MIN_CALIBRATION_CUBES:
+        return
+    cubes = obs.cubes()
+    most = max(int(obs.good[c].sum()) for c in cubes)
+    raise InputError(
+        f"{source}: {usable} of {len(cubes)} cubes (aorkey, expid) hold "
+        f"{MIN_GOOD_FRAMES_PER_CUBE} or more good frames (at most {most} in a cube): expected "
+        f"at least {MIN_CALIBRATION_CUBES} such cubes, as the twins' motion within an exposure "
+        "and sky scatter are calibrated on good frames spread over each cube and on the spread "
+        "of the noise pixels from cube to cube (photometry flags each cube's first frame by "
+        "default, so cubes of 2 frames hold 1)")
+
+
 def observation_from_table(table, source: str = "the photometry table") -> Observation:
     """The :class:`Observation` of a photometry table (``eclipsebench photometry``'s).
 
@@ -179,7 +211,10 @@ def observation_from_table(table, source: str = "the photometry table") -> Obser
         One line naming the table and the missing column or metadata key;
         times that are not finite, repeated or out of order; a flux whose
         median over the good frames is not positive; or fewer than
-        :data:`MIN_GOOD_FRAMES` good frames.
+        :data:`MIN_GOOD_FRAMES` good frames, or fewer than
+        :data:`MIN_CALIBRATION_CUBES` cubes with :data:`MIN_GOOD_FRAMES_PER_CUBE`
+        good frames (cubes of 2 frames whose first is flagged, as photometry flags
+        a cube's first frame, hold 1).
     """
     missing = [c for c in _COLUMNS if c not in table.colnames and c not in _OPTIONAL]
     if missing:
@@ -215,6 +250,7 @@ def observation_from_table(table, source: str = "the photometry table") -> Obser
     if n_good < MIN_GOOD_FRAMES:
         raise InputError(f"{source}: {n_good} good frames: expected at least {MIN_GOOD_FRAMES} "
                          "to simulate twins of the observation")
+    _check_cubes(obs, source)
     star_e = float(np.median(obs.flux_e[obs.good]))
     if not star_e > 0:
         raise InputError(f"{source}: column flux: the median of the good frames is {star_e:.6g} "

@@ -446,7 +446,8 @@ def make_settings(table: str | os.PathLike[str], *, reduce: ReduceSection, syste
     ------
     InputError
         One line naming the argument: a missing or unreadable table, one that
-        cannot be twinned (another pipeline's, fewer than 100 good frames), a
+        cannot be twinned (another pipeline's, fewer than 100 good frames or 2 cubes of
+        2 good frames), a
         twin count outside 10-10,000, a depth that is not finite and positive or
         not below what a fit can return (named ``depth_name``,
         :func:`~eclipsebench.fit.model.depth_limit_ppm`),

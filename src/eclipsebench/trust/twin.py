@@ -457,11 +457,12 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
 
 def _calibration_rows(obs: Observation, frames_per_cube: int, max_frames: int
                       ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """Up to ``frames_per_cube`` good frames spread over each cube (fewer per cube when the
-    observation has more than ``max_frames / frames_per_cube`` cubes, at least 2): the rows,
-    the index of each row's cube among the cubes kept, and every good row of each kept cube."""
-    cubes = [c[obs.good[c]] for c in obs.cubes()]
-    cubes = [c for c in cubes if c.size >= 2]
+    """Up to ``frames_per_cube`` good frames spread over each cube of at least 2 good frames
+    (:meth:`~eclipsebench.trust.observation.Observation.calibration_cubes`; fewer per cube
+    when the observation has more than ``max_frames / frames_per_cube`` cubes, at least 2):
+    the rows, the index of each row's cube among the cubes kept, and every good row of each
+    kept cube."""
+    cubes = obs.calibration_cubes()
     k = int(np.clip(max_frames // max(len(cubes), 1), 2, frames_per_cube))
     picked = [c[np.unique(np.linspace(0, c.size - 1, min(k, c.size)).astype(int))]
               for c in cubes]
