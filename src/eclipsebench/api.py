@@ -546,6 +546,7 @@ def trust_with_report(table: str | os.PathLike, out: str | os.PathLike, *, comma
 
 def _trust(given: Mapping[str, Any], command: str) -> tuple[TrustResult, RunReport]:
     """The trust run of :func:`trust`'s arguments ``given``, shown on its page as ``command``."""
+    from .engine.folder import check_kind
     from .io.paths import check_output_path
     from .trust.run import run_trust, trust_settings
 
@@ -556,6 +557,7 @@ def _trust(given: Mapping[str, Any], command: str) -> tuple[TrustResult, RunRepo
         section = replace(section, **given["reduce_options"])
         section.validate()
     root = check_output_path(given["out"], labels.get("out", "out"), "folder")
+    check_kind(root, "trust")   # another kind of run's folder: refused before the table is read
     times = {k: given[k] for k in ("time_scale", "time_at", "observer") if given[k] is not None}
     settings = trust_settings(given["table"], root, reduce=section, system=given["system"],
                               system_section=cfg.system, methods=given["methods"],

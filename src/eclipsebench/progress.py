@@ -56,15 +56,17 @@ def is_quiet() -> bool:
 
 @contextlib.contextmanager
 def command_scope() -> Iterator[None]:
-    """Restore, after the body (one command), the quiet flag and the logging manager's level
-    that :func:`configure` set for it, so a command called in a process that goes on (a test,
+    """Restore, after the body (one command), the quiet flag, the logging manager's level and
+    eclipsebench's logger's level that :func:`configure` set for it, so a command called in a process that goes on (a test,
     a notebook) does not leave logging off."""
-    quiet, disabled = _state["quiet"], logging.root.manager.disable
+    ours = logging.getLogger("eclipsebench")
+    quiet, disabled, level = _state["quiet"], logging.root.manager.disable, ours.level
     try:
         yield
     finally:
         _state["quiet"] = quiet
         logging.disable(disabled)
+        ours.setLevel(level)
 
 
 @contextlib.contextmanager

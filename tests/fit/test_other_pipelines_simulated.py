@@ -20,6 +20,7 @@ from eclipsebench.astro.catalogue import system_for
 from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.config.reduce import ReduceSection
+from eclipsebench.fit.prepare import resolve_method_options
 from eclipsebench.fit.reduce import reduce_epoch
 from eclipsebench.photometry.table import read_table
 
@@ -54,7 +55,8 @@ def main_aor(tmp_path_factory):
 def test_simulated_main_aor_csv_gives_the_full_tables_depth(method, main_aor):
     full, csv = main_aor
     assert read_table(csv).colnames == list(MINIMAL)
-    kwargs = {"options": FAST, "method_options": METHODS[method]}
+    kwargs = {"options": FAST,
+              "method_options": resolve_method_options(method, FAST, METHODS[method])}
     from_full = reduce_epoch(full, method, **kwargs)
     # a CSV names no planet: given, as for another pipeline's table
     from_csv = reduce_epoch(str(csv), method, system=system_for(load_config(None, SETS).system),

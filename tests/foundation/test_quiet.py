@@ -21,6 +21,7 @@ NO_ECLIPSE = ["--epochs", "1", "--no-calibration", "--workers", "1",
 
 def test_quiet_simulate_prints_its_answer_and_no_warning(tmp_path, capfd, caplog):
     caplog.set_level(logging.INFO)
+    ours = logging.getLogger("eclipsebench").level
     code = main(["simulate", "--out", str(tmp_path / "quiet"), *NO_ECLIPSE, "--quiet"])
     out, err = capfd.readouterr()
     assert code == 0 and err == "", err
@@ -28,6 +29,7 @@ def test_quiet_simulate_prints_its_answer_and_no_warning(tmp_path, capfd, caplog
     assert " ecl nan " in out   # the answer says what the warning said: no eclipse time
     # the command's quiet does not outlive it (a test or a notebook goes on logging)
     assert logging.root.manager.disable == logging.NOTSET and not is_quiet()
+    assert logging.getLogger("eclipsebench").level == ours   # a later test's warnings are seen
     # without --quiet the same command warns (the test could fail)
     caplog.clear()
     assert main(["simulate", "--out", str(tmp_path / "loud"), *NO_ECLIPSE]) == 0
