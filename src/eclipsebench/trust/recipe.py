@@ -37,6 +37,7 @@ from .observation import Observation, observation_from_table
 from .twin import (
     TwinRecipe,
     background_scatter_share,
+    blur_spanning,
     builtin_gain,
     calibrate_motion,
     gain_model,
@@ -299,13 +300,14 @@ def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None
 
     if steps[0]["bins_twin_in_excess"] > 0 and "motion_grid_px" in calibration:
         redder = float(calibration["motion_peak_px"])
-        for candidate in gentler_motions(recipe, options, calibration):
+        grid = blur_spanning(recipe, options, calibration)   # rendered once, if at all
+        for candidate in gentler_motions(recipe, options, grid):
             if passes(candidate):
                 # the grid is coarse: halve the interval between the last redder peak and
                 # this one, REFINE_STEPS times
                 calm = float(candidate["motion_peak_px"])
                 for _ in range(REFINE_STEPS):
-                    mid = gentler_motions(recipe, options, calibration,
+                    mid = gentler_motions(recipe, options, grid,
                                           peaks_px=(0.5 * (calm + redder),))
                     if not mid:
                         break

@@ -65,7 +65,7 @@ from .noise import add_correlated
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "gentler_motions", "photometry_window", "twin_star", "MOTION_GRID_PX",
+           "calibrate_motion", "gentler_motions", "blur_spanning", "photometry_window", "twin_star", "MOTION_GRID_PX",
            "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain", "builtin_prf", "builtin_gain",
            "background_scatter_share"]
 
@@ -625,6 +625,24 @@ def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
         "noise_pixels_grid": grid_medians, "noise_pixels_cube_sd_grid": grid_spreads}
 
 
+def blur_spanning(recipe: TwinRecipe, options: PhotometrySection, calibration: dict, *,
+                  frames_per_cube: int = 8, max_frames: int = 2048,
+                  blur_grid_px: tuple[float, ...] = BLUR_GRID_PX) -> dict:
+    """``calibration`` with its noise pixels on a grid of several blurs: itself where its
+    grid spans them (it fitted the blur), else a copy with the calibration's frames rendered
+    at each of ``blur_grid_px`` (where the committed PSF was kept), made once for all the
+    calls of :func:`gentler_motions` that follow."""
+    if len(calibration["blur_grid_px"]) > 1:
+        return calibration
+    grid_px = tuple(float(g) for g in calibration["motion_grid_px"])
+    *_, curves, _, _, _ = _noise_pixel_curves(recipe, options, frames_per_cube, max_frames,
+                                              grid_px)
+    both = [curves(float(b)) for b in blur_grid_px]
+    return {**calibration, "blur_grid_px": list(blur_grid_px),
+            "noise_pixels_grid": [m.tolist() for m, _ in both],
+            "noise_pixels_cube_sd_grid": [sd.tolist() for _, sd in both]}
+
+
 def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration: dict, *,
                     frames_per_cube: int = 8, max_frames: int = 2048,
                     blur_grid_px: tuple[float, ...] = BLUR_GRID_PX,
@@ -655,17 +673,11 @@ def gentler_motions(recipe: TwinRecipe, options: PhotometrySection, calibration:
         and ``noise_pixels_cube_sd_twins`` there (interpolated over the blurs).
     """
     grid_px = tuple(float(g) for g in calibration["motion_grid_px"])
-    if calibration.get("blur_fitted") and len(calibration["blur_grid_px"]) > 1:
-        blurs = np.asarray(calibration["blur_grid_px"], float)
-        medians = np.asarray(calibration["noise_pixels_grid"], float)
-        spreads = np.asarray(calibration["noise_pixels_cube_sd_grid"], float)
-    else:
-        *_, curves, _, _, _ = _noise_pixel_curves(recipe, options, frames_per_cube, max_frames,
-                                                  grid_px)
-        blurs = np.asarray(blur_grid_px, float)
-        both = [curves(float(b)) for b in blurs]
-        medians = np.array([m for m, _ in both])
-        spreads = np.array([sd for _, sd in both])
+    spanning = blur_spanning(recipe, options, calibration, frames_per_cube=frames_per_cube,
+                             max_frames=max_frames, blur_grid_px=blur_grid_px)
+    blurs = np.asarray(spanning["blur_grid_px"], float)
+    medians = np.asarray(spanning["noise_pixels_grid"], float)
+    spreads = np.asarray(spanning["noise_pixels_cube_sd_grid"], float)
     target = float(calibration["noise_pixels_real"])
     asked = sorted((g for g in grid_px if g < float(calibration["motion_peak_px"])), reverse=True) \
         if peaks_px is None else list(peaks_px)
