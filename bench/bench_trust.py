@@ -197,9 +197,11 @@ def speed(work: Path, n_twins: int, workers: int) -> None:
     print(f"  recommended {summary['recommended']}; skipped {summary['skipped']}")
 
 
-def table(work: Path, n_twins: int, workers: int) -> None:
+def table(work: Path, n_twins: int, workers: int, tables: list[str]) -> None:
     """Issue 36: twins of another pipeline's table (time_bmjd, flux in arbitrary units,
-    flux_err, x, y) against twins of the full photometry table, same seed."""
+    flux_err, x, y) against twins of the full photometry table, same seed. ``tables``: those
+    twinned again; the other's result is read from its folder (made by the same twin model
+    and as many twins, else refused)."""
     from astropy.table import Table
 
     from eclipsebench.astro.catalogue import get_system
@@ -220,10 +222,20 @@ def table(work: Path, n_twins: int, workers: int) -> None:
     for name, source, methods in (("full", path, ["bliss", "kr-data"]),
                                   ("csv", csv, ["bliss", "kr-data", "pld", "ica"])):
         out = work / "table" / name
-        shutil.rmtree(out, ignore_errors=True)
-        settings = trust_settings(source, out, reduce=cfg.reduce, system_section=cfg.system,
-                                  system=get_system("XO-3b"), methods=methods, n_twins=n_twins, seed=1)
-        summary, _ = run_trust(settings, out, workers=workers)
+        if name in tables:
+            shutil.rmtree(out, ignore_errors=True)
+            settings = trust_settings(source, out, reduce=cfg.reduce, system_section=cfg.system,
+                                      system=get_system("XO-3b"), methods=methods,
+                                      n_twins=n_twins, seed=1)
+            summary, _ = run_trust(settings, out, workers=workers)
+        else:
+            summary = json.loads((out / "trust.json").read_text())
+            made = json.loads((out / "trust_config.json").read_text())
+            if made.get("twin_model") != TWIN_MODEL or made.get("n_twins") != n_twins:
+                raise SystemExit(f"{out}: made with twin model {made.get('twin_model')} and "
+                                 f"{made.get('n_twins')} twins, not {TWIN_MODEL} and {n_twins}: "
+                                 f"twin it again (--tables {name})")
+            print(f"{name}: read from {out} (twin model {TWIN_MODEL}, {n_twins} twins)")
         rmse[name] = {m: s["rmse_ppm"] for m, s in summary["methods"].items()}
         inferred = json.loads((out / "trust.json").read_text()).get("table", {})
         print(f"{name}: skipped {sorted(summary['skipped'])}; "
@@ -380,6 +392,8 @@ def main(argv: list[str]) -> int:
                    help="phase-curve: a change to the xo3b-phase-curve configuration")
     p.add_argument("--methods", default=",".join(PHASE_CURVE_METHODS),
                    help="phase-curve: the methods")
+    p.add_argument("--tables", default="full,csv",
+                   help="table: the tables twinned again (full, csv); the other is read back")
     p.add_argument("--twins", type=int, default=None)
     p.add_argument("--epochs", type=int, default=20)
     p.add_argument("--workers", type=int, default=2)
@@ -399,7 +413,7 @@ def main(argv: list[str]) -> int:
     elif args.part == "window":
         window(work, args.twins or 10)
     elif args.part == "table":
-        table(work, args.twins or 20, args.workers)
+        table(work, args.twins or 20, args.workers, args.tables.split(","))
     elif args.part == "phase-curve":
         phase_curve(work, args.twins or 50, args.workers, args.sets, args.methods.split(","))
     else:

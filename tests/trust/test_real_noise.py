@@ -247,3 +247,38 @@ def test_the_motion_is_the_most_whose_pilot_twin_is_no_redder_than_the_real_resi
     made, out = bounded_recipe(recipe, info, None, real, pilot(1.0))
     assert tried == [0.9] and made.motion_peak_px == 0.9
     assert not out["motion_bound"]["bounded"] and "noise_pixels_only" not in out["calibration"]
+
+
+@pytest.mark.slow
+def test_a_table_without_noise_pixels_gets_the_most_motion_its_residuals_allow(small_table):
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    info = {"calibration": {"noise_pixels_real": None, "rms_per_peak": 0.22,
+                            "target_vs_grid": "no noise pixels in the table"},
+            "blur_px": None, "motion_peak_px": 0.0, "motion_rms_px": 0.0}
+    t = np.sort(obs.time_bmjd)
+    real = (t, np.random.default_rng(3).normal(0.0, 1e-3, t.size))
+    red = 2e-3 * np.sin(2 * np.pi * (t - t[0]) * 1440.0 / 20.0)
+    tried: list[float] = []
+
+    def pilot(limit_px):
+        def residuals(r):
+            tried.append(r.motion_peak_px)
+            white = np.random.default_rng(len(tried)).normal(0.0, 1e-3, t.size)
+            return t, white + (red if r.motion_peak_px > limit_px else 0.0)
+        return residuals
+
+    made, out = bounded_recipe(recipe, info, None, real, pilot(0.7))
+    # without motion, then the grid from its most motion down to the first no redder, then
+    # two halvings towards the last redder one; the committed PSF throughout
+    assert tried == pytest.approx([0.0, 1.25, 0.9, 0.6, 0.75, 0.675])
+    assert made.motion_peak_px == pytest.approx(0.675) and made.blur_px is None
+    bound = out["motion_bound"]
+    assert bound["photometry_only"] and not bound["bounded"] and bound["chosen"] == 5
+    assert "committed PSF" in bound["rule"]
+    assert out["calibration"]["motion_peak_px"] == pytest.approx(0.675)
+    assert out["motion_rms_px"] == pytest.approx(0.675 * 0.22)
+    # a pilot without motion already redder: more motion cannot help, none is tried
+    tried.clear()
+    made, out = bounded_recipe(recipe, info, None, real, pilot(-1.0))
+    assert tried == [0.0] and made.motion_peak_px == 0.0

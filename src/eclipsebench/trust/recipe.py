@@ -35,6 +35,7 @@ from ..photometry.table import read_table
 from .noise import correlated_component
 from .observation import Observation, observation_from_table
 from .twin import (
+    MOTION_GRID_PX,
     TwinRecipe,
     background_scatter_share,
     blur_spanning,
@@ -44,6 +45,7 @@ from .twin import (
     gentler_motions,
     make_recipe,
     map_gain,
+    motion_rms_per_peak,
     twin_table,
 )
 
@@ -204,9 +206,9 @@ def build_recipe(table_path: str, system: Any, fit: Mapping[str, Any], depth_ppm
     if np.isfinite(obs.noise_pixels[obs.good]).any():
         blur, peak, calibration = calibrate_motion(
             make_recipe(obs, lc, radius_px=options.radius_px), options)
-    else:   # another pipeline's table without noise pixels: nothing to calibrate on
+    else:   # another pipeline's table without noise pixels: the photometry bounds the motion
         blur, peak, calibration = None, 0.0, {
-            "noise_pixels_real": None, "rms_per_peak": 0.0,
+            "noise_pixels_real": None, "rms_per_peak": motion_rms_per_peak(obs),
             "target_vs_grid": "no noise pixels in the table"}
     recipe, made = _recipe_with(obs, lc, options, blur, peak, pmap)
     info = {"depth_ppm": float(depth_ppm), "event": event, "phase": fit.get("phase"),
@@ -271,8 +273,16 @@ def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None
     a pilot is not, and the interval between that peak and the last redder one
     is halved :data:`REFINE_STEPS` times (the grid is coarse); the most motion
     whose pilot is no redder is kept, or, where none is, the fewest such bins
-    (the most motion among equals). Nothing of a twin's truth enters: the test compares
-    residuals. ``info["motion_bound"]`` lists the steps.
+    (the most motion among equals).
+
+    A table without noise pixels (another pipeline's) has nothing to calibrate
+    on, so the same rule sets its motion alone: where its pilot without motion is
+    nowhere redder than ``real``, the committed PSF with each peak of
+    :data:`~eclipsebench.trust.twin.MOTION_GRID_PX`, the most first, until a
+    pilot is no redder, then the halvings (docs/trust.md, "the motion's bound").
+
+    Nothing of a twin's truth enters: the test compares residuals.
+    ``info["motion_bound"]`` lists the steps.
     """
     options = photometry_options(recipe.obs)
     calibration = info["calibration"]
@@ -288,7 +298,8 @@ def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None
 
     def passes(candidate: Mapping[str, Any]) -> bool:
         """Make and reduce the pilot of ``candidate``'s PSF; whether it is no redder."""
-        blur, peak = float(candidate["blur_px"]), float(candidate["motion_peak_px"])
+        blur = None if candidate["blur_px"] is None else float(candidate["blur_px"])
+        peak = float(candidate["motion_peak_px"])
         twin_recipe, parts = _recipe_with(recipe.obs, recipe.light_curve, options, blur, peak,
                                           pmap)
         at = {**info, **parts, "blur_px": blur, "motion_peak_px": peak,
@@ -298,34 +309,55 @@ def bounded_recipe(recipe: TwinRecipe, info: Mapping[str, Any], pmap: str | None
                                                      "noise_pixels_cube_sd_twins")}))
         return steps[-1]["bins_twin_in_excess"] == 0
 
-    if steps[0]["bins_twin_in_excess"] > 0 and "motion_grid_px" in calibration:
+    photometry_only = calibration.get("noise_pixels_real") is None
+    redder: float | None = None
+    if photometry_only:
+        def at_peaks(peaks: tuple[float, ...]) -> list[dict[str, Any]]:
+            return [{"blur_px": None, "motion_peak_px": float(p), "noise_pixels_twins": None,
+                     "noise_pixels_cube_sd_twins": None} for p in peaks]
+        ladder = (at_peaks(tuple(sorted((p for p in MOTION_GRID_PX if p > 0), reverse=True)))
+                  if steps[0]["bins_twin_in_excess"] == 0 else [])
+    elif steps[0]["bins_twin_in_excess"] > 0 and "motion_grid_px" in calibration:
         redder = float(calibration["motion_peak_px"])
         grid = blur_spanning(recipe, options, calibration)   # rendered once, if at all
-        for candidate in gentler_motions(recipe, options, grid):
-            if passes(candidate):
-                # the grid is coarse: halve the interval between the last redder peak and
-                # this one, REFINE_STEPS times
-                calm = float(candidate["motion_peak_px"])
-                for _ in range(REFINE_STEPS):
-                    mid = gentler_motions(recipe, options, grid,
-                                          peaks_px=(0.5 * (calm + redder),))
-                    if not mid:
-                        break
-                    if passes(mid[0]):
-                        calm = float(mid[0]["motion_peak_px"])
-                    else:
-                        redder = float(mid[0]["motion_peak_px"])
-                break
-            redder = float(candidate["motion_peak_px"])
+
+        def at_peaks(peaks: tuple[float, ...]) -> list[dict[str, Any]]:
+            return gentler_motions(recipe, options, grid, peaks_px=peaks)
+        ladder = gentler_motions(recipe, options, grid)
+    else:
+        ladder = []
+    for candidate in ladder:
+        if passes(candidate):
+            # the grid is coarse: halve the interval between the last redder peak and this
+            # one, REFINE_STEPS times
+            calm = float(candidate["motion_peak_px"])
+            for _ in range(REFINE_STEPS):
+                if redder is None:   # the most motion of the grid is no redder
+                    break
+                mid = at_peaks((0.5 * (calm + redder),))
+                if not mid:
+                    break
+                if passes(mid[0]):
+                    calm = float(mid[0]["motion_peak_px"])
+                else:
+                    redder = float(mid[0]["motion_peak_px"])
+            break
+        redder = float(candidate["motion_peak_px"])
     # the most motion among the pilots no redder (or, where none is, with the fewest bins)
     chosen = min(range(len(steps)), key=lambda i: (steps[i]["bins_twin_in_excess"],
                                                    -steps[i]["motion_peak_px"]))
     twin_recipe, out = made[chosen]
-    bound = {"rule": "the most motion within an exposure, among the PSFs with the real median "
-                     "noise pixels, whose pilot twin is nowhere significantly redder than the "
-                     "real residuals", "steps": steps, "chosen": chosen,
-             "bounded": chosen > 0}
-    if chosen > 0:   # the chosen PSF and its noise pixels; the noise pixels' own fit beside
+    psfs = ("the committed PSF (the table has no noise pixels)" if photometry_only
+            else "the PSFs with the real median noise pixels")
+    bound = {"rule": f"the most motion within an exposure, among {psfs}, whose pilot twin is "
+                     "nowhere significantly redder than the real residuals", "steps": steps,
+             "chosen": chosen, "bounded": chosen > 0 and not photometry_only,
+             "photometry_only": photometry_only}
+    if chosen > 0 and photometry_only:
+        out["calibration"] = {**calibration, "motion_peak_px": steps[chosen]["motion_peak_px"],
+                              "target_vs_grid": "no noise pixels in the table: the motion "
+                                                "from the real residuals alone"}
+    elif chosen > 0:   # the chosen PSF and its noise pixels; the noise pixels' own fit beside
         keys = ("blur_px", "motion_peak_px", "noise_pixels_twins", "noise_pixels_cube_sd_twins")
         out["calibration"] = {**calibration, **{k: steps[chosen][k] for k in keys},
                               "noise_pixels_only": {k: calibration[k] for k in keys}}

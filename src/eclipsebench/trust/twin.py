@@ -65,19 +65,21 @@ from .noise import add_correlated
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "gentler_motions", "blur_spanning", "photometry_window", "twin_star", "MOTION_GRID_PX",
+           "calibrate_motion", "gentler_motions", "motion_rms_per_peak", "blur_spanning", "photometry_window", "twin_star", "MOTION_GRID_PX",
            "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain", "builtin_prf", "builtin_gain",
            "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 4 since the motion within an exposure is bounded by
+#: otherwise is refused rather than mixed): 5 since a table without noise pixels gets the
+#: most motion within an exposure whose pilot twin is no redder than the real residuals
+#: (:func:`~eclipsebench.trust.recipe.bounded_recipe`; a table with them is made as in 4); 4 since the motion within an exposure is bounded by
 #: the real photometry (a pilot twin no redder than the real residuals,
 #: :func:`~eclipsebench.trust.recipe.bounded_recipe`); 3 since the PSF's blur is fitted with the motion,
 #: the real background scatter and correlated noise are added (issue 36), and only the part of
 #: the subarray the photometry reads is rendered (:func:`photometry_window`); 2 since the
 #: motion within an exposure is the simulator's block-scaled jitter (:class:`ExposureMotion`),
 #: 1 before (one rms throughout).
-TWIN_MODEL = 4
+TWIN_MODEL = 5
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
@@ -498,8 +500,7 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
     target = float(np.median(obs.noise_pixels[obs.good]))
     real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
     target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
-    model = _frame_model(obs, "none")
-    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
+    unit_x, unit_y, rms_per_peak = _unit_motion(obs, rows)
 
     def curves(blur: float | None) -> tuple[np.ndarray, np.ndarray]:
         star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
@@ -513,8 +514,24 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
             spreads.append(_cube_median_sd(npx, cube_of))
         return np.asarray(medians), np.asarray(spreads)
 
-    rms_per_peak = float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
     return target, target_sd, curves, rms_per_peak, rows, cubes
+
+
+def _unit_motion(obs: Observation, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """One draw of :class:`ExposureMotion` of 1 px peak at ``rows`` (the calibration's): its
+    offsets in x and y and its rms (px) per px of peak."""
+    model = _frame_model(obs, "none")
+    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
+    return unit_x, unit_y, float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
+
+
+def motion_rms_per_peak(obs: Observation, *, frames_per_cube: int = 8,
+                        max_frames: int = 2048) -> float:
+    """The rms (px) of :class:`ExposureMotion` within an exposure per px of its peak, over
+    the frames :func:`calibrate_motion` renders (for a table without noise pixels, whose
+    motion is set by :func:`~eclipsebench.trust.recipe.bounded_recipe` alone)."""
+    rows, _, _ = _calibration_rows(obs, frames_per_cube, max_frames)
+    return _unit_motion(obs, rows)[2]
 
 
 def calibrate_motion(recipe: TwinRecipe, options: PhotometrySection, *,
