@@ -90,8 +90,13 @@ def test_another_pipelines_table_is_twinned_with_pixel_methods_skipped(small, ca
     page = (out / "report" / "index.html").read_text()
     assert "Quote:" in page and "recommended in (%)" in page and "mid-eclipse time" in page
     assert "Inferred" in page
+    # no noise pixels: the motion within an exposure is what the real residuals allow
+    bound = summary["twins"]["motion_bound"]
+    assert bound["photometry_only"] and len(bound["steps"]) > 1
+    assert "the most whose pilot twin is no redder" in page
     text = capsys.readouterr().out
     assert text.startswith("quote ") and "\nranking " in text and "inferred      flux_scale" in text
+    assert "twins' PSF    the committed PSF (no noise pixels in the table)" in text
     # the same command resumes; another table into the same folder is refused
     assert main(["trust", str(root / "other.csv"), "--out", str(out),
                  "--methods", "poly2,pld,ica"] + FAST) == 0

@@ -128,6 +128,12 @@ def run(args: argparse.Namespace) -> dict:
 def _twin_lines(twins: dict) -> list[str]:
     """What was fitted to make the twins resemble the real frames (``docs/trust.md``)."""
     cal = twins.get("calibration") or {}
+    bound = twins.get("motion_bound") or {}
+    if bound.get("photometry_only"):
+        return [f"twins' PSF    the committed PSF (no noise pixels in the table); motion within an "
+                f"exposure {twins['motion_rms_px']:.3f} px rms (A_fbm "
+                f"{twins['motion_peak_px']:.3f}): the most whose pilot twin is no redder than the "
+                f"real residuals ({len(bound['steps']) - 1} motions tried)"]
     if "blur_px" not in cal:
         return []
     lines = [f"twins' PSF    blur {cal['blur_px']:.3f} px (builtin {cal['blur_px_builtin']:.3f}), "
@@ -136,7 +142,6 @@ def _twin_lines(twins: dict) -> list[str]:
              f"SD over cubes {cal['noise_pixels_cube_sd_twins']:.3f} (real "
              f"{cal['noise_pixels_real']:.2f}, {cal['noise_pixels_cube_sd_real']:.3f}; "
              f"{cal['target_vs_grid']})"]
-    bound = twins.get("motion_bound") or {}
     if bound.get("bounded"):
         first = bound["steps"][0]
         lines.append(f"twins' motion bounded by the photometry: A_fbm {first['motion_peak_px']:.3f}"

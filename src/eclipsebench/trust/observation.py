@@ -18,7 +18,9 @@ optionally noise pixels, background, frame numbers) is first completed by
   frames each; a frame missing inside a cube splits it), the AORs from gaps
   of more than a minute and 1.5 cube gaps;
 - no background (0 e/px: its photon noise is then part of the inferred flux
-  scale), no noise pixels (the motion within an exposure is not calibrated).
+  scale), no noise pixels (the motion within an exposure is then the most whose
+  pilot twin is no redder than the real residuals:
+  :func:`~eclipsebench.trust.recipe.bounded_recipe`).
 """
 
 from __future__ import annotations
@@ -485,8 +487,9 @@ def complete_table(table: Table, source: str, *, readout: str | None = None,
     else:
         inferred["background"] = "the table's, in the flux's unit per pixel, scaled"
     if "noise_pixels" not in table.colnames:
-        inferred["noise_pixels"] = ("none in the table: the motion within an exposure is not "
-                                    "calibrated (none added)")
+        inferred["noise_pixels"] = ("none in the table: the motion within an exposure is the "
+                                    "most whose pilot twin is no redder than the real "
+                                    "residuals")
     columns = {"time_bmjd": time, "aorkey": aorkey, "expid": expid, "frame": frame_no,
                "x": x, "y": y, "flux": flux * scale, "flux_err": err * scale,
                "background": background * scale, "flag": np.where(good, 0, np.maximum(flag, 1))}

@@ -235,8 +235,12 @@ def _provenance_html(summary: Mapping[str, Any]) -> str:
 def _noise_pixels_text(twins: Mapping[str, Any]) -> str:
     real = (twins.get("calibration") or {}).get("noise_pixels_real")
     bound = twins.get("motion_bound") or {}
-    return ("no noise pixels in the table: not calibrated" if real is None
-            else f"median noise pixels {real:.2f} real" + (
+    if real is None:
+        return ("no noise pixels in the table: the motion within an exposure is the most whose "
+                f"pilot twin is no redder than the real residuals, A_fbm "
+                f"{float(twins.get('motion_peak_px') or 0.0):.3f} px"
+                if bound.get("photometry_only") else "no noise pixels in the table: not calibrated")
+    return (f"median noise pixels {real:.2f} real" + (
                 f"; the noise pixels alone gave a peak of {bound['steps'][0]['motion_peak_px']:.3f}"
                 " px, whose pilot twin was redder than the real residuals, so the motion is the "
                 "most the real photometry allows" if bound.get("bounded") else ""))
