@@ -457,7 +457,7 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     out_cols = np.flatnonzero(outside)
     if model.noise_model in ("physical", "none"):
         member = weight_groups(mode)                                     # (n_max, FN)
-        gm = np.einsum("ftm,tg->fgm", moments, member)                   # (nf, FN, 6)
+        gm = np.matmul(member.T, moments)                                # (nf, FN, 6)
         groups = star_group_charges(basis, gm, star_e_per_tick)          # (FN, nf, s*s)
         groups += (gm[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
         j = np.arange(1, mode.fowler + 1, dtype=float)
@@ -467,7 +467,7 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
             frames[:, out_cols] = fowler_uniform(rate_out, mode, rng_photon)
     else:
         member = read_intervals(mode)                                    # (n_max, 2FN)
-        im = np.einsum("ftm,tr->frm", moments, member)                   # (nf, 2FN, 6)
+        im = np.matmul(member.T, moments)                                # (nf, 2FN, 6)
         inc = star_group_charges(basis, im, star_e_per_tick)             # (2FN, nf, s*s)
         inc += (im[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
         reads = np.cumsum(inc, axis=0)
