@@ -282,8 +282,11 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
     for j in range(cube.shape[1]):
         sub = np.asarray(cube[idx, j], dtype=float)          # (m, nx)
         finite = np.isfinite(sub)
-        fill = nanmedian0(np.where(finite, sub, np.nan))
-        filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
+        if finite.all():   # nothing to fill: no median over time to take for it (issue 40)
+            filled = sub
+        else:
+            fill = nanmedian0(np.where(finite, sub, np.nan))
+            filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
         med = _median_in_time(filled, size)
         resid = np.where(finite, sub - med, np.nan)
         sigma = robust_sigma(resid, axis=0)
