@@ -36,6 +36,38 @@ def test_frame_faults_by_kind(bad):
     assert frame_faults(np.full((2, 4, 4), np.nan)).tolist() == [0, 0]
 
 
+def _negated_by_the_median(frames: np.ndarray) -> np.ndarray:
+    """The ``negative`` rule with every frame's median taken (frames all finite)."""
+    flat = frames.reshape(len(frames), -1).astype(np.float64)
+    hi, lo, med = flat.max(axis=1), flat.min(axis=1), np.median(flat, axis=1)
+    return (hi != lo) & ((med - lo) > 2.0 * (hi - med))
+
+
+def test_the_negated_rule_with_its_median_bounded_is_the_rule_with_every_median():
+    """frame_faults takes a frame's median only where mean + SD could not clear it (issue 40);
+    on frames at the rule's edge either way, and on star frames, it flags what the median
+    of every frame flags."""
+    rng = np.random.default_rng(40)
+    frames = []
+    for k in range(400):
+        f = rng.normal(0.0, 1.0, size=(5, 5))
+        # set the median near the rule's edge 3 med = 2 hi + lo, on one side or the other
+        flat = np.sort(f.ravel())
+        hi, lo = flat[-1] + 10.0 * rng.random(), flat[0] - 10.0 * rng.random()
+        edge = (2.0 * hi + lo) / 3.0 + (k % 5 - 2) * 1e-12 * max(abs(hi), abs(lo))
+        flat[12] = edge
+        flat[0], flat[-1] = lo, hi
+        flat[1:12] = np.minimum(flat[1:12], edge)
+        flat[13:24] = np.maximum(flat[13:24], edge)
+        frames.append(rng.permutation(flat).reshape(5, 5))
+    star = rng.normal(35.0, 6.0, size=(200, 9, 9))
+    star[:, 4, 4] += 2e4
+    for cube in (np.array(frames), star, -star, star.astype(np.float32), -star.astype(np.float32)):
+        want = np.where(_negated_by_the_median(cube), FLAG_BITS["negative"], 0)
+        assert frame_faults(cube).tolist() == want.tolist()
+    assert 0 < np.count_nonzero(_negated_by_the_median(np.array(frames))) < 400
+
+
 def _table(folder):
     (_, table), = photometry_tables(folder, PhotometrySection())
     return table

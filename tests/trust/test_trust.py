@@ -72,6 +72,25 @@ def test_the_motion_within_an_exposure_is_the_simulator_s_block_scaled_jitter():
     assert 0.06 < np.sqrt(0.5 * var.mean()) < 0.12   # 0.0895 px for the challenge's 0.4
 
 
+def test_the_motion_s_moments_in_one_pass_are_those_of_its_offsets():
+    """ExposureMotion.moments (what a twin renders with, issue 40) gives tick_moments of
+    ExposureMotion.offsets, for frames within a block and across blocks, and for none."""
+    obs = _cubes_of_sub_2s(6)
+    model = FrameModel(mode=obs.mode, noise_model="physical", read_noise_e=9.4)
+    motion = ExposureMotion(obs, model, 0.4, np.random.default_rng(3))
+    for rows in (np.arange(64, 128), np.arange(obs.n_frames), np.array([3, 200, 383])):
+        want = tick_moments(*motion.offsets(rows), model)
+        got = motion.moments(rows)
+        for w, g in zip(want, got, strict=True):
+            assert g.shape == w.shape
+            assert np.allclose(g, w, rtol=1e-12, atol=1e-15)
+        assert np.abs(got[2][:, :, 3]).max() > 1e-4   # the motion is there
+    still = ExposureMotion(obs, model, 0.0, np.random.default_rng(3)).moments(np.arange(64))
+    assert np.array_equal(still[2], tick_moments(np.zeros((64, model.grid_samples_per_frame)),
+                                                 np.zeros((64, model.grid_samples_per_frame)),
+                                                 model)[2])
+
+
 def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
     table = read_table(small_table)
     obs = observation_from_table(table)

@@ -22,9 +22,9 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 
-import batman
 import numpy as np
 
+from .batman_core import TransitModel, TransitParams
 from .orbit import CONJUNCTION_SIDE, OrbitClock, geometric_to_observed
 
 __all__ = ["EclipseShape", "TransitShape", "event_window"]
@@ -73,9 +73,9 @@ class _EventShape(ABC):
         self._offset = geometric_to_observed(t_geom, clock) - t_mid_obs
         self.duration_days = float(self._offset[-1] - self._offset[0])
 
-    def _params_for(self, t_conj: float) -> batman.TransitParams:
+    def _params_for(self, t_conj: float) -> TransitParams:
         s = self.system
-        p = batman.TransitParams()
+        p = TransitParams()
         p.t0 = t_conj
         p.t_secondary = t_conj
         p.per = s.period_days
@@ -126,7 +126,7 @@ class EclipseShape(_EventShape):
 
     def _batman(self, t_geom: np.ndarray, t_conj: float) -> np.ndarray:
         p = self._params_for(t_conj)
-        model = batman.TransitModel(p, t_geom, transittype="secondary")
+        model = TransitModel(p, t_geom, transittype="secondary")
         vis = model.light_curve(p) - 1.0
         return np.clip(vis, 0.0, 1.0)
 
@@ -172,7 +172,7 @@ class TransitShape(_EventShape):
         p = self._params_for(t_conj)
         p.limb_dark = self.limb_dark
         p.u = self.u
-        model = batman.TransitModel(p, t_geom)
+        model = TransitModel(p, t_geom)
         return model.light_curve(p)
 
     def flux(self, t_transit_bmjd: float) -> np.ndarray:

@@ -77,20 +77,41 @@ def frame_faults(frames: np.ndarray) -> np.ndarray:
     """
     frames = np.asarray(frames)
     n = frames.shape[0]
-    flat = frames.reshape(n, -1).astype(np.float64, copy=False)
+    flat = frames.reshape(n, -1)
+    if not np.issubdtype(flat.dtype, np.floating):
+        flat = flat.astype(np.float64)
     finite = np.isfinite(flat)
     out = np.zeros(n, dtype=np.int64)
     any_finite = finite.any(axis=1)
     if not any_finite.any():
         return out
-    hi = np.where(finite, flat, -np.inf).max(axis=1)
-    lo = np.where(finite, flat, np.inf).min(axis=1)
     all_finite = finite.all(axis=1)
+    if all_finite.all():   # the extremes are exact in the frames' own precision
+        hi = flat.max(axis=1).astype(np.float64)
+        lo = flat.min(axis=1).astype(np.float64)
+    else:
+        hi = np.where(finite, flat, -np.inf).max(axis=1).astype(np.float64)
+        lo = np.where(finite, flat, np.inf).min(axis=1).astype(np.float64)
     med = np.full(n, np.nan)
-    med[all_finite] = np.median(flat[all_finite], axis=1)
+    # The median is needed only where it could make the frame negated: it lies within one
+    # standard deviation of the mean, so a frame whose mean + SD (with a margin for
+    # rounding) is not negated is not (any star frame; issue 40: the median of every frame
+    # cost a third of the photometry of a twin). The others get numpy's median, as before.
+    whole = np.flatnonzero(all_finite)
+    if whole.size:
+        rows = flat if whole.size == n else flat[whole]
+        mean = rows.mean(axis=1, dtype=np.float64)
+        bound = mean + rows.std(axis=1, dtype=np.float64)
+        slack = 1e-9 * (np.abs(hi[whole]) + np.abs(lo[whole]) + np.abs(bound)) + 1e-300
+        clear = (bound - lo[whole]) + slack < 2.0 * (hi[whole] - bound)
+        need = whole[~clear]
+        med[whole[clear]] = bound[clear]
+        if need.size:
+            med[need] = np.median(flat[need].astype(np.float64), axis=1)
     partial = any_finite & ~all_finite
     if partial.any():
-        med[partial] = np.nanmedian(np.where(finite[partial], flat[partial], np.nan), axis=1)
+        med[partial] = np.nanmedian(np.where(finite[partial], flat[partial].astype(np.float64),
+                                             np.nan), axis=1)
     flat_frame = any_finite & (hi == lo)
     out[flat_frame & (hi == 0)] = FLAG_BITS["no_star"]
     out[flat_frame & (hi != 0)] = FLAG_BITS["constant"]
@@ -261,8 +282,11 @@ def reject_cosmic_rays(cube: np.ndarray, window: int, nsigma: float,
     for j in range(cube.shape[1]):
         sub = np.asarray(cube[idx, j], dtype=float)          # (m, nx)
         finite = np.isfinite(sub)
-        fill = nanmedian0(np.where(finite, sub, np.nan))
-        filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
+        if finite.all():   # nothing to fill: no median over time to take for it (issue 40)
+            filled = sub
+        else:
+            fill = nanmedian0(np.where(finite, sub, np.nan))
+            filled = np.where(finite, sub, np.where(np.isfinite(fill), fill, 0.0)[None])
         med = _median_in_time(filled, size)
         resid = np.where(finite, sub - med, np.nan)
         sigma = robust_sigma(resid, axis=0)

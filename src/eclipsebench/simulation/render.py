@@ -48,12 +48,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from ..detector.constants import READ_NOISE_E, ReadoutMode
 from ..detector.fowler import fowler_sample_grouped, fowler_sample_iracsim2015, fowler_weights
 from ..errors import InputError
 
-__all__ = ["FrameModel", "tick_moments", "weight_groups", "read_intervals",
+__all__ = ["FrameModel", "tick_moments", "centred_tick_moments", "weight_groups", "read_intervals",
            "star_group_charges", "fowler_uniform",
            "expected_fowler", "render_frames", "render_cube", "stamp_origin", "N_MOMENTS",
            "NOISE_MODELS"]
@@ -165,6 +166,100 @@ def tick_means(dx: np.ndarray, dy: np.ndarray, model: FrameModel
     what removing each exposure's mean offset needs (issue 40: the twins' motion)."""
     sx, sy, span = _tick_samples(dx, dy, model)
     return _weighted_means(sx.sum(axis=2), sy.sum(axis=2), model, span)
+
+
+def centred_tick_moments(gx: np.ndarray, gy: np.ndarray, at: np.ndarray, model: FrameModel
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`tick_moments` of each frame's offsets less their Fowler-weighted mean, read from
+    one span of samples.
+
+    Frame ``f``'s grid samples are ``gx[at[f] : at[f] + model.grid_samples_per_frame]``
+    (and ``gy``): what :func:`~eclipsebench.instrument.pointing.frame_windows` cuts out
+    and :meth:`~eclipsebench.trust.twin.ExposureMotion.offsets` centres. The same
+    values (to rounding: the sums run in another order) without cutting, centring and
+    summing each frame's window in separate passes over memory (issue 40: the twins'
+    motion).
+
+    Returns
+    -------
+    x_mean, y_mean : ndarray, shape (n_frames,)
+        The Fowler-weighted mean of the centred offsets (zero to rounding).
+    moments : ndarray, shape (n_frames, n_max, 6)
+        As :func:`tick_moments`.
+    """
+    w = fowler_weights(model.mode).astype(float)
+    return _centred_moments_kernel(np.ascontiguousarray(gx, dtype=float),
+                                   np.ascontiguousarray(gy, dtype=float),
+                                   np.asarray(at, np.int64), w, model.subsamples,
+                                   model.subsamples_per_tick)
+
+
+@njit(cache=True)
+def _centred_moments_kernel(gx, gy, at, w, n, span):
+    nf = at.size
+    n_max = w.size
+    w_sum = 0.0
+    for t in range(n_max):
+        w_sum += w[t]
+    x_out = np.empty(nf)
+    y_out = np.empty(nf)
+    moments = np.empty((nf, n_max, 6))
+    s1x = np.empty(n_max)
+    s1y = np.empty(n_max)
+    sxx = np.empty(n_max)
+    sxy = np.empty(n_max)
+    syy = np.empty(n_max)
+    for f in range(nf):
+        a = at[f]
+        # the frame's Fowler-weighted mean (tick_means)
+        wx = 0.0
+        wy = 0.0
+        for t in range(n_max):
+            bx = 0.0
+            by = 0.0
+            for k in range(span):
+                bx += gx[a + t * n + k]
+                by += gy[a + t * n + k]
+            wx += bx * w[t]
+            wy += by * w[t]
+        mx0 = wx / (span * w_sum)
+        my0 = wy / (span * w_sum)
+        # the centred offsets' power sums per tick and their weighted mean (tick_moments)
+        wx = 0.0
+        wy = 0.0
+        for t in range(n_max):
+            a1 = 0.0
+            a2 = 0.0
+            axx = 0.0
+            axy = 0.0
+            ayy = 0.0
+            for k in range(span):
+                u = gx[a + t * n + k] - mx0
+                v = gy[a + t * n + k] - my0
+                a1 += u
+                a2 += v
+                axx += u * u
+                axy += u * v
+                ayy += v * v
+            s1x[t] = a1
+            s1y[t] = a2
+            sxx[t] = axx
+            sxy[t] = axy
+            syy[t] = ayy
+            wx += a1 * w[t]
+            wy += a2 * w[t]
+        mx = wx / (span * w_sum)
+        my = wy / (span * w_sum)
+        x_out[f] = mx
+        y_out[f] = my
+        for t in range(n_max):
+            moments[f, t, 0] = 1.0
+            moments[f, t, 1] = (s1x[t] - span * mx) / span
+            moments[f, t, 2] = (s1y[t] - span * my) / span
+            moments[f, t, 3] = (sxx[t] - 2 * mx * s1x[t] + span * mx * mx) / span
+            moments[f, t, 4] = (sxy[t] - mx * s1y[t] - my * s1x[t] + span * mx * my) / span
+            moments[f, t, 5] = (syy[t] - 2 * my * s1y[t] + span * my * my) / span
+    return x_out, y_out, moments
 
 
 def _tick_samples(dx: np.ndarray, dy: np.ndarray, model: FrameModel
@@ -362,7 +457,7 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     out_cols = np.flatnonzero(outside)
     if model.noise_model in ("physical", "none"):
         member = weight_groups(mode)                                     # (n_max, FN)
-        gm = np.einsum("ftm,tg->fgm", moments, member)                   # (nf, FN, 6)
+        gm = np.matmul(member.T, moments)                                # (nf, FN, 6)
         groups = star_group_charges(basis, gm, star_e_per_tick)          # (FN, nf, s*s)
         groups += (gm[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
         j = np.arange(1, mode.fowler + 1, dtype=float)
@@ -372,7 +467,7 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
             frames[:, out_cols] = fowler_uniform(rate_out, mode, rng_photon)
     else:
         member = read_intervals(mode)                                    # (n_max, 2FN)
-        im = np.einsum("ftm,tr->frm", moments, member)                   # (nf, 2FN, 6)
+        im = np.matmul(member.T, moments)                                # (nf, 2FN, 6)
         inc = star_group_charges(basis, im, star_e_per_tick)             # (2FN, nf, s*s)
         inc += (im[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
         reads = np.cumsum(inc, axis=0)
@@ -394,9 +489,11 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
     return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
 
 
-def render_cube(*, model: FrameModel, star: Any, x_px, y_px, dx: np.ndarray, dy: np.ndarray,
-                star_e_per_tick: np.ndarray, background_e_per_tick: np.ndarray,
-                rng_photon: np.random.Generator, rng_read: np.random.Generator
+def render_cube(*, model: FrameModel, star: Any, x_px, y_px, dx: np.ndarray | None,
+                dy: np.ndarray | None, star_e_per_tick: np.ndarray,
+                background_e_per_tick: np.ndarray, rng_photon: np.random.Generator,
+                rng_read: np.random.Generator,
+                moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """One cube's frames of a star at ``(x_px, y_px)`` moving by ``(dx, dy)`` within each
     exposure: the step the challenge simulator (:mod:`.aor`) and the trust twins
@@ -414,9 +511,12 @@ def render_cube(*, model: FrameModel, star: Any, x_px, y_px, dx: np.ndarray, dy:
     x_px, y_px : float or ndarray, shape (n_frames,)
         Each frame's mean position (0-based pixels of ``model.shape``).
     dx, dy : ndarray, shape (n_frames, model.grid_samples_per_frame)
-        The offsets within each exposure.
+        The offsets within each exposure (None with ``moments``).
     star_e_per_tick, background_e_per_tick, rng_photon, rng_read
         As :func:`render_frames`.
+    moments : tuple, optional
+        ``(x_mean, y_mean, moments)`` of the offsets, :func:`tick_moments` computed
+        already (:func:`centred_tick_moments`); ``dx`` and ``dy`` are then not read.
 
     Returns
     -------
@@ -424,7 +524,11 @@ def render_cube(*, model: FrameModel, star: Any, x_px, y_px, dx: np.ndarray, dy:
     x_f, y_f : ndarray, shape (n_frames,)
         Each frame's Fowler-weighted mean position.
     """
-    x_off, y_off, moments = tick_moments(dx, dy, model)
+    if moments is None:
+        if dx is None or dy is None:
+            raise ValueError("render_cube: give the offsets dx, dy or their moments")
+        moments = tick_moments(dx, dy, model)
+    x_off, y_off, tick = moments
     x_f = x_px + x_off
     y_f = y_px + y_off
     sx0, sy0 = stamp_origin(np.array([x_f.mean()]), np.array([y_f.mean()]), model.stamp_px,
@@ -432,7 +536,7 @@ def render_cube(*, model: FrameModel, star: Any, x_px, y_px, dx: np.ndarray, dy:
     basis = star.taylor_basis(x_f, y_f, int(sx0[0]), int(sy0[0]), model.stamp_px)
     wings = star.image(float(x_f.mean()), float(y_f.mean()), model.shape)
     frames_e, expected_e = render_frames(
-        model=model, moments=moments, basis=basis, stamp_x0=int(sx0[0]), stamp_y0=int(sy0[0]),
+        model=model, moments=tick, basis=basis, stamp_x0=int(sx0[0]), stamp_y0=int(sy0[0]),
         wings=wings, star_e_per_tick=star_e_per_tick, background_e_per_tick=background_e_per_tick,
         rng_photon=rng_photon, rng_read=rng_read)
     return frames_e, expected_e, x_f, y_f

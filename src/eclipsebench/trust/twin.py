@@ -59,7 +59,7 @@ from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
 from ..simulation.plan import SECONDS_PER_DAY
-from ..simulation.render import FrameModel, render_cube, tick_means
+from ..simulation.render import FrameModel, centred_tick_moments, render_cube, tick_means
 from ..simulation.star import StarImager
 from .noise import add_correlated
 from .observation import Observation
@@ -325,6 +325,29 @@ class ExposureMotion:
         mx, my = tick_means(dx, dy, self.model)
         return dx - mx[:, None], dy - my[:, None]
 
+    def moments(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tick moments of :meth:`offsets` of frames ``rows`` (what
+        :func:`~eclipsebench.simulation.render.render_cube` takes), computed from the
+        jitter's samples in one pass (:func:`~eclipsebench.simulation.render.
+        centred_tick_moments`) rather than cut out, centred and summed frame by frame."""
+        n_grid = self.model.grid_samples_per_frame
+        n_max = self.model.mode.n_max
+        if not self.peak_px > 0:
+            still = np.zeros((rows.size, n_max, 6))
+            still[:, :, 0] = 1.0
+            return np.zeros(rows.size), np.zeros(rows.size), still
+        starts = self.start_index[rows]
+        block = starts // (FBM_SEGMENT * FBM_BLOCK_SEGMENTS)
+        x_mean, y_mean = np.empty(rows.size), np.empty(rows.size)
+        tick = np.empty((rows.size, n_max, 6))
+        for b in np.unique(block):
+            sel = np.flatnonzero(block == b)
+            first = int(starts[sel].min())
+            gx, gy = self._pointing.fbm_samples(first, int(starts[sel].max()) - first + n_grid)
+            x_mean[sel], y_mean[sel], tick[sel] = centred_tick_moments(
+                gx, gy, starts[sel] - first, self.model)
+        return x_mean, y_mean, tick
+
 
 def photometry_window(x_px: np.ndarray, y_px: np.ndarray, options: PhotometrySection,
                       shape: tuple[int, int]) -> tuple[int, int, int, int]:
@@ -359,13 +382,16 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
                      motion: tuple[np.ndarray, np.ndarray] | None = None,
                      noise_model: str = "physical", radius_px: float = 2.25,
                      star: StarImager | None = None,
-                     window: tuple[int, int, int, int] | None = None) -> np.ndarray:
+                     window: tuple[int, int, int, int] | None = None,
+                     moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+                     ) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
     ``motion``: the offsets within each exposure about the measured centroid
     (:meth:`ExposureMotion.offsets` of ``rows``); None: none. ``key`` names
     the noise's random streams (``seed``, ``*key``, ``"photon"``/``"read"``),
     one set per cube, so a cube's frames do not depend on the others.
+    ``moments``: the motion's tick moments instead (:meth:`ExposureMotion.moments`).
     ``window``: ``(x0, y0, nx, ny)``, render only that part of the subarray
     (:func:`photometry_window`; the PRF depends on the sub-pixel phase only,
     so the pixels are the whole frame's); None: the whole subarray.
@@ -379,7 +405,11 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
                                                recipe.gain, recipe.blur_px)
     x_track, y_track = obs.track_px()
-    if motion is None:
+    dx: np.ndarray | None
+    dy: np.ndarray | None
+    if moments is not None:
+        dx = dy = None
+    elif motion is None:
         dx = dy = np.zeros((rows.size, model.grid_samples_per_frame))
     else:
         dx, dy = motion
@@ -389,7 +419,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
         model=model, star=star, x_px=x_track[rows] - x0, y_px=y_track[rows] - y0, dx=dx, dy=dy,
         star_e_per_tick=per_tick * recipe.light_curve[rows],
         background_e_per_tick=recipe.sky_e_per_px[rows] / ticks,
-        rng_photon=rng(seed, *key, "photon"), rng_read=rng(seed, *key, "read"))
+        rng_photon=rng(seed, *key, "photon"), rng_read=rng(seed, *key, "read"),
+        moments=moments)
     return frames
 
 
@@ -445,7 +476,7 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
         # no jitter (A_fbm 0): no offsets to draw, and no moments to take of zeros
         frames = np.concatenate([
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
-                             motion=motion.offsets(cube) if motion.peak_px > 0 else None,
+                             moments=motion.moments(cube) if motion.peak_px > 0 else None,
                              noise_model=noise_model, star=star, window=window)
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options, window))
