@@ -207,6 +207,7 @@ def table(work: Path, n_twins: int, workers: int, tables: list[str]) -> None:
     from eclipsebench.astro.catalogue import get_system
     from eclipsebench.config import load_config
     from eclipsebench.trust.run import run_trust, trust_settings
+    from eclipsebench.trust.twin import TWIN_MODEL
 
     path = _real_table(work)
     full = Table.read(path)
