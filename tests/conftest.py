@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import pickle
 import shutil
 import subprocess
 import sys
@@ -163,6 +164,34 @@ def real_epoch1_table(shared_irac, tmp_path_factory) -> Path:
     out = built_once(tmp_path_factory, "real_epoch1",
                      lambda folder: measure(shared_irac / "real_xo3_eclipse1", folder))
     return out / "epoch_01.fits"
+
+
+#: The tiny challenge of tests/challenge/test_runner.py and tests/engine/test_cluster.py: two
+#: epochs of 233 two-frame cubes (the eclipse stays inside the Main AOR), one sub-sample, two
+#: methods in both profiles.
+TINY_RUN_SETS = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
+                 "simulation.subsamples=1", "simulation.calibration_frames=2000",
+                 'run.methods=["pld", "bliss"]', "run.bootstrap=50", "run.report=false",
+                 "run.empirical_photon_limit=false"]
+
+
+@pytest.fixture(scope="session")
+def tiny_run_once(tmp_path_factory) -> tuple[Path, dict, list[str]]:
+    """The tiny challenge (``TINY_RUN_SETS``) run in one process, once per test run for every
+    file that uses it: ``(its run folder, the summary run_challenge returned, the keys of the
+    tasks it ran)``. Tests only read the folder; one that changes it works on a copy."""
+    def build(folder: Path) -> None:
+        from eclipsebench.challenge.runner import run_challenge
+        from eclipsebench.config import load_config
+
+        (folder / "run").mkdir()
+        summary, report = run_challenge(load_config(None, TINY_RUN_SETS), folder / "run",
+                                        workers=1)
+        (folder / "returned.pickle").write_bytes(pickle.dumps((summary, list(report.ran))))
+
+    out = built_once(tmp_path_factory, "tiny_run", build)
+    summary, ran = pickle.loads((out / "returned.pickle").read_bytes())
+    return out / "run", summary, ran
 
 
 def simulate_eclipse_epoch(root: Path, sets: list[str], lead_d: float) -> Path:

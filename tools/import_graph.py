@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import functools
 import re
 import sys
 from collections import defaultdict
@@ -65,6 +66,22 @@ def _type_checking_nodes(tree: ast.AST) -> set[int]:
     return inside
 
 
+@functools.cache
+def _import_nodes(source: str) -> tuple[tuple[ast.Import | ast.ImportFrom, bool], ...]:
+    """The import statements of ``source`` in :func:`ast.walk`'s order, each with whether it
+    sits under ``if TYPE_CHECKING:``.
+
+    Kept by the text itself: :func:`check` reads each file twice (the package graph, then
+    the module graph), and a process checking a copy of the package with one module added
+    (tests/foundation/test_architecture.py) parses only that module again. The nodes are
+    only read, never changed.
+    """
+    tree = ast.parse(source)
+    inside = _type_checking_nodes(tree)
+    return tuple((node, id(node) in inside) for node in ast.walk(tree)
+                 if isinstance(node, ast.Import | ast.ImportFrom))
+
+
 def imports(path: Path, root: Path, modules: set[str] | None = None,
             runtime_only: bool = False) -> list[tuple[int, str]]:
     """(line, module) of every eclipsebench module ``path`` imports, wherever the statement is.
@@ -73,14 +90,12 @@ def imports(path: Path, root: Path, modules: set[str] | None = None,
     ``X.n`` where that is a module of its own; with ``runtime_only``, imports under
     ``if TYPE_CHECKING:`` (never executed) are left out.
     """
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    skipped = _type_checking_nodes(tree) if runtime_only else set()
     here = module_name(path, root).split(".")
     if path.name != "__init__.py":
         here = here[:-1]
     found = []
-    for node in ast.walk(tree):
-        if id(node) in skipped:
+    for node, annotations_only in _import_nodes(path.read_text(encoding="utf-8")):
+        if runtime_only and annotations_only:
             continue
         if isinstance(node, ast.ImportFrom):
             if node.level:

@@ -7,6 +7,7 @@ import shutil
 import socket
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -17,19 +18,21 @@ from eclipsebench.cli import main
 from eclipsebench.config import load_config
 from eclipsebench.errors import InputError
 
+from ..conftest import TINY_RUN_SETS
+
 # Two epochs of 233 two-frame cubes (the eclipse stays inside the Main AOR), one sub-sample.
-TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
-        "simulation.subsamples=1", "simulation.calibration_frames=2000",
-        'run.methods=["pld", "bliss"]', "run.bootstrap=50", "run.report=false",
-        "run.empirical_photon_limit=false"]
+TINY = TINY_RUN_SETS
 
 
 @pytest.fixture(scope="module")
-def tiny_run(tmp_path_factory):
+def tiny_run(tmp_path_factory, tiny_run_once):
+    """The tiny challenge, run once per test run in one process (tests/conftest.py, shared with
+    tests/engine/test_cluster.py), copied: these tests change the folder. ``report`` holds
+    what that run ran (``report.ran``)."""
+    done, summary, ran = tiny_run_once
     root = tmp_path_factory.mktemp("run")
-    cfg = load_config(None, TINY)
-    summary, report = run_challenge(cfg, root, workers=1)
-    return cfg, root, summary, report
+    shutil.copytree(done, root, dirs_exist_ok=True)
+    return load_config(None, TINY), root, summary, SimpleNamespace(ran=ran)
 
 
 def test_every_stage_ran_and_the_summary_is_complete(tiny_run):

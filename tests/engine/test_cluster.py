@@ -23,11 +23,11 @@ from distributed import Client
 
 from eclipsebench.cli import main
 
-# as tests/challenge/test_runner.py: two epochs of 233 two-frame cubes, two methods
-TINY = ["challenge.epochs=2", "observation.pre_cubes=1", "observation.frames_per_cube=2",
-        "simulation.subsamples=1", "simulation.calibration_frames=2000",
-        'run.methods=["pld", "bliss"]', "run.bootstrap=50", "run.report=false",
-        "run.empirical_photon_limit=false"]
+from ..conftest import TINY_RUN_SETS
+
+# the tiny challenge of tests/challenge/test_runner.py: two epochs of 233 two-frame cubes, two
+# methods (run once per test run in one process, tests/conftest.py)
+TINY = TINY_RUN_SETS
 
 DASK = Path(sys.executable).with_name("dask")
 STARTUP_S = 45.0
@@ -138,11 +138,11 @@ def _run(out: Path, *execution: str) -> int:
     return main(args)
 
 
-@pytest.mark.slow  # ~40 s: two tiny runs and a cluster's start-up
+@pytest.mark.slow  # ~30 s: a tiny run and a cluster's start-up (the one-process run is shared)
 @pytest.mark.timeout(240)  # the signal interrupts a hung run; the cluster is still torn down
 @pytest.mark.skipif(not DASK.is_file(), reason="no dask command beside this Python")
-def test_scheduler_gives_the_same_summary_bytes_as_one_process(tmp_path, capsys):
-    assert _run(tmp_path / "one", "--workers", "1") == 0
+def test_scheduler_gives_the_same_summary_bytes_as_one_process(tmp_path, capsys, tiny_run_once):
+    one_process, _, _ = tiny_run_once   # the same settings run in one process (tests/conftest.py)
     with dask_cluster(tmp_path) as (address, procs):
         assert address.startswith("tcp://127.0.0.1:")
         with Client(address, timeout="20s") as client:  # the documented worker configuration
@@ -155,6 +155,6 @@ def test_scheduler_gives_the_same_summary_bytes_as_one_process(tmp_path, capsys)
         assert f"dask scheduler {address}" in timings
         assert all(p.poll() is None for p in procs)  # still up after the run's client left
     assert all(not _alive(p.pid) for p in procs)  # torn down, nanny and worker alike
-    one = (tmp_path / "one" / "summary.json").read_bytes()
+    one = (one_process / "summary.json").read_bytes()
     assert (tmp_path / "cluster" / "summary.json").read_bytes() == one
     capsys.readouterr()

@@ -1,7 +1,7 @@
 """Results as notebook objects (issue 29): repr, HTML, plot, QTable, read back from files.
 
 The real epoch 1 (``../shared/data/irac/real_xo3_eclipse1``) measured once per
-module, reduced with PLD as the issue's acceptance does it.
+test run, reduced with PLD as the issue's acceptance does it.
 """
 
 from __future__ import annotations
@@ -24,10 +24,9 @@ pytestmark = pytest.mark.shared_data
 
 
 @pytest.fixture(scope="module")
-def table_path(shared_irac, tmp_path_factory):
-    out = tmp_path_factory.mktemp("phot")
-    eb.measure(shared_irac / "real_xo3_eclipse1", out=out)
-    return out / "epoch_01.fits"
+def table_path(real_epoch1_table):
+    """``eb.measure`` of real epoch 1 (built-in settings), once per test run (tests/conftest.py)."""
+    return real_epoch1_table
 
 
 @pytest.fixture(scope="module")

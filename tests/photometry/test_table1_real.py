@@ -38,8 +38,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eclipsebench.api import measure
 from eclipsebench.photometry.clean import FLAG_BITS
+from eclipsebench.photometry.table import read_table
 
 pytestmark = pytest.mark.shared_data
 
@@ -62,11 +62,12 @@ def centroid_statistics(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
 
 
 @pytest.fixture(scope="module")
-def epoch1(shared_irac):
-    """Our photometry (built-in [photometry] settings) of both AORs of real epoch 1."""
-    tables = measure(shared_irac / "real_xo3_eclipse1")
-    assert len(tables) == 1  # the two AORs are one epoch
-    return tables[0]
+def epoch1(real_epoch1_table):
+    """Our photometry (built-in [photometry] settings) of both AORs of real epoch 1: the one
+    table ``measure`` wrote for them (measured once per test run, tests/conftest.py)."""
+    assert sorted(p.name for p in real_epoch1_table.parent.glob("epoch_*.fits")) == [
+        "epoch_01.fits"]  # the two AORs are one epoch
+    return read_table(real_epoch1_table)
 
 
 def test_both_aors_are_measured(epoch1):
