@@ -200,6 +200,23 @@ def test_gentler_motions_keep_the_real_median_with_less_motion(small_table):
         assert c["noise_pixels_cube_sd_twins"] == pytest.approx(0.04 + 0.02 * c["motion_peak_px"])
 
 
+def _white_and_red(obs) -> tuple:
+    """Made-up real residuals (white, 1000 ppm) of ``obs`` and a maker of pilots:
+    ``pilot(limit_px, tried)`` gives residuals white, with a 20-minute wave added where the
+    recipe's motion exceeds ``limit_px``, recording each motion tried."""
+    t = np.sort(obs.time_bmjd)
+    real = (t, np.random.default_rng(3).normal(0.0, 1e-3, t.size))
+    red = 2e-3 * np.sin(2 * np.pi * (t - t[0]) * 1440.0 / 20.0)   # a 20-minute wave
+
+    def pilot(limit_px: float, tried: list[float]):
+        def residuals(r):
+            tried.append(r.motion_peak_px)
+            white = np.random.default_rng(len(tried)).normal(0.0, 1e-3, t.size)
+            return t, white + (red if r.motion_peak_px > limit_px else 0.0)
+        return residuals
+    return real, pilot
+
+
 @pytest.mark.slow
 def test_the_motion_is_the_most_whose_pilot_twin_is_no_redder_than_the_real_residuals(
         small_table, monkeypatch):
@@ -208,18 +225,11 @@ def test_the_motion_is_the_most_whose_pilot_twin_is_no_redder_than_the_real_resi
                          blur_px=0.0475)
     info = {"calibration": _grid_calibration(0.9, (0.0, 0.3, 0.6, 0.9, 1.25)), "blur_px": 0.0475, "motion_peak_px": 0.9,
             "motion_rms_px": 0.9 * 0.22}
-    t = np.sort(obs.time_bmjd)
-    g = np.random.default_rng(3)
-    real = (t, g.normal(0.0, 1e-3, t.size))
-    red = 2e-3 * np.sin(2 * np.pi * (t - t[0]) * 1440.0 / 20.0)   # a 20-minute wave
+    real, make_pilot = _white_and_red(obs)
     tried: list[float] = []
 
     def pilot(limit_px):
-        def residuals(r):
-            tried.append(r.motion_peak_px)
-            white = np.random.default_rng(len(tried)).normal(0.0, 1e-3, t.size)
-            return t, white + (red if r.motion_peak_px > limit_px else 0.0)
-        return residuals
+        return make_pilot(limit_px, tried)
 
     made, out = bounded_recipe(recipe, info, None, real, pilot(0.4))
     # down the grid to the first that passes, then two halvings towards the last redder one
@@ -256,17 +266,11 @@ def test_a_table_without_noise_pixels_gets_the_most_motion_its_residuals_allow(s
     info = {"calibration": {"noise_pixels_real": None, "rms_per_peak": 0.22,
                             "target_vs_grid": "no noise pixels in the table"},
             "blur_px": None, "motion_peak_px": 0.0, "motion_rms_px": 0.0}
-    t = np.sort(obs.time_bmjd)
-    real = (t, np.random.default_rng(3).normal(0.0, 1e-3, t.size))
-    red = 2e-3 * np.sin(2 * np.pi * (t - t[0]) * 1440.0 / 20.0)
+    real, make_pilot = _white_and_red(obs)
     tried: list[float] = []
 
     def pilot(limit_px):
-        def residuals(r):
-            tried.append(r.motion_peak_px)
-            white = np.random.default_rng(len(tried)).normal(0.0, 1e-3, t.size)
-            return t, white + (red if r.motion_peak_px > limit_px else 0.0)
-        return residuals
+        return make_pilot(limit_px, tried)
 
     made, out = bounded_recipe(recipe, info, None, real, pilot(0.7))
     # without motion, then the grid from its most motion down to the first no redder, then
