@@ -102,8 +102,9 @@ def build_parser() -> argparse.ArgumentParser:
         module.add_arguments(p)
         p.add_argument("--json", action="store_true",
                        help="print one JSON object with the results on stdout")
-        p.add_argument("--quiet", action="store_true", help="errors and the answer only: no progress bars, log "
-                            "messages or warnings (the workers' too)")
+        p.add_argument("--quiet", action="store_true",
+                       help="errors and the answer only: no progress bars, log messages or "
+                            "warnings (the workers' too)")
         p.add_argument("--debug", action="store_true",
                        help="show the full traceback of an internal error")
         p.set_defaults(_module=module)

@@ -487,9 +487,8 @@ def complete_table(table: Table, source: str, *, readout: str | None = None,
     else:
         inferred["background"] = "the table's, in the flux's unit per pixel, scaled"
     if "noise_pixels" not in table.colnames:
-        inferred["noise_pixels"] = ("none in the table: the motion within an exposure is the "
-                                    "most whose pilot twin is no redder than the real "
-                                    "residuals")
+        inferred["noise_pixels"] = ("none in the table: the motion within an exposure is set "
+                                    "by the real residuals alone (twins.motion_bound)")
     columns = {"time_bmjd": time, "aorkey": aorkey, "expid": expid, "frame": frame_no,
                "x": x, "y": y, "flux": flux * scale, "flux_err": err * scale,
                "background": background * scale, "flag": np.where(good, 0, np.maximum(flag, 1))}

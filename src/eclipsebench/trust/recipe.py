@@ -49,9 +49,9 @@ from .twin import (
     twin_table,
 )
 
-__all__ = ["twin_light_curve", "twin_truth", "phase_truth", "build_recipe", "twin_map", "twin_gain", "write_recipe",
-           "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin", "with_real_noise",
-           "bounded_recipe"]
+__all__ = ["twin_light_curve", "twin_truth", "phase_truth", "build_recipe", "twin_map",
+           "twin_gain", "write_recipe", "read_recipe", "EVENTS", "PILOT_TWIN", "pilot_twin",
+           "with_real_noise", "bounded_recipe"]
 
 #: The events a twin can carry: one eclipse or transit observation, or a whole phase curve
 #: of several AORs (the models of :mod:`eclipsebench.fit.model`).

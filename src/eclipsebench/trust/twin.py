@@ -65,20 +65,20 @@ from .noise import add_correlated
 from .observation import Observation
 
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
-           "calibrate_motion", "gentler_motions", "motion_rms_per_peak", "blur_spanning", "photometry_window", "twin_star", "MOTION_GRID_PX",
-           "BLUR_GRID_PX", "TWIN_MODEL", "gain_model", "map_gain", "builtin_prf", "builtin_gain",
-           "background_scatter_share"]
+           "calibrate_motion", "gentler_motions", "motion_rms_per_peak", "blur_spanning",
+           "photometry_window", "twin_star", "MOTION_GRID_PX", "BLUR_GRID_PX", "TWIN_MODEL",
+           "gain_model", "map_gain", "builtin_prf", "builtin_gain", "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
 #: otherwise is refused rather than mixed): 5 since a table without noise pixels gets the
 #: most motion within an exposure whose pilot twin is no redder than the real residuals
-#: (:func:`~eclipsebench.trust.recipe.bounded_recipe`; a table with them is made as in 4); 4 since the motion within an exposure is bounded by
-#: the real photometry (a pilot twin no redder than the real residuals,
-#: :func:`~eclipsebench.trust.recipe.bounded_recipe`); 3 since the PSF's blur is fitted with the motion,
-#: the real background scatter and correlated noise are added (issue 36), and only the part of
-#: the subarray the photometry reads is rendered (:func:`photometry_window`); 2 since the
-#: motion within an exposure is the simulator's block-scaled jitter (:class:`ExposureMotion`),
-#: 1 before (one rms throughout).
+#: (:func:`~eclipsebench.trust.recipe.bounded_recipe`; a table with them is made as in 4);
+#: 4 since the motion within an exposure is bounded by the real photometry (a pilot twin no
+#: redder than the real residuals, the same function); 3 since the PSF's blur is fitted with
+#: the motion, the real background scatter and correlated noise are added (issue 36), and
+#: only the part of the subarray the photometry reads is rendered (:func:`photometry_window`);
+#: 2 since the motion within an exposure is the simulator's block-scaled jitter
+#: (:class:`ExposureMotion`), 1 before (one rms throughout).
 TWIN_MODEL = 5
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
