@@ -82,6 +82,19 @@ def test_kr_data_matches_brute_force(use_np):
     assert model.n_effective_params() == round(trace)
 
 
+def test_kr_data_walkers_batch_gives_the_bytes_of_the_sparse_product():
+    """The compiled walkers' pass sums as scipy's product does: equal values, not close ones."""
+    data = _random_epoch()
+    model = get_method("kr-data")(data, k=12)
+    g = np.random.default_rng(5)
+    astro = 1 + 1e-3 * g.standard_normal((16, len(data)))
+    expected = astro * (model.smoother @ (data.flux / astro).T).T
+    assert np.array_equal(model.log_likelihood_batch(astro),
+                          model._white_log_likelihood_batch(expected, 1.0))
+    assert np.array_equal(model.log_likelihood_batch(astro[:1]),
+                          [model.log_likelihood(astro[0])])
+
+
 def test_kr_data_widths_come_from_each_frames_neighbours():
     # Two clouds of the same shape, one ten times wider: with epoch-wide widths
     # the narrow cloud's weights would all be ~1 (a plain mean); with the

@@ -17,7 +17,8 @@ Pearson's ``gaussian_weights``, same rule). The neighbours themselves are the
 k nearest in Euclidean distance in (x, y[, sqrt b]) (Appendix B.4: "based on
 the Euclidean distance"). The neighbour lists and normalised weights depend
 only on the centroids, so they are built once (:func:`local_kernel_weights`)
-into a sparse matrix; evaluating the model is one sparse matrix-vector product.
+into a sparse matrix; evaluating the model is one sparse matrix-vector product,
+and the MCMC's walkers share one pass over it (:func:`_smooth_columns`).
 
 KR/Pmap (Krick et al. 2016) trains the same regression on a separate
 calibration star: for each science frame the k nearest calibration frames in
@@ -39,6 +40,7 @@ from typing import Annotated, Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 from scipy.spatial import cKDTree
 
 from ..config.base import check
@@ -194,6 +196,27 @@ def smoother_trace(sq_dist: np.ndarray) -> float:
     return float(np.sum(1.0 / (1.0 + np.exp(-0.5 * sq_dist).sum(axis=1))))
 
 
+@njit(cache=True)
+def _smooth_columns(indptr: np.ndarray, indices: np.ndarray, weights: np.ndarray,
+                    columns: np.ndarray) -> np.ndarray:
+    """``smoother @ columns`` for a CSR smoother and a C-ordered (n, m) block.
+
+    The same sums in the same order as scipy's ``csr_matvecs`` (each row's
+    neighbours in storage order, from 0.0), so the values are identical; about
+    2.5 times faster on KR/Data's 16-walker batches (the m columns of one
+    neighbour are adjacent, and the compiler vectorises across them).
+    """
+    m = columns.shape[1]
+    out = np.zeros((indptr.shape[0] - 1, m))
+    for i in range(out.shape[0]):
+        for jj in range(indptr[i], indptr[i + 1]):
+            j = indices[jj]
+            w = weights[jj]
+            for c in range(m):
+                out[i, c] += w * columns[j, c]
+    return out
+
+
 def _check_finite(name: str, method: str, *arrays) -> None:
     for a in arrays:
         if a is not None and not np.all(np.isfinite(np.asarray(a, float))):
@@ -282,7 +305,9 @@ class KernelRegressionData(Systematics[KrDataOptions]):
         if not self._batch_is_exact(KernelRegressionData):
             return super().log_likelihood_batch(astro, theta, noise_scale)
         astro = np.atleast_2d(np.asarray(astro, float))
-        smooth = (self.smoother @ (self._flux / astro).T).T
+        s = self.smoother
+        smooth = _smooth_columns(s.indptr, s.indices, s.data,
+                                 np.ascontiguousarray((self._flux / astro).T)).T
         return self._white_log_likelihood_batch(astro * smooth, noise_scale)
 
     def with_flux(self, flux: np.ndarray) -> KernelRegressionData:
