@@ -8,7 +8,7 @@ cache is empty, and the first ``eclipsebench run``, ``photometry`` or
 This script meets them all once, on a tiny observation in a temporary
 folder: simulate one short epoch (with its KR/Pmap calibration set), measure
 it, reduce it with every registered method by least squares and with BLISS
-by MCMC. The Makefile's install step runs it; it writes nothing else.
+and KR/Data by MCMC. The Makefile's install step runs it; it writes nothing else.
 
 Usage: ``python tools/warm_numba.py`` (prints the seconds it took).
 """
@@ -45,7 +45,8 @@ def main() -> int:
                 eb.reduce(table, method, config=cfg, sampler="leastsq", prayer_bead_shifts=0)
             except InputError:   # KR/Pmap: too few calibration frames here; no kernel of its own
                 pass
-        eb.reduce(table, "bliss", config=cfg, sampler="mcmc", prayer_bead_shifts=2)
+        for method in ("bliss", "kr-data"):    # the kernels only their MCMC walkers meet
+            eb.reduce(table, method, config=cfg, sampler="mcmc", prayer_bead_shifts=2)
     print(f"numba kernels compiled and cached in {time.perf_counter() - t0:.0f} s")
     return 0
 
