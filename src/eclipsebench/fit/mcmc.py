@@ -136,7 +136,7 @@ class _LogProb:
 
 def run_mcmc(systematics: Systematics, astro_model: AstroModel, theta_start, scale_start, *,
              names: tuple[str, ...], rng: np.random.Generator, n_walkers: int = 16,
-             max_steps: int = 2000, block_steps: int = 250, tau_factor: float = 50.0,
+             max_steps: int = 2000, block_steps: int = 100, tau_factor: float = 50.0,
              noise_scale: float = 1.0, move: str | None = None,
              cov_start: np.ndarray | None = None) -> McmcResult:
     """Sample the posterior of the joint parameters, starting near a least-squares solution.
