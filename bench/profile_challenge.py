@@ -10,6 +10,12 @@ Two views of a finished run folder:
    single-threaded, under cProfile, into a scratch folder: the CPU seconds of
    each task and the ``--top`` entries by internal time and by cumulative time.
 
+3. with ``--against BEFORE``: the science of the run against another run of the
+   same configuration (issue 40: a speed-up must not move it): per profile and
+   method, accuracy ``a`` and the RMSE with BEFORE's bootstrap interval (68 %,
+   ``a_lo``/``a_hi`` of its ``summary.json``; RMSE = sigma_phot / a), whether the
+   new value lies inside, and the largest depth difference.
+
 Usage: ``python bench/profile_challenge.py runs/xo3b-2015-seed2015-10ep
 --profile-epoch 1 --top 25`` (the run folder is only read).
 """
@@ -87,13 +93,55 @@ def profile_reductions(run: Path, epoch: int, top: int) -> None:
         print(out.getvalue())
 
 
+def _depths(path: Path, method: str) -> dict[int, float]:
+    from astropy.table import Table
+
+    t = Table.read(path, format="ascii.ecsv")
+    return {int(e): float(d) for m, e, d in zip(t["method"], t["epoch"], t["depth_ppm"],
+                                                strict=True) if m == method}
+
+
+def science_against(run: Path, before: Path) -> int:
+    """Print the science table of ``run`` against ``before``; the count of values outside."""
+    import json
+
+    new, old = (json.loads((r / "summary.json").read_text()) for r in (run, before))
+    outside = 0
+    print(f"science of {run} against {before} (68 % bootstrap intervals of the latter)")
+    print("| profile | method | a before [interval] | a after | RMSE before [interval] | "
+          "RMSE after | largest depth change (ppm) | inside |")
+    print("| --- | --- | --- | ---: | --- | ---: | ---: | --- |")
+    for profile, group in old["profiles"].items():
+        sigma = group["sigma_phot_ppm"]
+        for method, m in group["methods"].items():
+            n = new["profiles"][profile]["methods"][method]
+            rmse_lo, rmse_hi = sigma / m["a_hi"], sigma / m["a_lo"]
+            table = "depths.ecsv" if profile == "controlled" else f"depths_{profile}.ecsv"
+            depths_old, depths_new = (_depths(r / table, method) for r in (before, run))
+            change = max((abs(depths_new[e] - v) for e, v in depths_old.items()
+                          if e in depths_new), default=float("nan"))
+            inside = (m["a_lo"] <= n["a"] <= m["a_hi"]) and (rmse_lo <= n["RMSE"] <= rmse_hi)
+            outside += not inside
+            print(f"| {profile} | {method} | {m['a']:.3f} [{m['a_lo']:.3f}, {m['a_hi']:.3f}] | "
+                  f"{n['a']:.3f} | {m['RMSE']:.1f} [{rmse_lo:.1f}, {rmse_hi:.1f}] | "
+                  f"{n['RMSE']:.1f} | {change:.1f} | {'yes' if inside else 'NO'} |")
+        print(f"| {profile} | average a | {group['average']['a']:.4f} | "
+              f"{new['profiles'][profile]['average']['a']:.4f} | | | | |")
+    print(f"{outside} value pairs outside their interval")
+    return outside
+
+
 def main(argv: list[str]) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("run", type=Path, help="a finished run folder (eclipsebench run --out)")
     p.add_argument("--profile-epoch", type=int, default=None,
                    help="also profile every reduction of this epoch (default: timings only)")
     p.add_argument("--top", type=int, default=25)
+    p.add_argument("--against", type=Path, default=None,
+                   help="another run folder of the same configuration: compare the science")
     args = p.parse_args(argv)
+    if args.against is not None:
+        return 1 if science_against(args.run, args.against) else 0
     stage_split(args.run)
     if args.profile_epoch is not None:
         profile_reductions(args.run, args.profile_epoch, args.top)
