@@ -70,7 +70,11 @@ def _colors(n: int):
 
 
 def save_figure(fig: Figure, dest_stem: str | Path, *, dpi: int = 120) -> list[Path]:
-    """Write ``dest_stem.png`` and ``dest_stem.pdf`` atomically (no timestamps)."""
+    """Write ``dest_stem.png`` and ``dest_stem.pdf`` atomically (no timestamps).
+
+    The layout is computed once, for the PNG; the PDF keeps its positions (the
+    constrained layout of a figure of many panels costs as much as drawing it).
+    """
     stem = Path(dest_stem)
     out = []
     for fmt, meta in (("png", {"Software": None}), ("pdf", {"CreationDate": None, "Creator": None,
@@ -78,6 +82,7 @@ def save_figure(fig: Figure, dest_stem: str | Path, *, dpi: int = 120) -> list[P
         path = stem.with_suffix(f".{fmt}")
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata=meta)
+        fig.set_layout_engine("none")
         out.append(path)
     return out
 
