@@ -39,8 +39,9 @@ def _heavy_after(body: str) -> list[str]:
 
 
 def test_the_probe_sees_a_heavy_import():
-    """The check can fail: importing the fitter shows up."""
-    assert {"numba", "astropy"} <= set(_heavy_after("import eclipsebench.fit.reduce"))
+    """The check can fail: importing the fitter and the photometry's kernels shows up."""
+    assert {"numba", "astropy"} <= set(
+        _heavy_after("import eclipsebench.fit.reduce, eclipsebench.photometry.kernels"))
 
 
 def test_building_the_parser_imports_nothing_heavy():
@@ -137,3 +138,20 @@ def test_the_process_command_freezes_what_it_leaves_and_an_in_process_call_does_
                           text=True, env=env, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
     assert json.loads(done.stdout.strip().splitlines()[-1]) == [0, True]
+
+
+def test_a_least_squares_bliss_reduction_never_imports_numba(tmp_path):
+    """Its fit calls no compiled kernel (they load at their first call, ``eclipsebench.jit``):
+    numba's 0.3 s of import is not part of its start-up."""
+    table = tmp_path / "lc.csv"
+    rows = [f"{57234.40 + i * 4.0 / 86400:.7f},{1 + 1e-4 * (i % 7)},0.002,"
+            f"{15.0 + 0.01 * (i % 5)},{15.1 + 0.01 * (i % 3)}" for i in range(6000)]
+    table.write_text("time_bmjd,flux,flux_err,x,y\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    argv = ["reduce", str(table), "--method", "bliss", "--sampler", "leastsq", "--system",
+            "XO-3b", "--quiet", "--out", str(tmp_path / "r.json")]
+    body = ("import contextlib, io\nfrom eclipsebench.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    assert main({argv!r}) == 0\n")
+    heavy = _heavy_after(body)
+    assert (tmp_path / "r.json").is_file()
+    assert "numba" not in heavy and "astropy" in heavy, heavy

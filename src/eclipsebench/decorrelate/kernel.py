@@ -40,12 +40,12 @@ from typing import Annotated, Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
-from numba import njit
 from scipy.spatial import cKDTree
 
 from ..config.base import check
 from ..errors import InputError
 from ..io.pmap_files import find_pmap_path, load_pmap
+from ..jit import lazy_njit
 from .base import AtLeast, EpochData, MethodOptions, Systematics, register
 from .pmap import CalibrationSet, GriddedPmap, interpolate_grid, kernel_occupancy
 from .record import MethodRecord, team_profile
@@ -196,7 +196,7 @@ def smoother_trace(sq_dist: np.ndarray) -> float:
     return float(np.sum(1.0 / (1.0 + np.exp(-0.5 * sq_dist).sum(axis=1))))
 
 
-@njit(cache=True)
+@lazy_njit(cache=True)
 def _smooth_columns(indptr: np.ndarray, indices: np.ndarray, weights: np.ndarray,
                     columns: np.ndarray) -> np.ndarray:
     """``smoother @ columns`` for a CSR smoother and a C-ordered (n, m) block.

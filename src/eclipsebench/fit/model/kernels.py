@@ -11,7 +11,8 @@ keep their leading underscore: they are that model's internals, not an API).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ...jit import lazy_njit
 
 
 def _search_table(xp: np.ndarray, fp: np.ndarray) -> tuple:
@@ -33,7 +34,7 @@ def _search_table(xp: np.ndarray, fp: np.ndarray) -> tuple:
 _NO_TABLE = (np.zeros(2), np.ones(2), np.zeros(1), 0.0, 1.0, np.zeros(1, dtype=np.int64))
 
 
-@njit(cache=True)
+@lazy_njit(cache=True)
 def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, exposure,
                 xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
     """``AstroModel.__call__`` of every row of ``thetas``, one compiled pass per row.
@@ -92,7 +93,7 @@ def _interp_table(x: np.ndarray, table: tuple) -> np.ndarray:
     return _interp_rows(np.ascontiguousarray(x, dtype=float), xp, fp, slopes, start, step, index)
 
 
-@njit(cache=True)
+@lazy_njit(cache=True)
 def _interp_rows(x, xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
     m, n = x.shape
     out = np.empty((m, n))
