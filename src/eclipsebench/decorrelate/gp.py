@@ -299,21 +299,13 @@ class GaussianProcess(Systematics[GpOptions]):
         hi = np.log([0.5, 1e3 * sx, 1e3 * sy, 1e2 * span, 20.0])
         return lo, hi
 
-    def _covariance(self, h: np.ndarray, gradient: bool = False):
+    def _covariance(self, h: np.ndarray):
         amp2 = np.exp(2.0 * h[0])
-        lengths = np.exp(h[1:4])
         white = np.exp(2.0 * h[4]) * self.sigma_rel ** 2
-        if gradient:
-            k, dk = kernel_matrix(self.inputs, lengths, self.kernel, gradient=True)
-        else:
-            k = kernel_matrix(self.inputs, lengths, self.kernel)
-        signal = amp2 * k
+        signal = amp2 * kernel_matrix(self.inputs, np.exp(h[1:4]), self.kernel)
         cov = signal.copy()
         cov[np.diag_indices_from(cov)] += white
-        if not gradient:
-            return cov, signal
-        grads = [2.0 * signal] + [amp2 * d for d in dk] + [np.diag(2.0 * white)]
-        return cov, signal, grads
+        return cov, signal
 
     def _factor(self, h: np.ndarray) -> tuple:
         """Cholesky factor, signal covariance, GLS weights of F0 and half log-determinant."""
@@ -340,9 +332,13 @@ class GaussianProcess(Systematics[GpOptions]):
 
     # ------------------------------------------------------- hyperparameters
     def _neg_log_ml(self, h: np.ndarray, yrel: np.ndarray):
-        cov, _, grads = self._covariance(h, gradient=True)
+        amp2 = np.exp(2.0 * h[0])
+        white = np.exp(2.0 * h[4]) * self.sigma_rel ** 2
+        k, dk = kernel_matrix(self.inputs, np.exp(h[1:4]), self.kernel, gradient=True)
+        cov = amp2 * k
+        cov[np.diag_indices_from(cov)] += white
         try:
-            cf = cho_factor(cov, lower=True, check_finite=False)
+            cf = cho_factor(cov, lower=True, overwrite_a=True, check_finite=False)
         except np.linalg.LinAlgError:
             return 1e25, np.zeros_like(h)
         ones = np.ones(len(yrel))
@@ -352,12 +348,19 @@ class GaussianProcess(Systematics[GpOptions]):
         alpha = cho_solve(cf, r, check_finite=False)
         half_logdet = np.sum(np.log(np.diag(cf[0])))
         nll = 0.5 * r.dot(alpha) + half_logdet
-        cinv, info = dpotri(cf[0], lower=1)        # C^-1 from the factor (lower triangle)
+        cinv, info = dpotri(cf[0], lower=1, overwrite_c=1)  # C^-1 (its lower triangle)
         if info != 0:
             return 1e25, np.zeros_like(h)
-        cinv = np.tril(cinv) + np.tril(cinv, -1).T
+        cinv = np.tril(cinv)
+        cinv += np.tril(cinv, -1).T
         # d(-ln L)/dh = -0.5 (alpha^T dC alpha - tr(C^-1 dC)); F0 profiled (envelope theorem).
-        grad = np.array([-0.5 * (alpha @ g @ alpha - np.sum(cinv * g)) for g in grads])
+        # dC/dh: 2 amp2 K, amp2 dK/dln l_d, and diag(2 white); each symmetric, so
+        # tr(C^-1 dC) is the dot product of the two matrices' elements; none is built.
+        def term(g: np.ndarray) -> float:
+            return float(alpha @ g @ alpha - np.vdot(cinv, g))
+
+        grad = np.array([-amp2 * term(k)] + [-0.5 * amp2 * term(d) for d in dk]
+                        + [-(alpha @ (white * alpha) - np.diag(cinv) @ white)])
         return float(nll), grad
 
     def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:
