@@ -18,7 +18,8 @@ from astropy.table import Table
 
 from ... import __version__
 from ...errors import InputError
-from ...io.atomic import atomic_path, write_json
+from ...io.atomic import write_json, write_text
+from ...io.ecsv import ecsv_text
 from .epoch import EpochResult
 from .joint import JointResult
 
@@ -58,8 +59,7 @@ def write_result(result: EpochResult, path: str | os.PathLike) -> None:
     JSON is written last, so a result whose JSON exists has its light curve
     (:func:`result_ok`).
     """
-    with atomic_path(lightcurve_path(path)) as tmp:
-        result.lightcurve_table().write(tmp, format="ascii.ecsv")
+    write_text(lightcurve_path(path), ecsv_text(result.lightcurve_table()))
     write_json(Path(path), result.to_dict())
 
 
