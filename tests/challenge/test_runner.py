@@ -140,6 +140,8 @@ def test_graph_with_twins_and_report():
     assert "simulate/calibration" in keys and "simulate_flat/truth" in keys
     assert "reduce_flat/pld/epoch_02" in keys and "reduce_flat/bliss/epoch_02" not in keys
     assert keys[-2:] == ["stats", "report"]
+    # the engine's priority: the twin's chain before the many reductions that end the run
+    assert keys.index("reduce_flat/pld/epoch_02") < keys.index("reduce/pld/epoch_01")
 
 
 def test_cli_json_prints_the_summary(tiny_run, capsys):

@@ -116,6 +116,9 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
     epochs = [p.epoch for p in plans]
     plm = photon_limit_method(cfg, methods) if cfg.run.empirical_photon_limit else None
     tasks: list[Task] = []
+    # The plan's order is the engine's priority: the systematics-free twin's short chain
+    # (simulate, measure, one method) before the long list of reductions, so that the run
+    # ends on reductions that both workers share rather than on that chain.
     for flat in [False] + ([True] if plm is not None else []):
         vcfg = twin_config(cfg) if flat else cfg  # the twin writes no calibration set
         sim_tasks = plan_simulate_tasks(vcfg, layout.sim(flat),
@@ -125,9 +128,8 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
                                        after=(sim_tasks[-1].key,))
         if flat and plm is not None:
             tasks += plan_reduce_tasks(vcfg, layout, epochs, [plm], flat=True)
-        else:
-            for profile in cfg.run.profiles:
-                tasks += plan_reduce_tasks(vcfg, layout, epochs, methods, profile=profile)
+    for profile in cfg.run.profiles:
+        tasks += plan_reduce_tasks(cfg, layout, epochs, methods, profile=profile)
     results = [reduce_key(m, e, profile=p) for p in cfg.run.profiles for e in epochs
                for m in methods]
     reads = (results + ([reduce_key(plm, e, True) for e in epochs] if plm is not None else [])
