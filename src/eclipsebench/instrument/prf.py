@@ -50,6 +50,7 @@ Two PRFs:
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 import warnings
@@ -340,6 +341,18 @@ def pixel_integrated_table(psf: np.ndarray, oversample: int) -> np.ndarray:
     return np.clip(signal.fftconvolve(psf, kern, mode="full"), 0.0, None)
 
 
+@functools.lru_cache(maxsize=16)
+def _builtin_table(oversample: int, half_px: float, obscuration: float, blur_px: float,
+                   band_um: tuple[float, float], pixel_scale_arcsec: float) -> np.ndarray:
+    """The pixel-integrated table of :func:`psf_fine` (read-only), once per process and
+    optics: a twin task builds a PRF per blur it renders with (0.2 s each)."""
+    psf = psf_fine(oversample, half_px, obscuration=obscuration, blur_px=blur_px,
+                   band_um=band_um, pixel_scale_arcsec=pixel_scale_arcsec)
+    table = pixel_integrated_table(psf, oversample)
+    table.setflags(write=False)
+    return table
+
+
 class BuiltinPRF(PRF):
     """The package's own PRF of IRAC channel 1 or 2 (see the module docstring).
 
@@ -368,12 +381,11 @@ class BuiltinPRF(PRF):
         coeff = (load_gainmap_coefficients(self.channel)["builtin"] if coefficients is None
                  else coefficients)
         self.coefficients = coeff
-        psf = psf_fine(oversample, half_px - 0.5, obscuration=float(coeff["obscuration"]),
-                       blur_px=float(coeff["blur_px"]),
-                       band_um=constants.channel_constants(self.channel).band_um,
-                       pixel_scale_arcsec=float(coeff.get("pixel_scale_arcsec",
-                                                          constants.PIXEL_SCALE_ARCSEC)))
-        table = pixel_integrated_table(psf, oversample)
+        table = _builtin_table(oversample, half_px - 0.5, float(coeff["obscuration"]),
+                               float(coeff["blur_px"]),
+                               constants.channel_constants(self.channel).band_um,
+                               float(coeff.get("pixel_scale_arcsec",
+                                               constants.PIXEL_SCALE_ARCSEC)))
         gp = GainPolynomial.from_dict(coeff["gain"]) if gain else None
         super().__init__(table, oversample, (0.5 * (table.shape[1] - 1),
                                              0.5 * (table.shape[0] - 1)), gain=gp)
