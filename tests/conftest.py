@@ -166,6 +166,27 @@ def real_epoch1_table(shared_irac, tmp_path_factory) -> Path:
     return out / "epoch_01.fits"
 
 
+#: The trust run of real epoch 1 that tests/trust reads (issue 36's acceptance): ten twins
+#: made with BLISS's real fit (the first method), reduced by BLISS, KR/Data and PLD by least
+#: squares, in one process.
+REAL_EPOCH1_TRUST_OPTIONS = ["--twins", "10", "--sampler", "leastsq", "--methods",
+                             "bliss,kr-data,pld", "--quiet", "--workers", "1"]
+
+
+@pytest.fixture(scope="session")
+def real_epoch1_trust(real_epoch1_table, tmp_path_factory) -> Path:
+    """The folder of ``eclipsebench trust`` on real epoch 1 (``REAL_EPOCH1_TRUST_OPTIONS``),
+    run once per test run for every file that reads it (tests only read it): its twins, their
+    reductions and ``trust.json``. About 100 s of CPU, the suite's largest single command."""
+    def build(folder: Path) -> None:
+        from eclipsebench.cli import main
+
+        assert main(["trust", str(real_epoch1_table), "--out", str(folder / "trust"),
+                     *REAL_EPOCH1_TRUST_OPTIONS]) == 0
+
+    return built_once(tmp_path_factory, "real_epoch1_trust", build) / "trust"
+
+
 #: The tiny challenge of tests/challenge/test_runner.py and tests/engine/test_cluster.py: two
 #: epochs of 233 two-frame cubes (the eclipse stays inside the Main AOR), one sub-sample, two
 #: methods in both profiles.
