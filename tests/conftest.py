@@ -40,10 +40,13 @@ def pytest_xdist_node_collection_finished(node, ids: list[str]) -> None:
         (Path(folder) / f"{node.gateway.id}.txt").write_text("".join(f"{i}\n" for i in ids))
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_runtest_setup(item: pytest.Item) -> None:
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """With ``COLLECTED_IDS_ENV`` set, every item is skipped, the doctests of ``src/`` and
+    ``docs/`` too (a ``pytest_runtest_setup`` here sees only the items under ``tests/``)."""
     if os.environ.get(COLLECTED_IDS_ENV):
-        pytest.skip("only the collected ids were asked for")
+        skip = pytest.mark.skip(reason="only the collected ids were asked for")
+        for item in items:
+            item.add_marker(skip)
 
 
 #: The test files that start Dask clusters of processes (``workers=2``, ``--workers 2``, the
