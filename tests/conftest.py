@@ -56,8 +56,7 @@ DASK_MODULES = (
     "tests/challenge/test_faults.py", "tests/trust/test_trust.py",
     "tests/challenge/test_runner.py", "tests/engine/test_cluster.py",
     "tests/engine/test_engine.py", "tests/simulation/test_sim_challenge.py",
-    "tests/engine/test_cluster_security.py", "tests/foundation/test_planet_cli.py",
-    "tests/challenge/test_campaign.py",
+    "tests/engine/test_cluster_security.py", "tests/challenge/test_campaign.py",
 )
 
 
