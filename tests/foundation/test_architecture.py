@@ -43,12 +43,21 @@ def test_the_layers_come_from_the_table_in_the_docs():
     assert packages <= set(layers)
 
 
-@pytest.fixture
-def package_copy(tmp_path):
-    """A copy of the source package, to add a module that breaks the rule."""
-    root = tmp_path / "eclipsebench"
+@pytest.fixture(scope="module")
+def clean_copy(tmp_path_factory):
+    """A copy of the source package, checked once to pass the rule."""
+    root = tmp_path_factory.mktemp("clean") / "eclipsebench"
     shutil.copytree(PACKAGE, root, ignore=shutil.ignore_patterns("__pycache__", "data"))
     assert _tool().check(root, DOC)[1] == []
+    return root
+
+
+@pytest.fixture
+def package_copy(clean_copy, tmp_path):
+    """A copy of the source package (of ``clean_copy``, which passes the rule), to add a
+    module that breaks the rule."""
+    root = tmp_path / "eclipsebench"
+    shutil.copytree(clean_copy, root)
     return root
 
 

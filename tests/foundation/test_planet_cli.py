@@ -51,7 +51,7 @@ def reduced(tmp_path_factory):
     t_ecl = eclipse_time_bmjd(system_from_pairs(PAIRS), 57234.5)
     start = f"observation.start_times_jd=[{_start_jd(t_ecl):.6f}]"
     assert main(["simulate", "--out", str(root / "sim"), "--epochs", "1", "--no-calibration",
-                 "--quiet", *_sets(TINY + [start]), *PLANET_ARGS]) == 0
+                 "--quiet", "--workers", "1", *_sets(TINY + [start]), *PLANET_ARGS]) == 0
     assert main(["photometry", str(root / "sim"), "--out", str(root / "phot"), "--quiet"]) == 0
     table = root / "phot" / "epoch_01.fits"
     out = root / "test-b.pld.json"

@@ -25,7 +25,7 @@ from eclipsebench.trust.run import trust_settings
 
 from ..conftest import real_epoch1_jd_utc
 
-FAST = ["--sampler", "leastsq", "--twins", "10", "--quiet", "--system", "XO-3b"]
+FAST = ["--sampler", "leastsq", "--twins", "10", "--quiet", "--system", "XO-3b", "--workers", "1"]
 UNIT = 1.0 / 3737.0     # electrons to an arbitrary unit
 
 

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 from astropy.table import Table
 
-from eclipsebench.cli import main
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table
 from eclipsebench.trust.noise import add_correlated, correlated_component, twin_shift
@@ -152,15 +151,15 @@ def test_the_twin_table_carries_the_recipe_s_correlated_noise(small_table):
 
 @pytest.mark.shared_data
 @pytest.mark.slow
-def test_twins_of_real_epoch1_are_as_red_and_as_varied_as_it(real_epoch1_table, tmp_path):
+def test_twins_of_real_epoch1_are_as_red_and_as_varied_as_it(real_epoch1_table,
+                                                             real_epoch1_trust):
     """Issue 36's acceptance with 10 twins and the three methods it names: the motion within
     an exposure calibrates above 0; each method's twins' median beta_red within 15 % of the
     real one and none flagged redder than its twins; the SD over cubes of the per-cube median
-    noise pixels within 25 % of the real one."""
-    out = tmp_path / "trust"
-    assert main(["trust", str(real_epoch1_table), "--out", str(out), "--twins", "10",
-                 "--sampler", "leastsq", "--methods", "bliss,kr-data,pld", "--quiet",
-                 "--workers", "1"]) == 0
+    noise pixels within 25 % of the real one. The trust run (``--twins 10 --sampler leastsq
+    --methods bliss,kr-data,pld``) is made once per test run (tests/conftest.py,
+    ``real_epoch1_trust``) and shared with test_trust.py's resemblance test."""
+    out = real_epoch1_trust
     answer = json.loads((out / "trust.json").read_text())
     twins = answer["twins"]
     assert twins["motion_peak_px"] > 0 and twins["calibration"]["target_vs_grid"] == "inside"
