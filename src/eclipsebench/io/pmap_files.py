@@ -48,8 +48,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from astropy.io import fits
-from astropy.utils.exceptions import AstropyUserWarning
 
 from ..errors import DataError, InputError
 from ..limits import MAX_PMAP_FILE_BYTES
@@ -130,6 +128,9 @@ def _read_fits_quietly(path: Path):
     # a regular file within the stated size: not a device (/dev/zero) nor a FIFO
     check_input_file(path, "pixel-map FITS file", MAX_PMAP_FILE_BYTES)
     try:
+        from astropy.io import fits  # about 0.02-0.2 s: not for a reduce of a CSV
+        from astropy.utils.exceptions import AstropyUserWarning
+
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", AstropyUserWarning)
             with fits.open(path, memmap=False) as hdul:
