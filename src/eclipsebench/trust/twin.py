@@ -67,10 +67,13 @@ from .observation import Observation
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
            "calibrate_motion", "gentler_motions", "motion_rms_per_peak", "blur_spanning",
            "photometry_window", "twin_star", "MOTION_GRID_PX", "BLUR_GRID_PX", "TWIN_MODEL",
+           "GAUSSIAN_SKEW",
            "gain_model", "map_gain", "builtin_prf", "builtin_gain", "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 5 since a table without noise pixels gets the
+#: otherwise is refused rather than mixed): 6 since each pixel's photon and read noise are
+#: one Gaussian draw of the same mean and variance where the skewness lost is small
+#: (:data:`GAUSSIAN_SKEW`; issue 40); 5 since a table without noise pixels gets the
 #: most motion within an exposure whose pilot twin is no redder than the real residuals
 #: (:func:`~eclipsebench.trust.recipe.bounded_recipe`; a table with them is made as in 4);
 #: 4 since the motion within an exposure is bounded by the real photometry (a pilot twin no
@@ -79,7 +82,13 @@ __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "t
 #: only the part of the subarray the photometry reads is rendered (:func:`photometry_window`);
 #: 2 since the motion within an exposure is the simulator's block-scaled jitter
 #: (:class:`ExposureMotion`), 1 before (one rms throughout).
-TWIN_MODEL = 5
+TWIN_MODEL = 6
+
+#: The twins' photon noise: a pixel's photon and read noise are drawn as one Gaussian of the
+#: physical model's mean and variance wherever the skewness that drops is at most this
+#: (``FrameModel.gaussian_skew``, :mod:`eclipsebench.simulation.render`'s notes); with warm
+#: channel 2's read noise it is at most 0.082 at any charge, so every pixel is drawn once.
+GAUSSIAN_SKEW = 0.1
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
@@ -217,7 +226,9 @@ def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
 
 
 def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
-    return FrameModel(mode=obs.mode, noise_model=noise_model, read_noise_e=obs.read_noise_e)
+    skew = GAUSSIAN_SKEW if noise_model == "physical" else 0.0
+    return FrameModel(mode=obs.mode, noise_model=noise_model, read_noise_e=obs.read_noise_e,
+                      gaussian_skew=skew)
 
 
 def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
