@@ -73,7 +73,8 @@ __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "t
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
 #: otherwise is refused rather than mixed): 6 since each pixel's photon and read noise are
 #: one Gaussian draw of the same mean and variance where the skewness lost is small
-#: (:data:`GAUSSIAN_SKEW`; issue 40); 5 since a table without noise pixels gets the
+#: (:data:`GAUSSIAN_SKEW`; issue 40; the recipe's calibration keeps the exact draws, so its
+#: recipes are 5's); 5 since a table without noise pixels gets the
 #: most motion within an exposure whose pilot twin is no redder than the real residuals
 #: (:func:`~eclipsebench.trust.recipe.bounded_recipe`; a table with them is made as in 4);
 #: 4 since the motion within an exposure is bounded by the real photometry (a pilot twin no
@@ -225,8 +226,9 @@ def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
     return StarImager(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
 
 
-def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
-    skew = GAUSSIAN_SKEW if noise_model == "physical" else 0.0
+def _frame_model(obs: Observation, noise_model: str = "physical",
+                 gaussian_skew: float = GAUSSIAN_SKEW) -> FrameModel:
+    skew = gaussian_skew if noise_model == "physical" else 0.0
     return FrameModel(mode=obs.mode, noise_model=noise_model, read_noise_e=obs.read_noise_e,
                       gaussian_skew=skew)
 
@@ -394,8 +396,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
                      noise_model: str = "physical", radius_px: float = 2.25,
                      star: StarImager | None = None,
                      window: tuple[int, int, int, int] | None = None,
-                     moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-                     ) -> np.ndarray:
+                     moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                     gaussian_skew: float = GAUSSIAN_SKEW) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
     ``motion``: the offsets within each exposure about the measured centroid
@@ -406,9 +408,11 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     ``window``: ``(x0, y0, nx, ny)``, render only that part of the subarray
     (:func:`photometry_window`; the PRF depends on the sub-pixel phase only,
     so the pixels are the whole frame's); None: the whole subarray.
+    ``gaussian_skew``: where the photon noise is drawn as a Gaussian (:data:`GAUSSIAN_SKEW`;
+    0: exact Poisson draws everywhere, the challenge simulator's).
     """
     obs = recipe.obs
-    model = _frame_model(obs, noise_model)
+    model = _frame_model(obs, noise_model, gaussian_skew)
     x0, y0 = 0, 0
     if window is not None:
         x0, y0 = int(window[0]), int(window[1])
@@ -460,7 +464,7 @@ def twin_star(recipe: TwinRecipe, options: PhotometrySection) -> StarImager:
 
 def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twin: int,
                noise_model: str = "physical", star: StarImager | None = None,
-               whole_frame: bool = False) -> Table:
+               whole_frame: bool = False, gaussian_skew: float = GAUSSIAN_SKEW) -> Table:
     """Simulate and measure twin number ``twin``: its photometry table.
 
     The real frames' flags are kept (a frame flagged bad in the observation
@@ -472,7 +476,8 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     (:func:`photometry_window`, per AOR); ``whole_frame`` renders all of it
     (the same photometry without noise, the same statistics with it; slower).
     ``star``: the twins' :class:`StarImager` (:func:`twin_star`), when several
-    twins share it.
+    twins share it. ``gaussian_skew``: as :func:`render_frames_of` (0: the exact
+    Poisson draws of twins before ``TWIN_MODEL`` 6, the same statistics; slower).
     """
     obs = recipe.obs
     star = star if star is not None else twin_star(recipe, options)
@@ -488,7 +493,8 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
         frames = np.concatenate([
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
                              moments=motion.moments(cube) if motion.peak_px > 0 else None,
-                             noise_model=noise_model, star=star, window=window)
+                             noise_model=noise_model, star=star, window=window,
+                             gaussian_skew=gaussian_skew)
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options, window))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
@@ -782,8 +788,10 @@ def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
     level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, obs.good)
     model = _frame_model(obs, "physical")
     motion = ExposureMotion(obs, model, recipe.motion_peak_px, rng(0, "trust", "calibrate"))
+    # the exact Poisson draws, as the pilot twin's (trust/recipe.py::pilot_twin): a calibration
     frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate", "background"),
-                              motion=motion.offsets(rows), radius_px=options.radius_px)
+                              motion=motion.offsets(rows), radius_px=options.radius_px,
+                              gaussian_skew=0.0)
     sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
     measured = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
                              fowler=obs.mode.fowler, wait=obs.mode.wait,
