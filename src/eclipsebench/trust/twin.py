@@ -19,7 +19,9 @@ A twin shares with the real observation everything but the noise draw
   refitted for the PSF (:func:`builtin_gain`), or, where the user gives an
   SSC warm pixel map, a gain fitted to that map (:func:`map_gain`), rendered
   through the Fowler sampling of paper Appendix A.2-A.3
-  (:func:`eclipsebench.simulation.render.render_frames`);
+  (:func:`eclipsebench.simulation.render.render_frames`), each pixel's photon
+  and read noise one Gaussian draw of that model's mean and variance
+  (:data:`GAUSSIAN_SKEW`);
 - the astrophysics: L(t) given per frame (the real fit's phase model with a
   known depth at the real mid-time);
 - the real correlated noise that the twins lack, added to each twin's
