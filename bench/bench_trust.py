@@ -21,6 +21,16 @@ Three parts (``--part``):
     flux's frame-to-frame rms over good frames, the number of good frames)
     the mean over the twins of each way, their difference in standard
     errors of that difference, and the CPU seconds per twin of each way.
+``gaussian``
+    ``--twins`` twins of real epoch 1 (default 10), each rendered twice with
+    the same seed (the same motion; the noise draws differ): with the twins'
+    Gaussian photon noise (:data:`~eclipsebench.trust.twin.GAUSSIAN_SKEW`)
+    and with the exact Poisson draws (``gaussian_skew=0``, twins before
+    ``twin_model`` 6). Per quantity (``window``'s, the skewness of the flux
+    about its running median over a cube, and the BLISS least-squares fit's
+    ``beta_red`` and residual rms) the mean over the twins of each way,
+    their difference in standard errors of that difference, and the CPU
+    seconds per twin of each way (issue 40).
 ``table``
     another pipeline's table (issue 36): the real epoch-1 table cut to
     time_bmjd, flux and flux_err in an arbitrary unit, x and y (CSV), twinned
@@ -48,6 +58,7 @@ Three parts (``--part``):
 
 Command (what BENCHMARKS.md quotes): ``python bench/bench_trust.py --part
 resemble --twins 4``, ``--part speed``, ``--part window --twins 10``,
+``--part gaussian --twins 10``,
 ``--part predict --epochs 20 --twins 50``, ``--part phase-curve --twins 50``.
 """
 
@@ -120,7 +131,6 @@ def window(work: Path, n_twins: int) -> None:
     import eclipsebench as eb
     from eclipsebench.astro.catalogue import get_system
     from eclipsebench.trust.recipe import build_recipe, photometry_options
-    from eclipsebench.trust.score import observation_statistics
     from eclipsebench.trust.twin import photometry_window, twin_star, twin_table
 
     path = _real_table(work)
@@ -132,15 +142,6 @@ def window(work: Path, n_twins: int) -> None:
     print("windows (x0, y0, nx, ny) per AOR: " + ", ".join(
         str(photometry_window(x[r], y[r], options, (32, 32))) for r in recipe.obs.aors()))
 
-    def stats(table) -> dict[str, float]:
-        good = np.asarray(table["flag"]) == 0
-        flux = np.asarray(table["flux"], float)[good]
-        return {**observation_statistics(table), "flux_mean_e": float(flux.mean()),
-                "flux_rms_frame_ppm": float(np.std(np.diff(flux)) / np.sqrt(2) / flux.mean() * 1e6),
-                "background_mean_e": float(np.mean(np.asarray(table["background"])[good])),
-                "flux_err_mean_e": float(np.mean(np.asarray(table["flux_err"])[good])),
-                "good_frames": float(good.sum())}
-
     runs: dict[bool, list[dict[str, float]]] = {False: [], True: []}
     cpu = {False: 0.0, True: 0.0}
     for i in range(1, n_twins + 1):
@@ -148,17 +149,75 @@ def window(work: Path, n_twins: int) -> None:
             c0 = time.process_time()
             table = twin_table(recipe, options, seed=0, twin=i, star=star, whole_frame=whole)
             cpu[whole] += time.process_time() - c0
-            runs[whole].append(stats(table))
+            runs[whole].append(_twin_stats(table))
     print(f"CPU seconds per twin: window {cpu[False] / n_twins:.2f}, whole frame "
           f"{cpu[True] / n_twins:.2f}; ratio {cpu[True] / cpu[False]:.2f}")
-    print(f"| quantity | window (mean of {n_twins}) | whole frame | difference / its SE |")
-    print("| --- | --- | --- | --- |")
-    for key in runs[False][0]:
-        a = np.array([r[key] for r in runs[False]])
-        b = np.array([r[key] for r in runs[True]])
+    _compare(runs[False], runs[True], f"window (mean of {n_twins})", "whole frame")
+
+
+def _twin_stats(table) -> dict[str, float]:
+    """``window``'s and ``gaussian``'s statistics of one twin table's good frames."""
+    from eclipsebench.trust.score import observation_statistics
+
+    good = np.asarray(table["flag"]) == 0
+    flux = np.asarray(table["flux"], float)[good]
+    return {**observation_statistics(table), "flux_mean_e": float(flux.mean()),
+            "flux_rms_frame_ppm": float(np.std(np.diff(flux)) / np.sqrt(2) / flux.mean() * 1e6),
+            "background_mean_e": float(np.mean(np.asarray(table["background"])[good])),
+            "flux_err_mean_e": float(np.mean(np.asarray(table["flux_err"])[good])),
+            "good_frames": float(good.sum())}
+
+
+def _compare(one: list[dict[str, float]], other: list[dict[str, float]], name_one: str,
+             name_other: str) -> None:
+    """Per quantity: the mean over the twins of each way and their difference in its SE, as
+    two samples and paired (twin by twin: the two ways of a twin share its motion)."""
+    print(f"| quantity | {name_one} | {name_other} | difference / its SE | paired |")
+    print("| --- | --- | --- | --- | --- |")
+    for key in one[0]:
+        a = np.array([r[key] for r in one])
+        b = np.array([r[key] for r in other])
         se = np.sqrt(a.var(ddof=1) / a.size + b.var(ddof=1) / b.size)
+        se_paired = np.std(a - b, ddof=1) / np.sqrt(a.size)
         print(f"| {key} | {a.mean():.6g} | {b.mean():.6g} | "
-              f"{(a.mean() - b.mean()) / se if se > 0 else 0.0:+.2f} |")
+              f"{(a.mean() - b.mean()) / se if se > 0 else 0.0:+.2f} | "
+              f"{(a.mean() - b.mean()) / se_paired if se_paired > 0 else 0.0:+.2f} |")
+
+
+def gaussian(work: Path, n_twins: int) -> None:
+    """Issue 40: the twins' Gaussian photon noise against the exact Poisson draws."""
+    import eclipsebench as eb
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.photometry.clean import running_median
+    from eclipsebench.trust.recipe import build_recipe, photometry_options
+    from eclipsebench.trust.twin import GAUSSIAN_SKEW, twin_star, twin_table
+
+    path = _real_table(work)
+    fit = eb.reduce(path, "bliss", sampler="leastsq", prayer_bead_shifts=0)
+    recipe, _ = build_recipe(str(path), get_system("XO-3b"), fit.to_dict(), fit.depth_ppm)
+    options = photometry_options(recipe.obs)
+    star = twin_star(recipe, options)
+    ways = {"gaussian": GAUSSIAN_SKEW, "exact": 0.0}
+    runs: dict[str, list[dict[str, float]]] = {w: [] for w in ways}
+    cpu = {w: 0.0 for w in ways}
+    for i in range(1, n_twins + 1):
+        for way, skew in ways.items():
+            c0 = time.process_time()
+            table = twin_table(recipe, options, seed=0, twin=i, star=star, gaussian_skew=skew)
+            cpu[way] += time.process_time() - c0
+            good = np.asarray(table["flag"]) == 0
+            flux = np.asarray(table["flux"], float)
+            resid = (flux - running_median(flux, 65, good))[good]
+            resid = resid - resid.mean()
+            bliss = eb.reduce(table, "bliss", system="XO-3b", sampler="leastsq",
+                              prayer_bead_shifts=0)
+            runs[way].append({**_twin_stats(table),
+                              "flux_skewness": float(np.mean(resid**3) / np.std(resid) ** 3),
+                              "bliss_beta_red": float(bliss.to_dict()["beta_red"]),
+                              "bliss_rms_ppm": float(bliss.rms_ppm)})
+    print(f"CPU seconds per twin (rendering and photometry): Gaussian {cpu['gaussian'] / n_twins:.2f},"
+          f" exact {cpu['exact'] / n_twins:.2f}; ratio {cpu['gaussian'] / cpu['exact']:.2f}")
+    _compare(runs["gaussian"], runs["exact"], f"Gaussian (mean of {n_twins})", "exact")
 
 
 def speed(work: Path, n_twins: int, workers: int) -> None:
@@ -394,8 +453,8 @@ def phase_curve(work: Path, n_twins: int, workers: int, sets: list[str],
 
 def main(argv: list[str]) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--part", choices=("resemble", "speed", "window", "table", "predict",
-                                      "phase-curve"), default="resemble")
+    p.add_argument("--part", choices=("resemble", "speed", "window", "gaussian", "table",
+                                      "predict", "phase-curve"), default="resemble")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="phase-curve: a change to the xo3b-phase-curve configuration")
     p.add_argument("--methods", default=",".join(PHASE_CURVE_METHODS),
@@ -420,6 +479,8 @@ def main(argv: list[str]) -> int:
         speed(work, args.twins or 50, args.workers)
     elif args.part == "window":
         window(work, args.twins or 10)
+    elif args.part == "gaussian":
+        gaussian(work, args.twins or 10)
     elif args.part == "table":
         table(work, args.twins or 20, args.workers, args.tables.split(","))
     elif args.part == "phase-curve":

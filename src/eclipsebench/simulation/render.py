@@ -40,6 +40,19 @@ Noise (physical model)
     ``none``: the frames are their noise-free expectation (the physical
     model's Fowler sum, no photon, read or background noise); nothing is
     drawn, so every seed gives the same frames for the same pointing.
+
+Gaussian photon noise (``FrameModel.gaussian_skew``, the trust twins only)
+    A pixel's photon and read noise drawn together as one Gaussian of the
+    physical model's mean and variance (``sum_j j^2 G_j / FN^2 + 2 sigma_rn^2
+    / FN``, the read noise's draw scaled), where the skewness that drops is
+    small: the photon part's third cumulant ``sum_j j^3 G_j / FN^3`` is at
+    most its variance ``v``, so the pixel's skewness is at most ``v / (v +
+    2 sigma_rn^2 / FN)^1.5``; pixels where that bound exceeds
+    ``gaussian_skew`` keep the exact draws. With warm channel 2's read noise
+    (9.4 e, FN = 8) the bound never exceeds 0.082 whatever the charge (its
+    largest at ``v = 44`` e), so every pixel is drawn once; the mean and the
+    variance of every pixel, and so of any sum of pixels, are the physical
+    model's exactly (docs/trust.md, "How twins are made").
 """
 
 from __future__ import annotations
@@ -85,6 +98,11 @@ class FrameModel:
         Side of the square stamp that gets the per-tick treatment (odd).
     shape : tuple of int
         Image shape (ny, nx).
+    gaussian_skew : float
+        ``physical`` only: the largest bound on a pixel's skewness for which its
+        photon noise is drawn with its read noise as one Gaussian of the same
+        mean and variance (module notes, "Gaussian photon noise"); 0 (the
+        challenge simulator's): exact Poisson draws everywhere.
     """
 
     mode: ReadoutMode
@@ -94,11 +112,16 @@ class FrameModel:
     subsamples: int = 10
     stamp_px: int = 13
     shape: tuple[int, int] = (32, 32)
+    gaussian_skew: float = 0.0
 
     def __post_init__(self):
         if self.noise_factor != 1.0 and self.noise_model != "iracsim2015":
             raise InputError(f"noise_factor: IRACSIM's NOISE_FACTOR applies to noise_model "
                              f"'iracsim2015' only, got {self.noise_factor} with {self.noise_model!r}")
+        if not self.gaussian_skew >= 0 or (self.gaussian_skew > 0
+                                           and self.noise_model != "physical"):
+            raise InputError(f"gaussian_skew: expected a number >= 0, and 0 unless noise_model "
+                             f"is 'physical', got {self.gaussian_skew} with {self.noise_model!r}")
 
     @property
     def subsamples_per_tick(self) -> int:
@@ -462,7 +485,7 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
         groups += (gm[:, :, 0] * background_e_per_tick[:, None]).T[:, :, None]
         j = np.arange(1, mode.fowler + 1, dtype=float)
         expected[:, stamp_cols] = np.tensordot(j, groups, axes=(0, 0)) / mode.fowler
-        if model.noise_model == "physical":
+        if model.noise_model == "physical" and not model.gaussian_skew > 0:
             frames[:, stamp_cols] = fowler_sample_grouped(groups, mode, rng_photon, 0.0)
             frames[:, out_cols] = fowler_uniform(rate_out, mode, rng_photon)
     else:
@@ -480,12 +503,58 @@ def render_frames(*, model: FrameModel, moments: np.ndarray, basis: np.ndarray, 
         expected[:, stamp_cols] = (reads[fn:] - reads[:fn]).sum(axis=0) / fn
     w_sum = (fowler_weights(mode)[None, :] * m0).sum(axis=1) / mode.fowler
     expected[:, out_cols] = rate_out * w_sum[:, None]
+    if model.gaussian_skew > 0:
+        return _gaussian_frames(model, groups, rate_out, m0, expected, stamp_cols, out_cols,
+                                rng_photon, rng_read)
     if model.noise_model == "none":
         frames[:] = expected
         return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
     # Read noise: 2 FN reads per pixel; their sum in sum_i (S_i - P_i) / FN is one Gaussian.
     read_sd = model.read_noise_e * model.noise_factor
     frames += rng_read.standard_normal(size=frames.shape) * (read_sd * np.sqrt(2.0 / mode.fowler))
+    return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
+
+
+def _gaussian_frames(model: FrameModel, groups: np.ndarray, rate_out: np.ndarray,
+                     m0: np.ndarray, expected: np.ndarray, stamp_cols: np.ndarray,
+                     out_cols: np.ndarray, rng_photon: np.random.Generator,
+                     rng_read: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`render_frames`' physical frames with ``model.gaussian_skew`` > 0 (module notes,
+    "Gaussian photon noise"): one standard normal per pixel from ``rng_read`` scaled by the
+    pixel's whole noise where the skewness bound allows, else by the read noise alone, with
+    the exact photon draws of those pixels from ``rng_photon``."""
+    mode = model.mode
+    fn = mode.fowler
+    nf = expected.shape[0]
+    ny, nx = model.shape
+    read_var = model.read_noise_e**2 * 2.0 / fn
+    # the photon variance of each pixel: sum_k w_k^2 q_k / FN^2 (module fowler's notes)
+    photon_var = np.empty_like(expected)
+    j2 = np.arange(1, fn + 1, dtype=float) ** 2
+    photon_var[:, stamp_cols] = np.tensordot(j2, groups, axes=(0, 0)) / fn**2
+    w2 = fowler_weights(mode).astype(float) ** 2
+    photon_var[:, out_cols] = rate_out * ((m0 * w2[None, :]).sum(axis=1) / fn**2)[:, None]
+    total_var = photon_var + read_var
+    exact = photon_var > model.gaussian_skew * total_var**1.5
+    frames = rng_read.standard_normal(size=expected.shape)
+    frames *= np.sqrt(np.where(exact, read_var, total_var))
+    if exact.any():
+        # the pixels whose noise keeps its exact draws: their photon part, as without the bound
+        photon = expected.copy()
+        stamp_exact = exact[:, stamp_cols]
+        if stamp_exact.any():
+            part = photon[:, stamp_cols]
+            part[stamp_exact] = fowler_sample_grouped(groups[:, stamp_exact], mode, rng_photon,
+                                                      0.0)
+            photon[:, stamp_cols] = part
+        out_exact = exact[:, out_cols]
+        if out_exact.any():
+            part = photon[:, out_cols]
+            part[out_exact] = fowler_uniform(rate_out[out_exact], mode, rng_photon)
+            photon[:, out_cols] = part
+        frames += photon
+    else:
+        frames += expected
     return frames.reshape(nf, ny, nx), expected.reshape(nf, ny, nx)
 
 

@@ -19,7 +19,9 @@ A twin shares with the real observation everything but the noise draw
   refitted for the PSF (:func:`builtin_gain`), or, where the user gives an
   SSC warm pixel map, a gain fitted to that map (:func:`map_gain`), rendered
   through the Fowler sampling of paper Appendix A.2-A.3
-  (:func:`eclipsebench.simulation.render.render_frames`);
+  (:func:`eclipsebench.simulation.render.render_frames`), each pixel's photon
+  and read noise one Gaussian draw of that model's mean and variance
+  (:data:`GAUSSIAN_SKEW`);
 - the astrophysics: L(t) given per frame (the real fit's phase model with a
   known depth at the real mid-time);
 - the real correlated noise that the twins lack, added to each twin's
@@ -67,10 +69,14 @@ from .observation import Observation
 __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "twin_table",
            "calibrate_motion", "gentler_motions", "motion_rms_per_peak", "blur_spanning",
            "photometry_window", "twin_star", "MOTION_GRID_PX", "BLUR_GRID_PX", "TWIN_MODEL",
+           "GAUSSIAN_SKEW",
            "gain_model", "map_gain", "builtin_prf", "builtin_gain", "background_scatter_share"]
 
 #: How twins are made (recorded with a trust run's settings, so a folder of twins made
-#: otherwise is refused rather than mixed): 5 since a table without noise pixels gets the
+#: otherwise is refused rather than mixed): 6 since each pixel's photon and read noise are
+#: one Gaussian draw of the same mean and variance where the skewness lost is small
+#: (:data:`GAUSSIAN_SKEW`; issue 40; the recipe's calibration keeps the exact draws, so its
+#: recipes are 5's); 5 since a table without noise pixels gets the
 #: most motion within an exposure whose pilot twin is no redder than the real residuals
 #: (:func:`~eclipsebench.trust.recipe.bounded_recipe`; a table with them is made as in 4);
 #: 4 since the motion within an exposure is bounded by the real photometry (a pilot twin no
@@ -79,7 +85,13 @@ __all__ = ["TwinRecipe", "ExposureMotion", "make_recipe", "render_frames_of", "t
 #: only the part of the subarray the photometry reads is rendered (:func:`photometry_window`);
 #: 2 since the motion within an exposure is the simulator's block-scaled jitter
 #: (:class:`ExposureMotion`), 1 before (one rms throughout).
-TWIN_MODEL = 5
+TWIN_MODEL = 6
+
+#: The twins' photon noise: a pixel's photon and read noise are drawn as one Gaussian of the
+#: physical model's mean and variance wherever the skewness that drops is at most this
+#: (``FrameModel.gaussian_skew``, :mod:`eclipsebench.simulation.render`'s notes); with warm
+#: channel 2's read noise it is at most 0.082 at any charge, so every pixel is drawn once.
+GAUSSIAN_SKEW = 0.1
 
 #: Peak amplitudes (px) of the jitter (Table 5's ``A_fbm``; the challenge's is 0.4) on which
 #: the noise pixels are calibrated; for ``sub_2s`` frames they give 0 to about 0.28 px rms
@@ -216,8 +228,11 @@ def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
     return StarImager(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
 
 
-def _frame_model(obs: Observation, noise_model: str = "physical") -> FrameModel:
-    return FrameModel(mode=obs.mode, noise_model=noise_model, read_noise_e=obs.read_noise_e)
+def _frame_model(obs: Observation, noise_model: str = "physical",
+                 gaussian_skew: float = GAUSSIAN_SKEW) -> FrameModel:
+    skew = gaussian_skew if noise_model == "physical" else 0.0
+    return FrameModel(mode=obs.mode, noise_model=noise_model, read_noise_e=obs.read_noise_e,
+                      gaussian_skew=skew)
 
 
 def make_recipe(obs: Observation, light_curve: np.ndarray, *, radius_px: float,
@@ -383,8 +398,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
                      noise_model: str = "physical", radius_px: float = 2.25,
                      star: StarImager | None = None,
                      window: tuple[int, int, int, int] | None = None,
-                     moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-                     ) -> np.ndarray:
+                     moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                     gaussian_skew: float = GAUSSIAN_SKEW) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
     ``motion``: the offsets within each exposure about the measured centroid
@@ -395,9 +410,11 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     ``window``: ``(x0, y0, nx, ny)``, render only that part of the subarray
     (:func:`photometry_window`; the PRF depends on the sub-pixel phase only,
     so the pixels are the whole frame's); None: the whole subarray.
+    ``gaussian_skew``: where the photon noise is drawn as a Gaussian (:data:`GAUSSIAN_SKEW`;
+    0: exact Poisson draws everywhere, the challenge simulator's).
     """
     obs = recipe.obs
-    model = _frame_model(obs, noise_model)
+    model = _frame_model(obs, noise_model, gaussian_skew)
     x0, y0 = 0, 0
     if window is not None:
         x0, y0 = int(window[0]), int(window[1])
@@ -449,7 +466,7 @@ def twin_star(recipe: TwinRecipe, options: PhotometrySection) -> StarImager:
 
 def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twin: int,
                noise_model: str = "physical", star: StarImager | None = None,
-               whole_frame: bool = False) -> Table:
+               whole_frame: bool = False, gaussian_skew: float = GAUSSIAN_SKEW) -> Table:
     """Simulate and measure twin number ``twin``: its photometry table.
 
     The real frames' flags are kept (a frame flagged bad in the observation
@@ -461,7 +478,8 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
     (:func:`photometry_window`, per AOR); ``whole_frame`` renders all of it
     (the same photometry without noise, the same statistics with it; slower).
     ``star``: the twins' :class:`StarImager` (:func:`twin_star`), when several
-    twins share it.
+    twins share it. ``gaussian_skew``: as :func:`render_frames_of` (0: the exact
+    Poisson draws of twins before ``TWIN_MODEL`` 6, the same statistics; slower).
     """
     obs = recipe.obs
     star = star if star is not None else twin_star(recipe, options)
@@ -477,7 +495,8 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
         frames = np.concatenate([
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
                              moments=motion.moments(cube) if motion.peak_px > 0 else None,
-                             noise_model=noise_model, star=star, window=window)
+                             noise_model=noise_model, star=star, window=window,
+                             gaussian_skew=gaussian_skew)
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options, window))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
@@ -771,8 +790,10 @@ def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
     level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, obs.good)
     model = _frame_model(obs, "physical")
     motion = ExposureMotion(obs, model, recipe.motion_peak_px, rng(0, "trust", "calibrate"))
+    # the exact Poisson draws, as the pilot twin's (trust/recipe.py::pilot_twin): a calibration
     frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate", "background"),
-                              motion=motion.offsets(rows), radius_px=options.radius_px)
+                              motion=motion.offsets(rows), radius_px=options.radius_px,
+                              gaussian_skew=0.0)
     sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
     measured = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
                              fowler=obs.mode.fowler, wait=obs.mode.wait,
