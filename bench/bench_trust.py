@@ -127,17 +127,24 @@ def resemble(work: Path, n_twins: int) -> None:
         print(f"| {key} | {value:.4g} | {mean:.4g} | {mean / value:.3f} |")
 
 
-def window(work: Path, n_twins: int) -> None:
+def _real_recipe(work: Path):
+    """``(recipe, photometry options, star)`` of real epoch 1's twins, from its BLISS fit."""
     import eclipsebench as eb
     from eclipsebench.astro.catalogue import get_system
     from eclipsebench.trust.recipe import build_recipe, photometry_options
-    from eclipsebench.trust.twin import photometry_window, twin_star, twin_table
+    from eclipsebench.trust.twin import twin_star
 
     path = _real_table(work)
     fit = eb.reduce(path, "bliss", sampler="leastsq", prayer_bead_shifts=0)
     recipe, _ = build_recipe(str(path), get_system("XO-3b"), fit.to_dict(), fit.depth_ppm)
     options = photometry_options(recipe.obs)
-    star = twin_star(recipe, options)
+    return recipe, options, twin_star(recipe, options)
+
+
+def window(work: Path, n_twins: int) -> None:
+    from eclipsebench.trust.twin import photometry_window, twin_table
+
+    recipe, options, star = _real_recipe(work)
     x, y = recipe.obs.track_px()
     print("windows (x0, y0, nx, ny) per AOR: " + ", ".join(
         str(photometry_window(x[r], y[r], options, (32, 32))) for r in recipe.obs.aors()))
@@ -187,16 +194,10 @@ def _compare(one: list[dict[str, float]], other: list[dict[str, float]], name_on
 def gaussian(work: Path, n_twins: int) -> None:
     """Issue 40: the twins' Gaussian photon noise against the exact Poisson draws."""
     import eclipsebench as eb
-    from eclipsebench.astro.catalogue import get_system
     from eclipsebench.photometry.clean import running_median
-    from eclipsebench.trust.recipe import build_recipe, photometry_options
-    from eclipsebench.trust.twin import GAUSSIAN_SKEW, twin_star, twin_table
+    from eclipsebench.trust.twin import GAUSSIAN_SKEW, twin_table
 
-    path = _real_table(work)
-    fit = eb.reduce(path, "bliss", sampler="leastsq", prayer_bead_shifts=0)
-    recipe, _ = build_recipe(str(path), get_system("XO-3b"), fit.to_dict(), fit.depth_ppm)
-    options = photometry_options(recipe.obs)
-    star = twin_star(recipe, options)
+    recipe, options, star = _real_recipe(work)
     ways = {"gaussian": GAUSSIAN_SKEW, "exact": 0.0}
     runs: dict[str, list[dict[str, float]]] = {w: [] for w in ways}
     cpu = {w: 0.0 for w in ways}
