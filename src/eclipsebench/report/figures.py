@@ -73,7 +73,8 @@ def save_figure(fig: Figure, dest_stem: str | Path, *, dpi: int = 120) -> list[P
     """Write ``dest_stem.png`` and ``dest_stem.pdf`` atomically (no timestamps).
 
     The layout is computed once, for the PNG; the PDF keeps its positions (the
-    constrained layout of a figure of many panels costs as much as drawing it).
+    constrained layout of a figure of many panels costs as much as drawing it),
+    and so does ``fig`` afterwards: its layout engine is set to none.
     """
     stem = Path(dest_stem)
     out = []
