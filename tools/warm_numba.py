@@ -8,7 +8,10 @@ cache is empty, and the first ``eclipsebench run``, ``photometry`` or
 This script meets them all once, on a tiny observation in a temporary
 folder: simulate one short epoch (with its KR/Pmap calibration set), measure
 it, reduce it with every registered method by least squares and with BLISS
-and KR/Data by MCMC. The Makefile's install step runs it; it writes nothing else.
+and KR/Data by MCMC, render and measure one ``trust`` twin of it, and call the
+public photometry estimators (:mod:`eclipsebench.photometry.estimators`,
+:mod:`eclipsebench.photometry.overlap`) that the pipeline's fused kernel does
+not. The Makefile's install step runs it; it writes nothing else.
 
 Usage: ``python tools/warm_numba.py`` (prints the seconds it took).
 """
@@ -47,8 +50,57 @@ def main() -> int:
                 pass
         for method in ("bliss", "kr-data"):    # the kernels only their MCMC walkers meet
             eb.reduce(table, method, config=cfg, sampler="mcmc", prayer_bead_shifts=2)
+        warm_trust_twin(table)
+    warm_estimators()
+    warm_eclipse_table()
     print(f"numba kernels compiled and cached in {time.perf_counter() - t0:.0f} s")
     return 0
+
+
+def warm_trust_twin(table) -> None:
+    """One twin of ``table`` with motion within its exposures: the twins' own kernels (the
+    motion's tick moments, the windowed rendering)."""
+    import numpy as np
+
+    from eclipsebench.trust.observation import observation_from_table
+    from eclipsebench.trust.recipe import photometry_options
+    from eclipsebench.trust.twin import make_recipe, twin_table
+
+    obs = observation_from_table(table, "the warm-up's table")
+    options = photometry_options(obs)
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=options.radius_px,
+                         motion_peak_px=0.1)
+    twin_table(recipe, options, seed=0, twin=1)
+
+
+def warm_estimators() -> None:
+    """The public estimators, each its own compiled stack (float64 frames, as they convert)."""
+    import numpy as np
+
+    from eclipsebench.photometry import estimators
+    from eclipsebench.photometry.overlap import circle_overlap_grid, pixel_overlap
+
+    frames = np.random.default_rng(0).normal(100.0, 1.0, (4, 32, 32))
+    frames[:, 15:18, 15:18] += 1000.0
+    estimators.brightest_pixel(frames)
+    x, y = estimators.centroid_col(frames)[:2]
+    estimators.annulus_background(frames, x, y)
+    estimators.aperture_sums(frames, x, y, [2.0, 3.0])
+    estimators.centroid_gauss(frames)
+    estimators.centroid_lsq_asym(frames)
+    circle_overlap_grid((21, 21), 10.3, 9.8, 3.0)
+    pixel_overlap(-0.5, 0.5, -0.5, 0.5, 1.0)
+
+
+
+def warm_eclipse_table() -> None:
+    """The physical eclipse shape's table at times other than the data's (a binned fit's)."""
+    import numpy as np
+
+    from eclipsebench.fit.model.kernels import _interp_table, _search_table
+
+    xp = np.linspace(-0.1, 0.1, 9)
+    _interp_table(np.zeros((2, 3)), _search_table(xp, np.abs(xp)))
 
 
 if __name__ == "__main__":
