@@ -139,7 +139,8 @@ def test_graph_with_twins_and_report():
     keys = [t.key for t in build_tasks(cfg, "/nonexistent")]
     assert "simulate/calibration" in keys and "simulate_flat/truth" in keys
     assert "reduce_flat/pld/epoch_02" in keys and "reduce_flat/bliss/epoch_02" not in keys
-    assert keys[-2:] == ["stats", "report"]
+    assert keys[-4:] == ["stats", "report/figures-results-1", "report/figures-results-2", "report"]
+    assert keys.index("report/figures-photometry") < keys.index("reduce/pld/epoch_01")
     # the engine's priority: the twin's chain before the many reductions that end the run
     assert keys.index("reduce_flat/pld/epoch_02") < keys.index("reduce/pld/epoch_01")
 

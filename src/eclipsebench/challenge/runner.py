@@ -12,7 +12,7 @@ simulate    :func:`eclipsebench.simulation.stage.plan_simulate_tasks`
 photometry  :func:`.photometry_stage.plan_photometry_tasks` ``photometry[_flat]/epoch_NN``
 reduce      :func:`.reduce_stage.plan_reduce_tasks`        ``reduce[_flat|_paper]/<m>/epoch_NN``
 stats       :func:`eclipsebench.stats.challenge.plan_stats_tasks`    ``stats``
-report      :func:`eclipsebench.report.challenge.plan_report_tasks`  ``report``
+report      :func:`eclipsebench.report.challenge.plan_report_tasks`  ``report/figures-*``, ``report``
 =========== ============================================ ===========================
 
 The run folder is described by :class:`eclipsebench.engine.layout.Layout`. Each task writes
@@ -48,7 +48,7 @@ from ..engine.tasks import RunReport, Task, check_outputs_inside, run_tasks
 from ..errors import ConfigError, InputError
 from ..io.atomic import atomic_path, write_text
 from ..io.paths import check_links_inside, check_output_path
-from ..report.challenge import plan_report_tasks
+from ..report.challenge import plan_photometry_figures_task, plan_report_tasks
 from ..simulation.stage import challenge_plans, plan_simulate_tasks, simulated_bytes
 from ..stats.challenge import MIN_EPOCHS, plan_stats_tasks
 from .photometry_stage import photometry_key, plan_photometry_tasks
@@ -126,6 +126,9 @@ def build_tasks(cfg: Config, root: str | Path) -> list[Task]:
         tasks += sim_tasks
         tasks += plan_photometry_tasks(vcfg, layout, plans, flat=flat,
                                        after=(sim_tasks[-1].key,))
+        if not flat and cfg.run.report:
+            tasks += plan_photometry_figures_task(cfg, layout, epochs, after=tuple(
+                photometry_key(e) for e in epochs))
         if flat and plm is not None:
             tasks += plan_reduce_tasks(vcfg, layout, epochs, [plm], flat=True)
     for profile in cfg.run.profiles:

@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import html
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -23,7 +24,8 @@ from .page import figure_html, html_table, notes_html, page_folder, page_html, r
 from .paper_tables import COMPARED_KEYS, TABLE4, comparison_rows
 from .tables import anova_lines, display_rows, write_tables
 
-__all__ = ["build_report", "render_index", "result_figures", "with_units"]
+__all__ = ["build_report", "draw_planned", "plan_photometry_figures", "plan_result_figures",
+           "render_index", "result_figures", "with_units"]
 
 #: Centroids drawn over all epochs (4000 per epoch for ten; a PDF of 400,000 is 8 MB).
 CENTROID_POINTS = 40_000
@@ -36,7 +38,8 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
                  truth_curve: tuple[np.ndarray, np.ndarray] | None = None,
                  gain_map: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
                  title: str = "eclipsebench report", notes: Mapping[str, object] | None = None,
-                 profile: str | None = None) -> Path:
+                 profile: str | None = None,
+                 drawn: tuple[list[Item], list[str]] | None = None) -> Path:
     """Write the whole report to ``dest`` and return the path of ``index.html``.
 
     Parameters
@@ -68,6 +71,9 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
     profile : str, optional
         The profile whose depths and statistics the figures show, named in
         each figure's title (default: ``summary["profile"]``).
+    drawn : tuple, optional
+        ``(figures, not drawn)`` already written into ``dest`` (a run draws its figures in
+        tasks of their own, :func:`draw_planned`): the page shows them and draws none.
 
     Returns
     -------
@@ -80,24 +86,33 @@ def build_report(dest: str | Path, *, summary: Mapping, depths, truth_ppm: float
         stem = "eclipse_depth_stats" + ("" if name == "controlled" else f"_{name}")
         table_files += write_tables(stats, root, stem=stem, caption=f"{title} ({name} profile)")
     profile = profile or summary.get("profile") or "controlled"
-    items, skipped = _photometry_figures(root, photometry, gain_map)
-    more, not_drawn = result_figures(
-        root, summary, group_by_method(depths, list(summary["methods"])), profile,
-        truth_ppm=truth_ppm, lightcurves=lightcurves, lightcurve_epoch=lightcurve_epoch,
-        truth_curve=truth_curve)
+    if drawn is None:
+        planned, skipped = plan_photometry_figures(photometry, gain_map)
+        more, not_drawn = plan_result_figures(
+            summary, group_by_method(depths, list(summary["methods"])), profile,
+            truth_ppm=truth_ppm, lightcurves=lightcurves, lightcurve_epoch=lightcurve_epoch,
+            truth_curve=truth_curve)
+        drawn = draw_planned(root, planned + more), skipped + not_drawn
     summary_path = write_text(root / "statistics.json",
                               json.dumps(_plain(summary), indent=2, sort_keys=True) + "\n")
-    page = render_index(title=title, summary=summary, figures=items + more,
-                        tables=[*table_files, summary_path], skipped=skipped + not_drawn,
+    page = render_index(title=title, summary=summary, figures=drawn[0],
+                        tables=[*table_files, summary_path], skipped=drawn[1],
                         root=root, notes=notes or {}, profile=profile)
     return write_text(root / "index.html", page)
 
 
 #: A figure of the report: file stem, caption, files written.
 Item = tuple[str, str, list[Path]]
+#: A figure to draw: file stem, caption and the call that draws it.
+Planned = tuple[str, str, Callable[[], Any]]
 
 
-def _photometry_figures(root: Path, photometry, gain_map) -> tuple[list[Item], list[str]]:
+def draw_planned(root: Path, planned: list[Planned]) -> list[Item]:
+    """Draw and save (PNG and PDF) each planned figure into ``root``, in order."""
+    return [(name, caption, F.save_figure(draw(), root / name)) for name, caption, draw in planned]
+
+
+def plan_photometry_figures(photometry, gain_map) -> tuple[list[Planned], list[str]]:
     """Centroids and photometry against phase: one photometry for every profile."""
     if not photometry:
         return [], ["centroid clouds and photometry vs phase (no photometry given)"]
@@ -105,67 +120,80 @@ def _photometry_figures(root: Path, photometry, gain_map) -> tuple[list[Item], l
     return [
         ("centroids", "Centroid positions per epoch (center of light)"
          + (" over the intra-pixel gain map." if gain_map is not None else "."),
-         F.save_figure(F.centroid_clouds({e: (p["x"], p["y"]) for e, p in photometry.items()},
-                                         gain_map=gain_map, title="Centroids" + every,
-                                         max_points=max(400, CENTROID_POINTS // len(photometry))),
-                       root / "centroids")),
+         lambda: F.centroid_clouds({e: (p["x"], p["y"]) for e, p in photometry.items()},
+                                   gain_map=gain_map, title="Centroids" + every,
+                                   max_points=max(400, CENTROID_POINTS // len(photometry)))),
         ("photometry_phase", "x and y centroids, noise pixels, background and aperture flux "
          "(normalised to the mean of all epochs) against orbital phase, binned 63 frames.",
-         F.save_figure(F.photometry_vs_phase(photometry, title="Photometry vs phase" + every),
-                       root / "photometry_phase")),
+         lambda: F.photometry_vs_phase(photometry, title="Photometry vs phase" + every)),
     ], []
 
 
 def result_figures(root: Path, summary: Mapping, groups: Mapping, profile: str, *,
-                    truth_ppm, lightcurves, lightcurve_epoch, truth_curve
-                    ) -> tuple[list[Item], list[str]]:
-    """The figures of one profile's depths and statistics, each titled with the profile."""
-    items: list[Item] = []
+                   truth_ppm, lightcurves, lightcurve_epoch, truth_curve
+                   ) -> tuple[list[Item], list[str]]:
+    """Draw the figures of one profile's depths and statistics (:func:`plan_result_figures`)
+    into ``root``: ``(figures, not drawn)``."""
+    planned, skipped = plan_result_figures(summary, groups, profile, truth_ppm=truth_ppm,
+                                           lightcurves=lightcurves,
+                                           lightcurve_epoch=lightcurve_epoch,
+                                           truth_curve=truth_curve)
+    return draw_planned(root, planned), skipped
+
+
+def plan_result_figures(summary: Mapping, groups: Mapping, profile: str, *,
+                        truth_ppm, lightcurves, lightcurve_epoch, truth_curve
+                        ) -> tuple[list[Planned], list[str]]:
+    """The figures of one profile's depths and statistics, each titled with the profile,
+    planned (not drawn), and what cannot be drawn."""
+    items: list[Planned] = []
     skipped: list[str] = []
     sigma_phot = summary.get("sigma_phot_ppm")
 
     def named(text: str) -> str:
         return f"{text} ({profile} profile)"
 
-    def add(name: str, caption: str, fig) -> None:
-        items.append((name, caption, F.save_figure(fig, root / name)))
+    def add(name: str, caption: str, draw: Callable[[], Any]) -> None:
+        items.append((name, caption, draw))
 
     if lightcurves:
         add("lightcurves", f"Decorrelated light curves of epoch {lightcurve_epoch}, each binned "
             f"to about {F.LIGHTCURVE_POINTS} points (a method fitted on bins, as GP, has fewer "
             "rows, binned less); red: the fitted model"
             + ("; blue: the input light curve." if truth_curve is not None else "."),
-            F.decorrelated_lightcurves(lightcurves, truth=truth_curve,
-                                       title=named("Decorrelated light curves")))
+            lambda: F.decorrelated_lightcurves(lightcurves, truth=truth_curve,
+                                               title=named("Decorrelated light curves")))
     else:
         skipped.append("decorrelated light curves (none given)")
     add("depths", "Eclipse depths per epoch and method (reported 1-sigma errors); right: weighted "
         "means with sigma_tot = f_dis sigma_orig; red: grand mean +- its error"
         + ("; blue: the input depth." if truth_ppm is not None else "."),
-        F.depths_per_epoch({m: (g.epoch, g.depth_ppm, g.error_ppm) for m, g in groups.items()},
-                           summary, truth_ppm=truth_ppm, title=named("Eclipse depths")))
+        lambda: F.depths_per_epoch({m: (g.epoch, g.depth_ppm, g.error_ppm)
+                                    for m, g in groups.items()},
+                                   summary, truth_ppm=truth_ppm, title=named("Eclipse depths")))
     add("visit_differences", "Mean/difference plots between visits: every ordered pair of epochs; "
         "dashed: +-R (the repeatability).",
-        F.visit_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()}, summary,
-                            title=named("Repeated visits: mean/difference")))
+        lambda: F.visit_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()},
+                                    summary, title=named("Repeated visits: mean/difference")))
     if len(groups) >= 2:
         add("method_differences", "Mean/difference plots between methods per common epoch; dashed: "
             "mean difference +- SD; corner: unpaired t-test p (red if < 0.05).",
-            F.method_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()},
-                                 summary["ttest"]["p"], title=named("Methods: mean/difference")))
+            lambda: F.method_differences({m: (g.epoch, g.depth_ppm) for m, g in groups.items()},
+                                         summary["ttest"]["p"],
+                                         title=named("Methods: mean/difference")))
     else:
         skipped.append("method differences (one method)")
     if sigma_phot is not None:
         add("repeatability_reliability", "Repeatability R against reliability r; solid: "
             "R = sqrt(2) sigma_phot / r; dashed: least-squares fit R = k / r.",
-            F.repeatability_vs_reliability(summary, sigma_phot,
-                                           title=named("Repeatability vs reliability")))
+            lambda: F.repeatability_vs_reliability(summary, sigma_phot,
+                                                   title=named("Repeatability vs reliability")))
         if truth_ppm is not None:
             add("accuracy_reliability", "Accuracy a against reliability r; dotted: a = r; dashed: "
-                "linear fit.", F.accuracy_vs_reliability(summary,
-                                                         title=named("Accuracy vs reliability")))
+                "linear fit.", lambda: F.accuracy_vs_reliability(
+                    summary, title=named("Accuracy vs reliability")))
             add("accuracy_ratio_bias", "a / r against the mean absolute bias; dashed: linear fit.",
-                F.accuracy_ratio_vs_bias(summary, title=named("a/r vs |bias|")))
+                lambda: F.accuracy_ratio_vs_bias(summary, title=named("a/r vs |bias|")))
         else:
             skipped.append("accuracy figures (no truth)")
     else:
@@ -174,11 +202,11 @@ def result_figures(root: Path, summary: Mapping, groups: Mapping, profile: str, 
         add("coverage", "Fraction of epochs whose reported 1-sigma (blue) and 2-sigma (red) errors "
             "cover the input depth; error bars: the exact binomial 68% interval of that "
             "fraction; dashed: 68.3% and 95.4%, the coverage of honest Gaussian errors.",
-            F.coverage_per_method(summary, title=named("Coverage of the truth")))
+            lambda: F.coverage_per_method(summary, title=named("Coverage of the truth")))
         add("normalised_residuals", "Normalised residuals (D - truth) / sigma per epoch with the "
             "reported sigma: all methods pooled, then per method, against the unit Gaussian "
             "(black); values beyond +-4 are counted in the outer bins.",
-            F.normalised_residual_histograms(
+            lambda: F.normalised_residual_histograms(
                 {m: normalised_residuals(g.depth_ppm, g.error_ppm, truth_ppm)
                  for m, g in groups.items()},
                 title=named("Normalised residuals (D - truth) / sigma")))
