@@ -53,10 +53,10 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 #: default two workers of ``run``, ``simulate`` and ``trust``, the ``dask`` command), longest
 #: first (``--durations``): a parallel run hands them out first, in this order.
 DASK_MODULES = (
-    "tests/challenge/test_faults.py", "tests/trust/test_trust.py",
-    "tests/challenge/test_runner.py", "tests/engine/test_cluster.py",
-    "tests/engine/test_engine.py", "tests/simulation/test_sim_challenge.py",
-    "tests/engine/test_cluster_security.py", "tests/challenge/test_campaign.py",
+    "tests/challenge/test_campaign.py", "tests/trust/test_trust.py",
+    "tests/challenge/test_runner.py", "tests/challenge/test_faults.py",
+    "tests/engine/test_cluster.py", "tests/simulation/test_sim_challenge.py",
+    "tests/engine/test_cluster_security.py", "tests/engine/test_engine.py",
 )
 
 
