@@ -28,7 +28,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 __all__ = ["PHASE_MODELS", "N_COEFFS", "flat", "linear", "quadratic", "sinusoid",
-           "design_matrix", "evaluate", "harmonic_curve", "harmonic_summary", "fit_harmonics",
+           "design_matrix", "evaluate", "harmonic_curve", "harmonic_terms",
+           "harmonic_from_terms", "harmonic_summary", "fit_harmonics",
            "fit_harmonic_light_curve"]
 
 
@@ -122,13 +123,30 @@ def harmonic_curve(phase_rad, depth: float, harmonics: Sequence[float] | np.ndar
     >>> harmonic_curve([0.0, math.pi], 2e-3, (5e-4, 0.0)).tolist()
     [0.002, 0.001]
     """
-    phi = np.asarray(phase_rad, dtype=float)
     h = tuple(float(v) for v in harmonics)
     if len(h) not in (2, 4):
         raise ValueError(f"harmonics: expected (a1, b1) or (a1, b1, a2, b2), got {len(h)} values")
-    p = depth + h[0] * (np.cos(phi) - 1.0) + h[1] * np.sin(phi)
+    return harmonic_from_terms(harmonic_terms(phase_rad, len(h) // 2), depth, h)
+
+
+def harmonic_terms(phase_rad, n_harmonics: int) -> tuple[np.ndarray, ...]:
+    """``cos phi - 1, sin phi`` (and ``cos 2 phi - 1, sin 2 phi`` for two harmonics): what
+    :func:`harmonic_curve` weighs by its coefficients (a fitter moving only the
+    coefficients reuses them)."""
+    phi = np.asarray(phase_rad, dtype=float)
+    terms = (np.cos(phi) - 1.0, np.sin(phi))
+    if n_harmonics == 2:
+        terms += (np.cos(2.0 * phi) - 1.0, np.sin(2.0 * phi))
+    return terms
+
+
+def harmonic_from_terms(terms: Sequence[np.ndarray], depth: float,
+                        harmonics: Sequence[float]) -> np.ndarray:
+    """:func:`harmonic_curve` from its :func:`harmonic_terms`."""
+    h = tuple(float(v) for v in harmonics)
+    p = depth + h[0] * terms[0] + h[1] * terms[1]
     if len(h) == 4:
-        p = p + h[2] * (np.cos(2.0 * phi) - 1.0) + h[3] * np.sin(2.0 * phi)
+        p = p + h[2] * terms[2] + h[3] * terms[3]
     return p
 
 

@@ -40,7 +40,12 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from ...astro.phase_curves import PHASE_MODELS, harmonic_curve
+from ...astro.phase_curves import (
+    PHASE_MODELS,
+    harmonic_curve,
+    harmonic_from_terms,
+    harmonic_terms,
+)
 from ...errors import InputError
 
 __all__ = ["TRANSIT_FREE", "SCALES", "TRANSIT_BOUNDS", "MAX_SUBEXPOSURE_S", "NONNEGATIVE_SCALE",
@@ -281,6 +286,15 @@ class FirstHarmonic(PhaseTerm):
 
     def value(self, level, c, dt, period_d):
         return harmonic_curve((2.0 * np.pi / known_period(period_d)) * dt, level, c)
+
+    def terms(self, dt: np.ndarray, period_d: float | None) -> tuple[np.ndarray, ...]:
+        """What :meth:`value` weighs by the coefficients (:func:`harmonic_terms`): they
+        depend on the eclipse time alone."""
+        return harmonic_terms((2.0 * np.pi / known_period(period_d)) * dt, len(self.names) // 2)
+
+    def from_terms(self, level, c, terms: tuple[np.ndarray, ...]) -> np.ndarray:
+        """:meth:`value` from its :meth:`terms` (the same arithmetic)."""
+        return harmonic_from_terms(terms, level, c)
 
     def rows(self, level, c, dt, period_d):
         return np.stack([self.value(level[i, 0], c[i], dt[i], period_d)
