@@ -61,7 +61,13 @@ from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
 from ..simulation.plan import SECONDS_PER_DAY
-from ..simulation.render import FrameModel, centred_tick_moments, render_cube, tick_means
+from ..simulation.render import (
+    FrameModel,
+    centred_tick_moments,
+    render_cube,
+    tick_means,
+    tick_moments,
+)
 from ..simulation.star import StarImager
 from .noise import add_correlated
 from .observation import Observation
@@ -551,14 +557,26 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
     real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
     target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
     unit_x, unit_y, rms_per_peak = _unit_motion(obs, rows)
+    model = _frame_model(obs, "none")
+    # only the part of the subarray the photometry reads (the whole frame's noise pixels,
+    # byte for byte, on noise-free frames), and the motion's tick moments once per peak:
+    # they do not depend on the blur (issue 40)
+    x_track, y_track = obs.track_px()
+    window = photometry_window(x_track[rows], y_track[rows], options, model.shape)
+    moments_at: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def moments(peak: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if peak not in moments_at:
+            moments_at[peak] = tick_moments(peak * unit_x, peak * unit_y, model)
+        return moments_at[peak]
 
     def curves(blur: float | None) -> tuple[np.ndarray, np.ndarray]:
         star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
         medians, spreads = [], []
         for peak in grid_px:
             frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
-                                      motion=(peak * unit_x, peak * unit_y), noise_model="none",
-                                      star=star)
+                                      moments=moments(peak), noise_model="none", star=star,
+                                      window=window)
             npx = _measure_rows(frames, obs, options)
             medians.append(float(np.median(npx)))
             spreads.append(_cube_median_sd(npx, cube_of))
