@@ -47,6 +47,7 @@ from ..instrument.pointing import (
     FBM_SEGMENT,
     PointingModel,
     PointingParams,
+    fbm_scale,
     frame_windows,
 )
 from ..instrument.prf import (
@@ -370,6 +371,72 @@ class ExposureMotion:
         return x_mean, y_mean, tick
 
 
+class _AnyPeakMotion:
+    """One draw of :class:`ExposureMotion` at frames ``rows``, for any peak: ``offsets(peak)``
+    is ``ExposureMotion(obs, model, peak, stream).offsets(rows)`` byte for byte, the jitter's
+    blocks drawn once (each block is one unscaled draw times ``A_fbm`` over its peak,
+    :meth:`~eclipsebench.instrument.pointing.PointingModel.fbm_block_unscaled`; the unscaled
+    values are single precision, so they are kept as such). The calibration's draw is asked at
+    the unit peak and at each candidate recipe's (issue 40)."""
+
+    def __init__(self, obs: Observation, model: FrameModel, stream: np.random.Generator,
+                 rows: np.ndarray):
+        motion = ExposureMotion(obs, model, 1.0, stream)
+        self.model = model
+        n_grid = model.grid_samples_per_frame
+        block_len = FBM_SEGMENT * FBM_BLOCK_SEGMENTS
+        starts = motion.start_index[rows]
+        # each frame's samples: its first block's from `at`, the next block's after `split`
+        self._first = starts // block_len
+        at = starts % block_len
+        self._split = np.minimum(block_len - at, n_grid)
+        self._raw = np.empty((2, rows.size, n_grid), np.float32)
+        self._peaks: dict[int, np.ndarray] = {}
+        crossing = np.flatnonzero(self._split < n_grid)
+        for b in np.unique(np.concatenate([self._first, self._first[crossing] + 1])):
+            z, self._peaks[int(b)] = motion._pointing.fbm_block_unscaled(int(b))
+            for i in np.flatnonzero(self._first == b):
+                k = self._split[i]
+                self._raw[:, i, :k] = z[:, at[i]:at[i] + k]
+            for i in crossing[self._first[crossing] == b - 1]:
+                k = self._split[i]
+                self._raw[:, i, k:] = z[:, :n_grid - k]
+
+    def offsets(self, peak_px: float) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`ExposureMotion.offsets` of the rows with peak ``peak_px``."""
+        peak = float(peak_px)
+        n_rows, n_grid = self._raw.shape[1:]
+        dx, dy = np.zeros((n_rows, n_grid)), np.zeros((n_rows, n_grid))
+        if peak > 0:
+            scale = {b: fbm_scale(peak, p)[:, 0] for b, p in self._peaks.items()}
+            first = np.array([scale[int(b)] for b in self._first])
+            second = np.array([scale.get(int(b) + 1, scale[int(b)]) for b in self._first])
+            in_first = np.arange(n_grid)[None, :] < self._split[:, None]
+            for axis, out in enumerate((dx, dy)):
+                factor = np.where(in_first, first[:, axis, None], second[:, axis, None])
+                np.multiply(self._raw[axis].astype(float), factor, out=out)
+        mx, my = tick_means(dx, dy, self.model)
+        return dx - mx[:, None], dy - my[:, None]
+
+
+#: The calibration's draw of the motion last made in this process (:func:`_calibration_motion`).
+_CALIBRATION_MOTION: list[tuple[Observation, tuple, _AnyPeakMotion]] = []
+
+
+def _calibration_motion(obs: Observation, rows: np.ndarray, model: FrameModel
+                        ) -> _AnyPeakMotion:
+    """The calibration's one draw of :class:`ExposureMotion` (stream ``("trust",
+    "calibrate")``) at ``rows`` of ``obs``, made once for the noise pixels' unit motion, the
+    blurs spanned and each candidate's background share (issue 40)."""
+    key = (rows.tobytes(), model.mode, model.subsamples, model.subsamples_per_tick)
+    if _CALIBRATION_MOTION and _CALIBRATION_MOTION[0][0] is obs \
+            and _CALIBRATION_MOTION[0][1] == key:
+        return _CALIBRATION_MOTION[0][2]
+    motion = _AnyPeakMotion(obs, model, rng(0, "trust", "calibrate"), rows)
+    _CALIBRATION_MOTION[:] = [(obs, key, motion)]
+    return motion
+
+
 def photometry_window(x_px: np.ndarray, y_px: np.ndarray, options: PhotometrySection,
                       shape: tuple[int, int]) -> tuple[int, int, int, int]:
     """``(x0, y0, nx, ny)``: the part of frames of ``shape`` that the photometry with
@@ -588,8 +655,7 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
 def _unit_motion(obs: Observation, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """One draw of :class:`ExposureMotion` of 1 px peak at ``rows`` (the calibration's): its
     offsets in x and y and its rms (px) per px of peak."""
-    model = _frame_model(obs, "none")
-    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
+    unit_x, unit_y = _calibration_motion(obs, rows, _frame_model(obs, "none")).offsets(1.0)
     return unit_x, unit_y, float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
 
 
@@ -807,10 +873,10 @@ def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
     rows, _, _ = _calibration_rows(obs, frames_per_cube, max_frames)
     level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, obs.good)
     model = _frame_model(obs, "physical")
-    motion = ExposureMotion(obs, model, recipe.motion_peak_px, rng(0, "trust", "calibrate"))
+    motion = _calibration_motion(obs, rows, model).offsets(recipe.motion_peak_px)
     # the exact Poisson draws, as the pilot twin's (trust/recipe.py::pilot_twin): a calibration
     frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate", "background"),
-                              motion=motion.offsets(rows), radius_px=options.radius_px,
+                              motion=motion, radius_px=options.radius_px,
                               gaussian_skew=0.0)
     sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
     measured = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
