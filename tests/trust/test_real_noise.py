@@ -17,6 +17,7 @@ from astropy.table import Table
 
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table
+from eclipsebench.simulation.star import StarImager
 from eclipsebench.trust.noise import add_correlated, correlated_component, twin_shift
 from eclipsebench.trust.observation import observation_from_table
 from eclipsebench.trust.recipe import bounded_recipe
@@ -202,23 +203,27 @@ def test_gentler_motions_keep_the_real_median_with_less_motion(small_table):
 def test_the_calibration_renders_the_photometry_window_with_each_peak_s_moments_once(
         small_table, monkeypatch):
     """Issue 40: the calibration's noise-free frames are rendered only where the photometry
-    reads, with the motion's tick moments taken once per peak for every blur, and give the
-    noise pixels of whole frames rendered from the offsets at each blur and peak (to rounding:
-    the window's coordinates are offset by whole pixels)."""
+    reads, with the motion's tick moments taken once per peak for every blur and the star's
+    Taylor basis once per blur, and give the noise pixels of whole frames rendered from the
+    offsets at each blur and peak (to rounding: the window's coordinates are offset by whole
+    pixels)."""
     import eclipsebench.trust.twin as twin_module
 
     obs = observation_from_table(read_table(small_table))
     recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
     options, grid, blurs = PhotometrySection(), (0.0, 0.3, 0.6), (0.15, 0.3)
-    taken, windows = [], []
+    taken, windows, bases = [], [], []
     moments_of, render = twin_module.tick_moments, twin_module.render_frames_of
+    basis_of = StarImager.taylor_basis
     monkeypatch.setattr(twin_module, "tick_moments",
                         lambda *a: taken.append(1) or moments_of(*a))
+    monkeypatch.setattr(StarImager, "taylor_basis",
+                        lambda *a: bases.append(1) or basis_of(*a))
     monkeypatch.setattr(twin_module, "render_frames_of",
                         lambda *a, **k: windows.append(k.get("window")) or render(*a, **k))
     *_, curves, _, rows, _ = twin_module._noise_pixel_curves(recipe, options, 8, 2048, grid)
     got = [curves(b) for b in blurs]
-    assert len(taken) == len(grid)
+    assert len(taken) == len(grid) and len(bases) == len(blurs)
     x, y = obs.track_px()
     assert windows == [twin_module.photometry_window(x[rows], y[rows], options, (32, 32))] * 6
     monkeypatch.undo()

@@ -228,11 +228,32 @@ def builtin_prf(channel: int, blur_px: float | None = None, *, gain: bool = True
 
 
 def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
-          gain: GainPolynomial | None = None, blur_px: float | None = None) -> StarImager:
+          gain: GainPolynomial | None = None, blur_px: float | None = None,
+          kind: type[StarImager] = StarImager) -> StarImager:
     prf = builtin_prf(obs.channel, blur_px, gain=gain is None)
     if gain is not None:
         prf.gain = gain
-    return StarImager(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
+    return kind(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
+
+
+class _KeptBasisStar(StarImager):
+    """A :class:`~eclipsebench.simulation.star.StarImager` that keeps its last Taylor basis
+    (read-only, so no caller changes what it shares): the calibration renders the same frames
+    at every peak of the motion, whose positions (the track plus the motion's Fowler-weighted
+    mean offset, zero to rounding) are the same floats, and the basis is most of the
+    rendering (issue 40)."""
+
+    _kept: tuple[tuple, np.ndarray] | None = None
+
+    def taylor_basis(self, x_px: np.ndarray, y_px: np.ndarray, sx0: int, sy0: int, size: int
+                     ) -> np.ndarray:
+        key = (np.asarray(x_px, float).tobytes(), np.asarray(y_px, float).tobytes(), int(sx0),
+               int(sy0), int(size))
+        if self._kept is None or self._kept[0] != key:
+            basis = super().taylor_basis(x_px, y_px, sx0, sy0, size)
+            basis.setflags(write=False)
+            self._kept = (key, basis)
+        return self._kept[1]
 
 
 def _frame_model(obs: Observation, noise_model: str = "physical",
@@ -626,8 +647,8 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
     unit_x, unit_y, rms_per_peak = _unit_motion(obs, rows)
     model = _frame_model(obs, "none")
     # only the part of the subarray the photometry reads (the whole frame's noise pixels,
-    # byte for byte, on noise-free frames), and the motion's tick moments once per peak:
-    # they do not depend on the blur (issue 40)
+    # byte for byte, on noise-free frames), the motion's tick moments once per peak (they do
+    # not depend on the blur) and the star's Taylor basis once per blur (issue 40)
     x_track, y_track = obs.track_px()
     window = photometry_window(x_track[rows], y_track[rows], options, model.shape)
     moments_at: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -638,7 +659,8 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
         return moments_at[peak]
 
     def curves(blur: float | None) -> tuple[np.ndarray, np.ndarray]:
-        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
+        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur,
+                     kind=_KeptBasisStar)
         medians, spreads = [], []
         for peak in grid_px:
             frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
