@@ -656,9 +656,10 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
     target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
     unit_x, unit_y, rms_per_peak = _unit_motion(obs, rows)
     model = _frame_model(obs, "none")
-    # only the part of the subarray the photometry reads (the whole frame's noise pixels,
-    # byte for byte, on noise-free frames), the motion's tick moments once per peak (they do
-    # not depend on the blur) and the star's Taylor basis once per blur (issue 40)
+    # only the part of the subarray the photometry reads (the whole frame's noise pixels on
+    # noise-free frames, to an ulp: the wings are rendered at the frames' mean position in
+    # offset coordinates), the motion's tick moments once per peak (they do not depend on the
+    # blur) and the star's Taylor basis once per blur (issue 40)
     x_track, y_track = obs.track_px()
     window = photometry_window(x_track[rows], y_track[rows], options, model.shape)
     moments_at: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
