@@ -493,7 +493,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
                      star: StarImager | None = None,
                      window: tuple[int, int, int, int] | None = None,
                      moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-                     gaussian_skew: float = GAUSSIAN_SKEW) -> np.ndarray:
+                     gaussian_skew: float = GAUSSIAN_SKEW,
+                     track: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
     ``motion``: the offsets within each exposure about the measured centroid
@@ -505,7 +506,9 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     (:func:`photometry_window`; the PRF depends on the sub-pixel phase only,
     so the pixels are the whole frame's); None: the whole subarray.
     ``gaussian_skew``: where the photon noise is drawn as a Gaussian (:data:`GAUSSIAN_SKEW`;
-    0: exact Poisson draws everywhere, the challenge simulator's).
+    0: exact Poisson draws everywhere, the challenge simulator's). ``track``: the
+    observation's :meth:`~eclipsebench.trust.observation.Observation.track_px`, when the
+    caller renders it cube by cube (None: taken here).
     """
     obs = recipe.obs
     model = _frame_model(obs, noise_model, gaussian_skew)
@@ -515,7 +518,7 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
         model = dataclasses.replace(model, shape=(int(window[3]), int(window[2])))
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
                                                recipe.gain, recipe.blur_px)
-    x_track, y_track = obs.track_px()
+    x_track, y_track = track if track is not None else obs.track_px()
     dx: np.ndarray | None
     dy: np.ndarray | None
     if moments is not None:
@@ -590,7 +593,7 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
                              moments=motion.moments(cube) if motion.peak_px > 0 else None,
                              noise_model=noise_model, star=star, window=window,
-                             gaussian_skew=gaussian_skew)
+                             gaussian_skew=gaussian_skew, track=(x_track, y_track))
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options, window))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
