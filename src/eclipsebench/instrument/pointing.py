@@ -303,7 +303,8 @@ class PointingModel:
         draw can be scaled to several ``a_fbm_px`` (the twins' calibration, issue 40)."""
         z = fbm_segments(self._stream(0, b), 2 * FBM_BLOCK_SEGMENTS, FBM_SEGMENT,
                          self.params.beta_fbm).reshape(2, self._block_len)
-        return z, np.max(np.abs(z), axis=1, keepdims=True)
+        # max |z| without a temporary |z| (the same value)
+        return z, np.maximum(z.max(axis=1, keepdims=True), -z.min(axis=1, keepdims=True))
 
     def _fbm_block(self, b: int) -> np.ndarray:
         """Block ``b`` of the FBM, shape (2, block_len): x and y."""
@@ -311,10 +312,11 @@ class PointingModel:
         if cached is not None:
             return cached
         p = self.params
-        out = np.zeros((2, self._block_len))
-        if p.a_fbm_px > 0:
+        if p.a_fbm_px > 0:   # scaled in place: the draw is this call's own (no new 2 MB array)
             z, peak = self.fbm_block_unscaled(b)
-            np.multiply(z, fbm_scale(p.a_fbm_px, peak), out=out)
+            out = np.multiply(z, fbm_scale(p.a_fbm_px, peak), out=z)
+        else:
+            out = np.zeros((2, self._block_len))
         if len(self._block_cache) >= 4:
             self._block_cache.pop(next(iter(self._block_cache)))
         self._block_cache[b] = out
