@@ -17,6 +17,7 @@ from astropy.table import Table
 
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry.table import read_table
+from eclipsebench.simulation.star import StarImager
 from eclipsebench.trust.noise import add_correlated, correlated_component, twin_shift
 from eclipsebench.trust.observation import observation_from_table
 from eclipsebench.trust.recipe import bounded_recipe
@@ -197,6 +198,48 @@ def test_gentler_motions_keep_the_real_median_with_less_motion(small_table):
         assert c["blur_px"] == pytest.approx((1 - 0.5 * c["motion_peak_px"] ** 2) / 4)
         assert c["noise_pixels_twins"] == pytest.approx(4.0)
         assert c["noise_pixels_cube_sd_twins"] == pytest.approx(0.04 + 0.02 * c["motion_peak_px"])
+
+
+def test_the_calibration_renders_the_photometry_window_with_each_peak_s_moments_once(
+        small_table, monkeypatch):
+    """Issue 40: the calibration's noise-free frames are rendered only where the photometry
+    reads, with the motion's tick moments taken once per peak for every blur and the star's
+    Taylor basis once per blur, and give the noise pixels of whole frames rendered from the
+    offsets at each blur and peak (to rounding: the window's coordinates are offset by whole
+    pixels)."""
+    import eclipsebench.trust.twin as twin_module
+
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25)
+    options, grid, blurs = PhotometrySection(), (0.0, 0.3, 0.6), (0.15, 0.3)
+    taken, windows, bases = [], [], []
+    moments_of, render = twin_module.tick_moments, twin_module.render_frames_of
+    basis_of = StarImager.taylor_basis
+    monkeypatch.setattr(twin_module, "tick_moments",
+                        lambda *a: taken.append(1) or moments_of(*a))
+    monkeypatch.setattr(StarImager, "taylor_basis",
+                        lambda *a: bases.append(1) or basis_of(*a))
+    monkeypatch.setattr(twin_module, "render_frames_of",
+                        lambda *a, **k: windows.append(k.get("window")) or render(*a, **k))
+    *_, curves, _, rows, _ = twin_module._noise_pixel_curves(recipe, options, 8, 2048, grid)
+    got = [curves(b) for b in blurs]
+    assert len(taken) == len(grid) and len(bases) == len(blurs)
+    x, y = obs.track_px()
+    assert windows == [twin_module.photometry_window(x[rows], y[rows], options, (32, 32))] * 6
+    monkeypatch.undo()
+    unit_x, unit_y, _ = twin_module._unit_motion(obs, rows)
+    cube_of = twin_module._calibration_rows(obs, 8, 2048)[1]
+    for blur, (medians, spreads) in zip(blurs, got, strict=True):
+        star = twin_module._star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None,
+                                 blur)
+        for peak, median, spread in zip(grid, medians, spreads, strict=True):
+            whole = twin_module.render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
+                                                 motion=(peak * unit_x, peak * unit_y),
+                                                 noise_model="none", star=star)
+            npx = twin_module._measure_rows(whole, obs, options)
+            assert median == pytest.approx(np.median(npx), rel=1e-13, abs=0)
+            assert spread == pytest.approx(twin_module._cube_median_sd(npx, cube_of), rel=1e-11,
+                                           abs=0)
 
 
 def _white_and_red(obs) -> tuple:

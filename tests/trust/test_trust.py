@@ -91,6 +91,27 @@ def test_the_motion_s_moments_in_one_pass_are_those_of_its_offsets():
                                                  model)[2])
 
 
+def test_the_calibration_s_one_draw_of_the_motion_gives_each_peak_s_offsets_byte_for_byte():
+    """Issue 40: the calibration's draw of the motion, its blocks drawn once, gives at any peak
+    the offsets of an ExposureMotion made at that peak with the same stream, for frames within
+    a block and across blocks; the calibration asks for it once per observation and rows."""
+    from eclipsebench.seeding import rng
+    from eclipsebench.trust import twin as twin_module
+
+    obs = _cubes_of_sub_2s(12)
+    model = FrameModel(mode=obs.mode, noise_model="none", read_noise_e=9.4)
+    rows = np.arange(1, obs.n_frames, 3)
+    drawn = twin_module._AnyPeakMotion(obs, model, rng(0, "trust", "calibrate"), rows)
+    assert 0 < np.count_nonzero(drawn._split < model.grid_samples_per_frame)   # across blocks
+    for peak in (1.0, 0.677, 0.0):
+        want = ExposureMotion(obs, model, peak, rng(0, "trust", "calibrate")).offsets(rows)
+        got = drawn.offsets(peak)
+        assert all(np.array_equal(g, w) for g, w in zip(got, want, strict=True)), peak
+    first = twin_module._calibration_motion(obs, rows, model)
+    assert twin_module._calibration_motion(obs, rows, model) is first
+    assert twin_module._calibration_motion(obs, rows[1:], model) is not first
+
+
 def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
     table = read_table(small_table)
     obs = observation_from_table(table)

@@ -49,7 +49,7 @@ from eclipsebench.errors import InputError
 from ..detector.constants import PIXEL_SCALE_ARCSEC
 
 __all__ = ["PointingParams", "ParamRange", "PointingRanges", "draw_pointing_params",
-           "PointingModel", "fbm_series", "skewed_sine", "frame_windows"]
+           "PointingModel", "fbm_series", "fbm_scale", "skewed_sine", "frame_windows"]
 
 FBM_SEGMENT = 2048
 FBM_BLOCK_SEGMENTS = 64
@@ -210,6 +210,12 @@ def fbm_segments(rng: np.random.Generator, m: int, n: int, beta: float) -> np.nd
     return z.astype(float)
 
 
+def fbm_scale(a_fbm_px: float, peak: np.ndarray) -> np.ndarray:
+    """The factor that scales an FBM block whose peak ``|FBM|`` is ``peak`` (per axis) to the
+    peak ``a_fbm_px`` (a block of zeros stays zeros)."""
+    return a_fbm_px / np.where(peak > 0, peak, 1.0)
+
+
 def _skew_phase(q, s_w: float):
     """phi_sk(q) of the paper (wobble equation), q in [0, 1)."""
     q = np.asarray(q, float)
@@ -291,18 +297,26 @@ class PointingModel:
         self._walk_amp, self._walk_per = walks
 
     # ----- FBM -------------------------------------------------------------
+    def fbm_block_unscaled(self, b: int) -> tuple[np.ndarray, np.ndarray]:
+        """Block ``b`` of the FBM before its scaling, shape (2, block_len), and each axis's
+        peak ``|FBM|``, shape (2, 1): the block is ``z * fbm_scale(a_fbm_px, peak)``, so one
+        draw can be scaled to several ``a_fbm_px`` (the twins' calibration, issue 40)."""
+        z = fbm_segments(self._stream(0, b), 2 * FBM_BLOCK_SEGMENTS, FBM_SEGMENT,
+                         self.params.beta_fbm).reshape(2, self._block_len)
+        # max |z| without a temporary |z| (the same value)
+        return z, np.maximum(z.max(axis=1, keepdims=True), -z.min(axis=1, keepdims=True))
+
     def _fbm_block(self, b: int) -> np.ndarray:
         """Block ``b`` of the FBM, shape (2, block_len): x and y."""
         cached = self._block_cache.get(b)
         if cached is not None:
             return cached
         p = self.params
-        out = np.zeros((2, self._block_len))
-        if p.a_fbm_px > 0:
-            z = fbm_segments(self._stream(0, b), 2 * FBM_BLOCK_SEGMENTS, FBM_SEGMENT,
-                             p.beta_fbm).reshape(2, self._block_len)
-            peak = np.max(np.abs(z), axis=1, keepdims=True)
-            np.multiply(z, p.a_fbm_px / np.where(peak > 0, peak, 1.0), out=out)
+        if p.a_fbm_px > 0:   # scaled in place: the draw is this call's own (no new 2 MB array)
+            z, peak = self.fbm_block_unscaled(b)
+            out = np.multiply(z, fbm_scale(p.a_fbm_px, peak), out=z)
+        else:
+            out = np.zeros((2, self._block_len))
         if len(self._block_cache) >= 4:
             self._block_cache.pop(next(iter(self._block_cache)))
         self._block_cache[b] = out

@@ -47,6 +47,7 @@ from ..instrument.pointing import (
     FBM_SEGMENT,
     PointingModel,
     PointingParams,
+    fbm_scale,
     frame_windows,
 )
 from ..instrument.prf import (
@@ -61,7 +62,13 @@ from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
 from ..simulation.plan import SECONDS_PER_DAY
-from ..simulation.render import FrameModel, centred_tick_moments, render_cube, tick_means
+from ..simulation.render import (
+    FrameModel,
+    centred_tick_moments,
+    render_cube,
+    tick_means,
+    tick_moments,
+)
 from ..simulation.star import StarImager
 from .noise import add_correlated
 from .observation import Observation
@@ -221,11 +228,32 @@ def builtin_prf(channel: int, blur_px: float | None = None, *, gain: bool = True
 
 
 def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
-          gain: GainPolynomial | None = None, blur_px: float | None = None) -> StarImager:
+          gain: GainPolynomial | None = None, blur_px: float | None = None,
+          kind: type[StarImager] = StarImager) -> StarImager:
     prf = builtin_prf(obs.channel, blur_px, gain=gain is None)
     if gain is not None:
         prf.gain = gain
-    return StarImager(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
+    return kind(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
+
+
+class _KeptBasisStar(StarImager):
+    """A :class:`~eclipsebench.simulation.star.StarImager` that keeps its last Taylor basis
+    (read-only, so no caller changes what it shares): the calibration renders the same frames
+    at every peak of the motion, whose positions (the track plus the motion's Fowler-weighted
+    mean offset, zero to rounding) are the same floats, and the basis is most of the
+    rendering (issue 40)."""
+
+    _kept: tuple[tuple, np.ndarray] | None = None
+
+    def taylor_basis(self, x_px: np.ndarray, y_px: np.ndarray, sx0: int, sy0: int, size: int
+                     ) -> np.ndarray:
+        key = (np.asarray(x_px, float).tobytes(), np.asarray(y_px, float).tobytes(), int(sx0),
+               int(sy0), int(size))
+        if self._kept is None or self._kept[0] != key:
+            basis = super().taylor_basis(x_px, y_px, sx0, sy0, size)
+            basis.setflags(write=False)
+            self._kept = (key, basis)
+        return self._kept[1]
 
 
 def _frame_model(obs: Observation, noise_model: str = "physical",
@@ -364,6 +392,72 @@ class ExposureMotion:
         return x_mean, y_mean, tick
 
 
+class _AnyPeakMotion:
+    """One draw of :class:`ExposureMotion` at frames ``rows``, for any peak: ``offsets(peak)``
+    is ``ExposureMotion(obs, model, peak, stream).offsets(rows)`` byte for byte, the jitter's
+    blocks drawn once (each block is one unscaled draw times ``A_fbm`` over its peak,
+    :meth:`~eclipsebench.instrument.pointing.PointingModel.fbm_block_unscaled`; the unscaled
+    values are single precision, so they are kept as such). The calibration's draw is asked at
+    the unit peak and at each candidate recipe's (issue 40)."""
+
+    def __init__(self, obs: Observation, model: FrameModel, stream: np.random.Generator,
+                 rows: np.ndarray):
+        motion = ExposureMotion(obs, model, 1.0, stream)
+        self.model = model
+        n_grid = model.grid_samples_per_frame
+        block_len = FBM_SEGMENT * FBM_BLOCK_SEGMENTS
+        starts = motion.start_index[rows]
+        # each frame's samples: its first block's from `at`, the next block's after `split`
+        self._first = starts // block_len
+        at = starts % block_len
+        self._split = np.minimum(block_len - at, n_grid)
+        self._raw = np.empty((2, rows.size, n_grid), np.float32)
+        self._peaks: dict[int, np.ndarray] = {}
+        crossing = np.flatnonzero(self._split < n_grid)
+        for b in np.unique(np.concatenate([self._first, self._first[crossing] + 1])):
+            z, self._peaks[int(b)] = motion._pointing.fbm_block_unscaled(int(b))
+            for i in np.flatnonzero(self._first == b):
+                k = self._split[i]
+                self._raw[:, i, :k] = z[:, at[i]:at[i] + k]
+            for i in crossing[self._first[crossing] == b - 1]:
+                k = self._split[i]
+                self._raw[:, i, k:] = z[:, :n_grid - k]
+
+    def offsets(self, peak_px: float) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`ExposureMotion.offsets` of the rows with peak ``peak_px``."""
+        peak = float(peak_px)
+        n_rows, n_grid = self._raw.shape[1:]
+        dx, dy = np.zeros((n_rows, n_grid)), np.zeros((n_rows, n_grid))
+        if peak > 0:
+            scale = {b: fbm_scale(peak, p)[:, 0] for b, p in self._peaks.items()}
+            first = np.array([scale[int(b)] for b in self._first])
+            second = np.array([scale.get(int(b) + 1, scale[int(b)]) for b in self._first])
+            in_first = np.arange(n_grid)[None, :] < self._split[:, None]
+            for axis, out in enumerate((dx, dy)):
+                factor = np.where(in_first, first[:, axis, None], second[:, axis, None])
+                np.multiply(self._raw[axis].astype(float), factor, out=out)
+        mx, my = tick_means(dx, dy, self.model)
+        return dx - mx[:, None], dy - my[:, None]
+
+
+#: The calibration's draw of the motion last made in this process (:func:`_calibration_motion`).
+_CALIBRATION_MOTION: list[tuple[Observation, tuple, _AnyPeakMotion]] = []
+
+
+def _calibration_motion(obs: Observation, rows: np.ndarray, model: FrameModel
+                        ) -> _AnyPeakMotion:
+    """The calibration's one draw of :class:`ExposureMotion` (stream ``("trust",
+    "calibrate")``) at ``rows`` of ``obs``, made once for the noise pixels' unit motion, the
+    blurs spanned and each candidate's background share (issue 40)."""
+    key = (rows.tobytes(), model.mode, model.subsamples, model.subsamples_per_tick)
+    if _CALIBRATION_MOTION and _CALIBRATION_MOTION[0][0] is obs \
+            and _CALIBRATION_MOTION[0][1] == key:
+        return _CALIBRATION_MOTION[0][2]
+    motion = _AnyPeakMotion(obs, model, rng(0, "trust", "calibrate"), rows)
+    _CALIBRATION_MOTION[:] = [(obs, key, motion)]
+    return motion
+
+
 def photometry_window(x_px: np.ndarray, y_px: np.ndarray, options: PhotometrySection,
                       shape: tuple[int, int]) -> tuple[int, int, int, int]:
     """``(x0, y0, nx, ny)``: the part of frames of ``shape`` that the photometry with
@@ -399,7 +493,8 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
                      star: StarImager | None = None,
                      window: tuple[int, int, int, int] | None = None,
                      moments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-                     gaussian_skew: float = GAUSSIAN_SKEW) -> np.ndarray:
+                     gaussian_skew: float = GAUSSIAN_SKEW,
+                     track: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The twin's frames (electrons) of the real frames ``rows`` of one cube.
 
     ``motion``: the offsets within each exposure about the measured centroid
@@ -411,7 +506,9 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
     (:func:`photometry_window`; the PRF depends on the sub-pixel phase only,
     so the pixels are the whole frame's); None: the whole subarray.
     ``gaussian_skew``: where the photon noise is drawn as a Gaussian (:data:`GAUSSIAN_SKEW`;
-    0: exact Poisson draws everywhere, the challenge simulator's).
+    0: exact Poisson draws everywhere, the challenge simulator's). ``track``: the
+    observation's :meth:`~eclipsebench.trust.observation.Observation.track_px`, when the
+    caller renders it cube by cube (None: taken here).
     """
     obs = recipe.obs
     model = _frame_model(obs, noise_model, gaussian_skew)
@@ -421,7 +518,7 @@ def render_frames_of(recipe: TwinRecipe, rows: np.ndarray, *, seed: int, key: tu
         model = dataclasses.replace(model, shape=(int(window[3]), int(window[2])))
     star = star if star is not None else _star(obs, recipe.x_ref_px, recipe.y_ref_px, radius_px,
                                                recipe.gain, recipe.blur_px)
-    x_track, y_track = obs.track_px()
+    x_track, y_track = track if track is not None else obs.track_px()
     dx: np.ndarray | None
     dy: np.ndarray | None
     if moments is not None:
@@ -496,7 +593,7 @@ def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twi
             render_frames_of(recipe, cube, seed=seed, key=("trust", "twin", twin, int(cube[0])),
                              moments=motion.moments(cube) if motion.peak_px > 0 else None,
                              noise_model=noise_model, star=star, window=window,
-                             gaussian_skew=gaussian_skew)
+                             gaussian_skew=gaussian_skew, track=(x_track, y_track))
             for cube in np.split(rows, np.flatnonzero(np.diff(obs.expid[rows]) != 0) + 1)])
         parts.append(_measure_aor(recipe, rows, frames, options, window))
     columns = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
@@ -524,9 +621,19 @@ def _calibration_rows(obs: Observation, frames_per_cube: int, max_frames: int
 
 
 def _cube_median_sd(values: np.ndarray, cube_of: np.ndarray) -> float:
-    """Sample SD over cubes of each cube's median of ``values``."""
-    medians = [np.median(values[cube_of == i]) for i in np.unique(cube_of)]
-    return float(np.std(medians, ddof=1)) if len(medians) > 1 else float("nan")
+    """Sample SD over cubes of each cube's median of ``values``.
+
+    The cubes of one size are stacked and their medians taken along the rows (the same
+    partition and mean as one cube's median, so the same floats; issue 40: the calibration
+    asks for 72 such spreads of 244 cubes)."""
+    cubes, counts = np.unique(cube_of, return_counts=True)
+    grouped = np.asarray(values)[np.argsort(cube_of, kind="stable")]
+    starts = np.cumsum(counts) - counts
+    medians = np.empty(cubes.size)
+    for n in np.unique(counts):
+        same = np.flatnonzero(counts == n)
+        medians[same] = np.median(grouped[starts[same][:, None] + np.arange(n)], axis=1)
+    return float(np.std(medians, ddof=1)) if cubes.size > 1 else float("nan")
 
 
 def _solve_on_curve(target: float, values: np.ndarray, grid: tuple[float, ...]
@@ -551,14 +658,28 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
     real_cube = np.concatenate([np.full(c.size, i) for i, c in enumerate(cubes)])
     target_sd = _cube_median_sd(obs.noise_pixels[np.concatenate(cubes)], real_cube)
     unit_x, unit_y, rms_per_peak = _unit_motion(obs, rows)
+    model = _frame_model(obs, "none")
+    # only the part of the subarray the photometry reads (the whole frame's noise pixels on
+    # noise-free frames, to an ulp: the wings are rendered at the frames' mean position in
+    # offset coordinates), the motion's tick moments once per peak (they do not depend on the
+    # blur) and the star's Taylor basis once per blur (issue 40)
+    x_track, y_track = obs.track_px()
+    window = photometry_window(x_track[rows], y_track[rows], options, model.shape)
+    moments_at: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def moments(peak: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if peak not in moments_at:
+            moments_at[peak] = tick_moments(peak * unit_x, peak * unit_y, model)
+        return moments_at[peak]
 
     def curves(blur: float | None) -> tuple[np.ndarray, np.ndarray]:
-        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur)
+        star = _star(obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, None, blur,
+                     kind=_KeptBasisStar)
         medians, spreads = [], []
         for peak in grid_px:
             frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
-                                      motion=(peak * unit_x, peak * unit_y), noise_model="none",
-                                      star=star)
+                                      moments=moments(peak), noise_model="none", star=star,
+                                      window=window)
             npx = _measure_rows(frames, obs, options)
             medians.append(float(np.median(npx)))
             spreads.append(_cube_median_sd(npx, cube_of))
@@ -570,8 +691,7 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
 def _unit_motion(obs: Observation, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """One draw of :class:`ExposureMotion` of 1 px peak at ``rows`` (the calibration's): its
     offsets in x and y and its rms (px) per px of peak."""
-    model = _frame_model(obs, "none")
-    unit_x, unit_y = ExposureMotion(obs, model, 1.0, rng(0, "trust", "calibrate")).offsets(rows)
+    unit_x, unit_y = _calibration_motion(obs, rows, _frame_model(obs, "none")).offsets(1.0)
     return unit_x, unit_y, float(np.sqrt(0.5 * (np.mean(unit_x**2) + np.mean(unit_y**2))))
 
 
@@ -789,10 +909,10 @@ def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
     rows, _, _ = _calibration_rows(obs, frames_per_cube, max_frames)
     level = running_median(obs.background_e_per_px, _BACKGROUND_WINDOW, obs.good)
     model = _frame_model(obs, "physical")
-    motion = ExposureMotion(obs, model, recipe.motion_peak_px, rng(0, "trust", "calibrate"))
+    motion = _calibration_motion(obs, rows, model).offsets(recipe.motion_peak_px)
     # the exact Poisson draws, as the pilot twin's (trust/recipe.py::pilot_twin): a calibration
     frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate", "background"),
-                              motion=motion.offsets(rows), radius_px=options.radius_px,
+                              motion=motion, radius_px=options.radius_px,
                               gaussian_skew=0.0)
     sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
     measured = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
