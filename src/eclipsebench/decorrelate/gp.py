@@ -20,9 +20,12 @@ generalised-least-squares value for each ``astro``). The likelihood is that of
 ``y``; it omits the Jacobian ``prod 1 / astro_i``, which would only matter
 together with the equally small dependence of the white noise on ``astro``.
 
-Library: none beyond scipy. The covariance of the ~1000 binned points is
-factorised with :func:`scipy.linalg.cho_factor`; with the kernel fixed, each
-likelihood costs one triangular solve (O(N^2)). Binning happens in
+Library: none beyond scipy (and numba). The covariance of the ~1000 binned
+points is factorised with :func:`scipy.linalg.cho_factor`; with the kernel
+fixed, each likelihood costs one triangular solve (O(N^2)). While the kernel is
+optimised, each evaluation fills the covariance (:func:`_fill_covariance`) and
+sums the gradient's kernel terms (:func:`_kernel_gradient_sums`) in compiled
+passes over its lower triangle. Binning happens in
 ``__init__`` (default 30 s bins within each AOR, inverse-variance weights from
 ``flux_err``), and ``self.data`` becomes the binned :class:`EpochData`, so a
 fitter evaluates its astrophysical model at ``self.data.time_bmjd``. More
