@@ -152,3 +152,31 @@ def test_batched_jacobian_is_the_column_by_column_one(kit, trapezoid_epoch, meth
     jac = problem.jacobian(theta, central=central)
     assert jac.shape == (len(data), len(theta)) and jac.flags.c_contiguous
     assert np.array_equal(jac, _jacobian_by_columns(problem, theta, central))
+
+
+def test_forward_jacobian_starts_from_the_residuals_just_evaluated(kit, trapezoid_epoch,
+                                                                 monkeypatch):
+    """least_squares asks for the Jacobian where it has just evaluated the residuals: they are
+    not evaluated again (the same bytes), unless the problem was told to forget them."""
+    data = epoch_data_from_table(trapezoid_epoch["table"])
+    sys = kit.PolyGain(data)
+    model = AstroModel(data.time_bmjd, None, phase="quadratic", shape=trapezoid_epoch["shape"])
+    problem = _Problem(sys, model)
+    theta = np.concatenate([model.initial(depth=1e-3, t_event_bmjd=trapezoid_epoch["t_ecl"]),
+                            sys.initial_params()])
+    expected = _jacobian_by_columns(problem, theta, False)
+    calls = []
+    residuals = type(sys).residuals
+    monkeypatch.setattr(type(sys), "residuals",
+                        lambda self, *a: calls.append(1) or residuals(self, *a))
+    problem.residuals(theta)
+    calls.clear()
+    assert np.array_equal(problem.jacobian(theta), expected)
+    assert len(calls) == len(theta)                 # the shifted vectors only
+    calls.clear()
+    problem.forget()
+    assert np.array_equal(problem.jacobian(theta), expected)
+    assert len(calls) == len(theta) + 1
+    calls.clear()
+    problem.jacobian(theta + 1e-9)                  # elsewhere: its own residuals
+    assert len(calls) == len(theta) + 1

@@ -186,6 +186,13 @@ class _Problem:
         lo_s, hi_s = systematics.param_bounds()
         self.lower = np.concatenate([lo_a, np.asarray(lo_s, dtype=float)])
         self.upper = np.concatenate([hi_a, np.asarray(hi_s, dtype=float)])
+        #: the last (theta, residuals): least_squares asks for the Jacobian where it has
+        #: just evaluated the residuals, which the forward differences start from
+        self._last: tuple[np.ndarray, np.ndarray] | None = None
+
+    def forget(self) -> None:
+        """Drop the remembered residuals (the method's state may have changed since)."""
+        self._last = None
 
     def scales(self, theta: np.ndarray) -> np.ndarray:
         sys_scale = np.maximum(1e-2, np.abs(theta[self.n_astro:]))
@@ -199,6 +206,7 @@ class _Problem:
         resid = self.sys.residuals(self.astro(theta_a), theta_s)
         if getattr(self.astro, "n_priors", 0):   # Gaussian priors (a transit's q1, q2, ...)
             resid = np.concatenate([resid, self.astro.prior_residuals(theta_a)])
+        self._last = (np.array(theta, dtype=float), np.array(resid, dtype=float))
         return resid
 
     def residuals_rows(self, thetas: np.ndarray) -> np.ndarray:
@@ -216,11 +224,15 @@ class _Problem:
                  f0: np.ndarray | None = None) -> np.ndarray:
         """Finite-difference Jacobian with steps of 1 % of each parameter's scale.
 
-        The shifted parameter vectors are evaluated together (:meth:`residuals_rows`).
+        The shifted parameter vectors are evaluated together (:meth:`residuals_rows`);
+        forward differences start from the residuals last evaluated if they were at
+        ``theta`` (least_squares evaluates them there just before).
         """
         steps = 1e-2 * self.scales(theta)
         if f0 is None and not central:
-            f0 = self.residuals(theta)
+            last = self._last
+            f0 = last[1] if last is not None and np.array_equal(last[0], theta) else \
+                self.residuals(theta)
         # step away from a bound that the forward point would cross
         steps = np.where(theta + steps > self.upper, -steps, steps)
         diag = np.arange(len(theta))
@@ -237,6 +249,7 @@ class _Problem:
 
 
 def _solve(problem: _Problem, theta0: np.ndarray, max_nfev: int | None):
+    problem.forget()   # e.g. a GP's kernel set again since the last solve
     theta0 = np.clip(theta0, problem.lower, problem.upper)
     inside = (theta0 > problem.lower) & (theta0 < problem.upper)
     if not np.all(inside):  # least_squares wants a strictly feasible start
