@@ -63,8 +63,9 @@ def test_kernel_matrix_formula_and_gradient(kind):
         np.testing.assert_allclose(dk[d], num, rtol=1e-4, atol=1e-8)
 
 
-def test_marginal_likelihood_gradient_matches_finite_differences():
-    m = GaussianProcess(_small(), bin_seconds=None)
+@pytest.mark.parametrize("kind", ["squared-exponential", "matern32"])
+def test_marginal_likelihood_gradient_matches_finite_differences(kind):
+    m = GaussianProcess(_small(), bin_seconds=None, kernel=kind)
     y = m.flux_rel
     h0 = m.hyper + np.array([0.1, -0.2, 0.1, -0.5, 0.3])
     f0, grad = m._neg_log_ml(h0, y)
@@ -74,6 +75,28 @@ def test_marginal_likelihood_gradient_matches_finite_differences():
         e[i] = 1e-6
         num[i] = (m._neg_log_ml(h0 + e, y)[0] - m._neg_log_ml(h0 - e, y)[0]) / 2e-6
     np.testing.assert_allclose(grad, num, rtol=1e-4, atol=1e-4)
+
+
+@pytest.mark.parametrize("kind", ["squared-exponential", "matern32"])
+def test_compiled_likelihood_and_gradient_equal_dense_numpy(kind):
+    # _neg_log_ml fills, factorises and inverts in place with compiled passes; the same
+    # quantities from kernel_matrix's dense K and dK, numpy's inverse and full traces.
+    m = GaussianProcess(_small(), bin_seconds=None, kernel=kind)
+    y = m.flux_rel * (1.0 + 1e-3 * (np.arange(len(m.data)) > 40))
+    h = m.hyper + np.array([0.3, -0.4, 0.2, -1.5, 0.5])
+    nll, grad = m._neg_log_ml(h, y)
+    amp2, white = np.exp(2 * h[0]), np.exp(2 * h[4]) * m.sigma_rel**2
+    k, dk = kernel_matrix(m.inputs, np.exp(h[1:4]), kind, gradient=True)
+    cov = amp2 * k + np.diag(white)
+    cinv = np.linalg.inv(cov)
+    ones = np.ones(len(y))
+    r = y - (ones @ cinv @ y) / (ones @ cinv @ ones)
+    alpha = cinv @ r
+    expect_nll = 0.5 * r @ alpha + 0.5 * np.linalg.slogdet(cov)[1]
+    dcov = [2 * amp2 * k] + [amp2 * d for d in dk] + [np.diag(2 * white)]
+    expect = [-0.5 * (alpha @ d @ alpha - np.trace(cinv @ d)) for d in dcov]
+    assert nll == pytest.approx(expect_nll, rel=1e-12)
+    np.testing.assert_allclose(grad, expect, rtol=1e-9, atol=1e-9 * np.max(np.abs(expect)))
 
 
 def test_log_likelihood_is_the_dense_gaussian_density():

@@ -82,12 +82,15 @@ def test_kr_data_matches_brute_force(use_np):
     assert model.n_effective_params() == round(trace)
 
 
-def test_kr_data_walkers_batch_gives_the_bytes_of_the_sparse_product():
-    """The compiled walkers' pass sums as scipy's product does: equal values, not close ones."""
+@pytest.mark.parametrize("n_walkers", [16, 3, 9])
+def test_kr_data_walkers_batch_gives_the_bytes_of_the_sparse_product(n_walkers):
+    """The compiled walkers' pass sums as scipy's product does: equal values, not close ones
+    (8 curves at a time, a part-filled block of 8, frames stored in another order)."""
     data = _random_epoch()
     model = get_method("kr-data")(data, k=12)
+    assert not np.array_equal(model._rank, np.arange(len(data)))
     g = np.random.default_rng(5)
-    astro = 1 + 1e-3 * g.standard_normal((16, len(data)))
+    astro = 1 + 1e-3 * g.standard_normal((n_walkers, len(data)))
     expected = astro * (model.smoother @ (data.flux / astro).T).T
     assert np.array_equal(model.log_likelihood_batch(astro),
                           model._white_log_likelihood_batch(expected, 1.0))

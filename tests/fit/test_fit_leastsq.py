@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from eclipsebench.decorrelate import get_method
 from eclipsebench.decorrelate.base import EpochData
 from eclipsebench.fit.data import epoch_data_from_table
 from eclipsebench.fit.leastsq import (
+    _Problem,
     fit_leastsq,
     information_criteria,
     prayer_bead,
@@ -113,3 +115,68 @@ def test_inputs_are_not_modified(kit, trapezoid_epoch):
     fit_leastsq(kit.PolyGain(data), model, model.initial(t_event_bmjd=trapezoid_epoch["t_ecl"]))
     assert np.array_equal(data.flux, before)
     assert isinstance(data, EpochData)
+
+
+def _jacobian_by_columns(problem, theta, central):
+    """The finite-difference Jacobian one column at a time (the fitter's former loop)."""
+    steps = 1e-2 * problem.scales(theta)
+    f0 = problem.residuals(theta)
+    cols = []
+    for i, h in enumerate(steps):
+        up = theta.copy()
+        if up[i] + h > problem.upper[i]:
+            h = -h
+        up[i] += h
+        if central:
+            down = theta.copy()
+            down[i] -= h
+            cols.append((problem.residuals(up) - problem.residuals(down)) / (2 * h))
+        else:
+            cols.append((problem.residuals(up) - f0) / h)
+    return np.column_stack(cols)
+
+
+@pytest.mark.parametrize("method", ["polygain", "kr-data"])
+@pytest.mark.parametrize("central", [False, True])
+def test_batched_jacobian_is_the_column_by_column_one(kit, trapezoid_epoch, method, central):
+    """All shifted parameter vectors in one call (a method's residuals_batch, KR/Data's own
+    compiled pass): the same bytes, also for a step turned back at a bound."""
+    data = epoch_data_from_table(trapezoid_epoch["table"])
+    sys = kit.PolyGain(data) if method == "polygain" else get_method("kr-data")(data)
+    model = AstroModel(data.time_bmjd, None, phase="quadratic", shape=trapezoid_epoch["shape"])
+    problem = _Problem(sys, model)
+    theta = np.concatenate([model.initial(depth=1e-3, t_event_bmjd=trapezoid_epoch["t_ecl"]),
+                            sys.initial_params()])
+    bounded = int(np.flatnonzero(np.isfinite(problem.upper))[0])
+    theta[bounded] = problem.upper[bounded] - 1e-4 * problem.scales(theta)[bounded]
+    jac = problem.jacobian(theta, central=central)
+    assert jac.shape == (len(data), len(theta)) and jac.flags.c_contiguous
+    assert np.array_equal(jac, _jacobian_by_columns(problem, theta, central))
+
+
+def test_forward_jacobian_starts_from_the_residuals_just_evaluated(kit, trapezoid_epoch,
+                                                                 monkeypatch):
+    """least_squares asks for the Jacobian where it has just evaluated the residuals: they are
+    not evaluated again (the same bytes), unless the problem was told to forget them."""
+    data = epoch_data_from_table(trapezoid_epoch["table"])
+    sys = kit.PolyGain(data)
+    model = AstroModel(data.time_bmjd, None, phase="quadratic", shape=trapezoid_epoch["shape"])
+    problem = _Problem(sys, model)
+    theta = np.concatenate([model.initial(depth=1e-3, t_event_bmjd=trapezoid_epoch["t_ecl"]),
+                            sys.initial_params()])
+    expected = _jacobian_by_columns(problem, theta, False)
+    calls = []
+    residuals = type(sys).residuals
+    monkeypatch.setattr(type(sys), "residuals",
+                        lambda self, *a: calls.append(1) or residuals(self, *a))
+    problem.residuals(theta)
+    calls.clear()
+    assert np.array_equal(problem.jacobian(theta), expected)
+    assert len(calls) == len(theta)                 # the shifted vectors only
+    calls.clear()
+    problem.forget()
+    assert np.array_equal(problem.jacobian(theta), expected)
+    assert len(calls) == len(theta) + 1
+    calls.clear()
+    problem.jacobian(theta + 1e-9)                  # elsewhere: its own residuals
+    assert len(calls) == len(theta) + 1

@@ -573,6 +573,27 @@ class Systematics(ABC, Generic[OptionsT]):
         """Normalised residuals ``(flux - model) / flux_err`` (for least squares)."""
         return (self.data.flux - self.predict(astro, theta)) / self.data.flux_err
 
+    def residuals_batch(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`residuals` of ``m`` astrophysical curves at once (a Jacobian's columns).
+
+        The default loops over :meth:`residuals`; a method overrides it where
+        all curves share one pass (KR/Data), returning the same values, so
+        that a fit is the same whichever is called.
+
+        Parameters
+        ----------
+        astro : ndarray, shape (m, n)
+            One astrophysical curve per row, at ``data.time_bmjd``.
+        theta : ndarray, shape (m, k), or None
+            The method's own parameters of each curve (``param_names``), or None.
+
+        Returns
+        -------
+        ndarray, shape (m, len(residuals))
+        """
+        return np.stack([self.residuals(a, None if theta is None else theta[i])
+                         for i, a in enumerate(np.atleast_2d(astro))])
+
     def correct(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """The decorrelated light curve: ``flux / (model / astro)``, in units of the star."""
         systematic = self.predict(astro, theta) / astro

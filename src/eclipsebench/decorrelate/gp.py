@@ -20,9 +20,12 @@ generalised-least-squares value for each ``astro``). The likelihood is that of
 ``y``; it omits the Jacobian ``prod 1 / astro_i``, which would only matter
 together with the equally small dependence of the white noise on ``astro``.
 
-Library: none beyond scipy. The covariance of the ~1000 binned points is
-factorised with :func:`scipy.linalg.cho_factor`; with the kernel fixed, each
-likelihood costs one triangular solve (O(N^2)). Binning happens in
+Library: none beyond scipy (and numba). The covariance of the ~1000 binned
+points is factorised with :func:`scipy.linalg.cho_factor`; with the kernel
+fixed, each likelihood costs one triangular solve (O(N^2)). While the kernel is
+optimised, each evaluation fills the covariance (:func:`_fill_covariance`) and
+sums the gradient's kernel terms (:func:`_kernel_gradient_sums`) in compiled
+passes over its lower triangle. Binning happens in
 ``__init__`` (default 30 s bins within each AOR, inverse-variance weights from
 ``flux_err``), and ``self.data`` becomes the binned :class:`EpochData`, so a
 fitter evaluates its astrophysical model at ``self.data.time_bmjd``. More
@@ -56,11 +59,12 @@ from typing import Any, ClassVar, Literal
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve, solve_triangular
-from scipy.linalg.lapack import dpotri
+from scipy.linalg.lapack import dpotrf, dpotri
 from scipy.optimize import minimize
 
 from ..config.base import check
 from ..errors import InputError
+from ..jit import lazy_njit
 from .base import EpochData, MethodOptions, Systematics, register
 from .record import FitterPolicy, MethodRecord, team_profile
 
@@ -179,6 +183,105 @@ def kernel_matrix(inputs: np.ndarray, lengths: np.ndarray, kind: str,
             return k
         return k, [3.0 * e * s for s in sq]
     raise InputError(f"gp option 'kernel': expected one of {', '.join(KERNELS)}, got {kind!r}")
+
+
+@lazy_njit(cache=True)
+def _fill_covariance(scaled_t: np.ndarray, amp2: float, white: np.ndarray, matern: bool,
+                     cov: np.ndarray) -> None:
+    """Lower triangle and diagonal of ``amp2 K + diag(white)`` into ``cov`` (in place).
+
+    The compiled form of :func:`kernel_matrix` for :meth:`GaussianProcess._neg_log_ml`:
+    one pass over the pairs ``i > j``, no ``(n, n)`` temporaries; the upper
+    triangle is not written (LAPACK's lower Cholesky factor does not read it).
+
+    Parameters
+    ----------
+    scaled_t : ndarray, shape (d, n)
+        The inputs divided by their length scales, one row per input.
+    amp2 : float
+        ``A^2``.
+    white : ndarray, shape (n,)
+        The white-noise variances ``(s sigma_i)^2``.
+    matern : bool
+        Matern-3/2 kernel, else squared exponential (the formulas of :func:`kernel_matrix`).
+    cov : ndarray, shape (n, n)
+        Output (Fortran order, for LAPACK in place).
+    """
+    nd, n = scaled_t.shape
+    sqrt3 = np.sqrt(3.0)
+    for j in range(n):
+        cov[j, j] = amp2 + white[j]          # k(0) = 1
+        for i in range(j + 1, n):
+            r2 = 0.0
+            for d in range(nd):
+                dz = scaled_t[d, i] - scaled_t[d, j]
+                r2 += dz * dz
+            if matern:
+                r = np.sqrt(r2)
+                k = (1.0 + sqrt3 * r) * np.exp(-sqrt3 * r)
+            else:
+                k = np.exp(-0.5 * r2)
+            cov[i, j] = amp2 * k
+
+
+@lazy_njit(cache=True)
+def _kernel_gradient_sums(scaled_t: np.ndarray, alpha: np.ndarray, cinv: np.ndarray,
+                          matern: bool) -> np.ndarray:
+    """``sum_ij (alpha_i alpha_j - Cinv_ij) G_ij`` for ``G = K`` and ``G = dK / d ln l_d``.
+
+    The kernel terms of the marginal likelihood's gradient (Rasmussen &
+    Williams 2006, eq. 5.9: ``d ln L / dh = 0.5 tr((alpha alpha^T - C^-1) dC/dh)``;
+    each matrix is symmetric, so the trace is the sum of their elementwise
+    product), accumulated over the lower triangle without building ``K``, its
+    derivatives or ``C^-1``'s upper half. ``dK / d ln l_d`` is
+    ``K (dz_d)^2`` (squared exponential) or ``3 exp(-sqrt(3) r) (dz_d)^2``
+    (Matern-3/2), with ``dz_d`` the scaled separation; it vanishes on the diagonal.
+
+    Parameters
+    ----------
+    scaled_t : ndarray, shape (d, n)
+        The inputs divided by their length scales, one row per input.
+    alpha : ndarray, shape (n,)
+        ``C^-1 (y - F0)``.
+    cinv : ndarray, shape (n, n)
+        ``C^-1`` in its lower triangle (LAPACK ``dpotri``; the upper one is not read).
+    matern : bool
+        Matern-3/2 kernel, else squared exponential.
+
+    Returns
+    -------
+    ndarray, shape (d + 1,)
+        The sum for ``K``, then for each ``dK / d ln l_d``.
+    """
+    nd, n = scaled_t.shape
+    sqrt3 = np.sqrt(3.0)
+    total = np.zeros(nd + 1)
+    column = np.zeros(nd + 1)
+    sq = np.zeros(nd)
+    for j in range(n):
+        column[:] = 0.0
+        for i in range(j + 1, n):
+            r2 = 0.0
+            for d in range(nd):
+                dz = scaled_t[d, i] - scaled_t[d, j]
+                sq[d] = dz * dz
+                r2 += sq[d]
+            w = alpha[i] * alpha[j] - cinv[i, j]
+            if matern:
+                r = np.sqrt(r2)
+                e = np.exp(-sqrt3 * r)
+                column[0] += w * (1.0 + sqrt3 * r) * e
+                g = 3.0 * w * e
+            else:
+                g = w * np.exp(-0.5 * r2)
+                column[0] += g
+            for d in range(nd):
+                column[1 + d] += g * sq[d]
+        # the pair (i, j) and its mirror (j, i); the diagonal once (K_jj = 1, dK_jj = 0)
+        total[0] += 2.0 * column[0] + alpha[j] * alpha[j] - cinv[j, j]
+        for d in range(nd):
+            total[1 + d] += 2.0 * column[1 + d]
+    return total
 
 
 @dataclass(frozen=True)
@@ -332,35 +435,40 @@ class GaussianProcess(Systematics[GpOptions]):
 
     # ------------------------------------------------------- hyperparameters
     def _neg_log_ml(self, h: np.ndarray, yrel: np.ndarray):
+        """``-ln L`` of ``yrel`` at hyperparameters ``h`` (``F0`` profiled) and its gradient.
+
+        ``d(-ln L)/dh = -0.5 (alpha^T dC alpha - tr(C^-1 dC))`` (Rasmussen &
+        Williams 2006, eq. 5.9; ``F0`` profiled, envelope theorem), with ``dC/dh``
+        = ``2 A^2 K``, ``A^2 dK/d ln l_d`` and ``diag(2 (s sigma_i)^2)``. The
+        covariance is filled (:func:`_fill_covariance`), factorised and inverted
+        (LAPACK ``dpotrf``, ``dpotri``) in one Fortran-ordered array, and the
+        kernel traces summed over its lower triangle (:func:`_kernel_gradient_sums`);
+        no other ``n x n`` array is made.
+        """
         amp2 = np.exp(2.0 * h[0])
         white = np.exp(2.0 * h[4]) * self.sigma_rel ** 2
-        k, dk = kernel_matrix(self.inputs, np.exp(h[1:4]), self.kernel, gradient=True)
-        cov = amp2 * k
-        cov[np.diag_indices_from(cov)] += white
-        try:
-            cf = cho_factor(cov, lower=True, overwrite_a=True, check_finite=False)
-        except np.linalg.LinAlgError:
+        matern = self.kernel == "matern32"   # else squared exponential (checked in setup)
+        n = len(yrel)
+        scaled_t = np.ascontiguousarray((self.inputs / np.exp(h[1:4])).T)
+        cov = np.empty((n, n), order="F")
+        _fill_covariance(scaled_t, amp2, white, matern, cov)
+        c, info = dpotrf(cov, lower=1, clean=0, overwrite_a=1)
+        if info != 0:
             return 1e25, np.zeros_like(h)
-        ones = np.ones(len(yrel))
+        cf = (c, True)
+        ones = np.ones(n)
         cinv1 = cho_solve(cf, ones, check_finite=False)
         f0 = cinv1.dot(yrel) / cinv1.sum()
         r = yrel - f0
         alpha = cho_solve(cf, r, check_finite=False)
-        half_logdet = np.sum(np.log(np.diag(cf[0])))
+        half_logdet = np.sum(np.log(np.diag(c)))
         nll = 0.5 * r.dot(alpha) + half_logdet
-        cinv, info = dpotri(cf[0], lower=1, overwrite_c=1)  # C^-1 (its lower triangle)
+        cinv, info = dpotri(c, lower=1, overwrite_c=1)  # C^-1 in the lower triangle
         if info != 0:
             return 1e25, np.zeros_like(h)
-        cinv = np.tril(cinv)
-        cinv += np.tril(cinv, -1).T
-        # d(-ln L)/dh = -0.5 (alpha^T dC alpha - tr(C^-1 dC)); F0 profiled (envelope theorem).
-        # dC/dh: 2 amp2 K, amp2 dK/dln l_d, and diag(2 white); each symmetric, so
-        # tr(C^-1 dC) is the dot product of the two matrices' elements; none is built.
-        def term(g: np.ndarray) -> float:
-            return float(alpha @ g @ alpha - np.vdot(cinv, g))
-
-        grad = np.array([-amp2 * term(k)] + [-0.5 * amp2 * term(d) for d in dk]
-                        + [-(alpha @ (white * alpha) - np.diag(cinv) @ white)])
+        sums = _kernel_gradient_sums(scaled_t, alpha, cinv, matern)
+        grad = np.concatenate([[-amp2 * sums[0]], -0.5 * amp2 * sums[1:],
+                               [-(alpha @ (white * alpha) - np.diag(cinv) @ white)]])
         return float(nll), grad
 
     def optimise_hyperparameters(self, astro: np.ndarray) -> dict[str, Any] | None:

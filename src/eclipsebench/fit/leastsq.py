@@ -186,6 +186,13 @@ class _Problem:
         lo_s, hi_s = systematics.param_bounds()
         self.lower = np.concatenate([lo_a, np.asarray(lo_s, dtype=float)])
         self.upper = np.concatenate([hi_a, np.asarray(hi_s, dtype=float)])
+        #: the last (theta, residuals): least_squares asks for the Jacobian where it has
+        #: just evaluated the residuals, which the forward differences start from
+        self._last: tuple[np.ndarray, np.ndarray] | None = None
+
+    def forget(self) -> None:
+        """Drop the remembered residuals (the method's state may have changed since)."""
+        self._last = None
 
     def scales(self, theta: np.ndarray) -> np.ndarray:
         sys_scale = np.maximum(1e-2, np.abs(theta[self.n_astro:]))
@@ -199,31 +206,50 @@ class _Problem:
         resid = self.sys.residuals(self.astro(theta_a), theta_s)
         if getattr(self.astro, "n_priors", 0):   # Gaussian priors (a transit's q1, q2, ...)
             resid = np.concatenate([resid, self.astro.prior_residuals(theta_a)])
+        self._last = (np.array(theta, dtype=float), np.array(resid, dtype=float))
+        return resid
+
+    def residuals_rows(self, thetas: np.ndarray) -> np.ndarray:
+        """:meth:`residuals` of every row of ``thetas``, the same values: the astrophysical
+        model of all rows at once (``AstroModel.batch``, bit-identical to a call per row)
+        and the method's ``residuals_batch``."""
+        astro = self.astro.batch(thetas[:, :self.n_astro])
+        resid = self.sys.residuals_batch(astro, thetas[:, self.n_astro:] if self.n_sys else None)
+        if getattr(self.astro, "n_priors", 0):   # Gaussian priors (a transit's q1, q2, ...)
+            resid = np.hstack([resid, np.stack([self.astro.prior_residuals(t[:self.n_astro])
+                                                for t in thetas])])
         return resid
 
     def jacobian(self, theta: np.ndarray, *, central: bool = False,
                  f0: np.ndarray | None = None) -> np.ndarray:
-        """Finite-difference Jacobian with steps of 1 % of each parameter's scale."""
+        """Finite-difference Jacobian with steps of 1 % of each parameter's scale.
+
+        The shifted parameter vectors are evaluated together (:meth:`residuals_rows`);
+        forward differences start from the residuals last evaluated if they were at
+        ``theta`` (least_squares evaluates them there just before).
+        """
         steps = 1e-2 * self.scales(theta)
         if f0 is None and not central:
-            f0 = self.residuals(theta)
-        cols = []
-        for i, h in enumerate(steps):
-            up = theta.copy()
-            # step away from a bound that the forward point would cross
-            if up[i] + h > self.upper[i]:
-                h = -h
-            up[i] += h
-            if central:
-                down = theta.copy()
-                down[i] -= h
-                cols.append((self.residuals(up) - self.residuals(down)) / (2 * h))
-            else:
-                cols.append((self.residuals(up) - f0) / h)
-        return np.column_stack(cols)
+            last = self._last
+            f0 = last[1] if last is not None and np.array_equal(last[0], theta) else \
+                self.residuals(theta)
+        # step away from a bound that the forward point would cross
+        steps = np.where(theta + steps > self.upper, -steps, steps)
+        diag = np.arange(len(theta))
+        up = np.tile(theta, (len(theta), 1))
+        up[diag, diag] += steps
+        if central:
+            down = np.tile(theta, (len(theta), 1))
+            down[diag, diag] -= steps
+            both = self.residuals_rows(np.vstack([up, down]))
+            cols = (both[:len(theta)] - both[len(theta):]) / (2 * steps)[:, None]
+        else:
+            cols = (self.residuals_rows(up) - f0) / steps[:, None]
+        return np.ascontiguousarray(cols.T)
 
 
 def _solve(problem: _Problem, theta0: np.ndarray, max_nfev: int | None):
+    problem.forget()   # e.g. a GP's kernel set again since the last solve
     theta0 = np.clip(theta0, problem.lower, problem.upper)
     inside = (theta0 > problem.lower) & (theta0 < problem.upper)
     if not np.all(inside):  # least_squares wants a strictly feasible start
