@@ -257,20 +257,7 @@ def _solve(problem: _Problem, theta0: np.ndarray, max_nfev: int | None):
                          problem.upper - problem.lower, 1.0)
         theta0 = np.where(inside, theta0, np.clip(theta0, problem.lower + 1e-6 * width,
                                                   problem.upper - 1e-6 * width))
-    # least_squares asks for the Jacobian at the point whose residuals it has just had: the
-    # forward differences start from those (one evaluation of the model fewer per Jacobian)
-    last: list[np.ndarray] = []
-
-    def residuals(theta: np.ndarray) -> np.ndarray:
-        resid = problem.residuals(theta)
-        last[:] = [theta.copy(), resid.copy()]
-        return resid
-
-    def jacobian(theta: np.ndarray) -> np.ndarray:
-        f0 = last[1] if last and np.array_equal(last[0], theta) else None
-        return problem.jacobian(theta, f0=f0)
-
-    return least_squares(residuals, theta0, jac=jacobian,
+    return least_squares(problem.residuals, theta0, jac=lambda th: problem.jacobian(th),
                          bounds=(problem.lower, problem.upper), x_scale=problem.scales(theta0),
                          method="trf", max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10)
 
