@@ -211,9 +211,10 @@ class _Problem:
 
     def residuals_rows(self, thetas: np.ndarray) -> np.ndarray:
         """:meth:`residuals` of every row of ``thetas``, the same values: the astrophysical
-        model of all rows at once (``AstroModel.batch``, bit-identical to a call per row)
-        and the method's ``residuals_batch``."""
-        astro = self.astro.batch(thetas[:, :self.n_astro])
+        model of each row and the method's ``residuals_batch`` of all of them (a row at a
+        time, not ``AstroModel.batch``'s compiled pass: a least-squares fit by a method
+        without kernels of its own never loads numba, issue 40's start-up)."""
+        astro = np.stack([self.astro(t) for t in thetas[:, :self.n_astro]])
         resid = self.sys.residuals_batch(astro, thetas[:, self.n_astro:] if self.n_sys else None)
         if getattr(self.astro, "n_priors", 0):   # Gaussian priors (a transit's q1, q2, ...)
             resid = np.hstack([resid, np.stack([self.astro.prior_residuals(t[:self.n_astro])
