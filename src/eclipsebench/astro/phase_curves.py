@@ -134,13 +134,13 @@ def harmonic_terms(phase_rad, n_harmonics: int) -> tuple[np.ndarray, ...]:
     :func:`harmonic_curve` weighs by its coefficients (a fitter moving only the
     coefficients reuses them)."""
     phi = np.asarray(phase_rad, dtype=float)
-    terms = (np.cos(phi) - 1.0, np.sin(phi))
+    terms: tuple[np.ndarray, ...] = (np.cos(phi) - 1.0, np.sin(phi))
     if n_harmonics == 2:
         terms += (np.cos(2.0 * phi) - 1.0, np.sin(2.0 * phi))
     return terms
 
 
-def harmonic_from_terms(terms: Sequence[np.ndarray], depth: float,
+def harmonic_from_terms(terms: Sequence[np.ndarray] | np.ndarray, depth: float,
                         harmonics: Sequence[float]) -> np.ndarray:
     """:func:`harmonic_curve` from its :func:`harmonic_terms`."""
     h = tuple(float(v) for v in harmonics)

@@ -292,7 +292,7 @@ class FirstHarmonic(PhaseTerm):
         depend on the eclipse time alone."""
         return harmonic_terms((2.0 * np.pi / known_period(period_d)) * dt, len(self.names) // 2)
 
-    def from_terms(self, level, c, terms: tuple[np.ndarray, ...]) -> np.ndarray:
+    def from_terms(self, level, c, terms: np.ndarray | tuple[np.ndarray, ...]) -> np.ndarray:
         """:meth:`value` from its :meth:`terms` (the same arithmetic)."""
         return harmonic_from_terms(terms, level, c)
 

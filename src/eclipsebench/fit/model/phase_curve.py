@@ -38,6 +38,7 @@ from .base import AstroModel, EventSettings
 from .parts import (
     NONNEGATIVE_SCALE,
     TRANSIT_BOUNDS,
+    FirstHarmonic,
     VisibleFraction,
     aor_order,
     integration_offsets_d,
@@ -186,7 +187,7 @@ class PhaseCurveModel(TransitGeometry, AstroModel):
         """p(t) at ``time``; at the sub-exposure times the harmonics of the eclipse time
         ``theta[1]`` are remembered (:meth:`_remembered`)."""
         term = self.phase_term
-        if time is not self._sub_time or not hasattr(term, "terms"):
+        if time is not self._sub_time or not isinstance(term, FirstHarmonic):
             return super()._planet_at(theta, time)
         t_ecl = float(theta[1])
         terms = self._remembered("harmonics", (t_ecl,),
