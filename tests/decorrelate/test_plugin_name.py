@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -18,12 +19,13 @@ import eclipsebench as eb
 from eclipsebench.decorrelate import base
 from eclipsebench.engine.layout import Layout
 
+from ..conftest import TINY_RUN_SETS
+
 PLUGIN_DIR = Path(__file__).parent / "plugin_demo"
 SRC = Path(__file__).resolve().parents[2] / "src"
-# Two tiny epochs (233 two-frame cubes, the eclipse inside the Main AOR), as test_runner's.
-TINY = ["observation.pre_cubes=1", "observation.frames_per_cube=2", "simulation.subsamples=1",
-        "simulation.calibration_frames=2000", "run.bootstrap=50", "run.report=false",
-        "run.empirical_photon_limit=false"]
+# The tiny challenge of tests/conftest.py (two epochs of 233 two-frame cubes), its methods named
+# on the command line.
+TINY = [s for s in TINY_RUN_SETS if not s.startswith("run.methods=")]
 
 
 @pytest.fixture
@@ -70,8 +72,13 @@ def test_a_class_naming_itself_otherwise_is_refused(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.timeout(900)
-def test_the_plugin_runs_beside_bliss_in_both_profiles(tmp_path):
+def test_the_plugin_runs_beside_bliss_in_both_profiles(tmp_path, tiny_run_once):
     out = tmp_path / "run"
+    # the tiny challenge's epochs, photometry and BLISS results (tests/conftest.py): the same
+    # settings, so the run reuses them and reduces only the plugin's method
+    done, _, _ = tiny_run_once
+    for folder in ("simulation", "photometry", "results", "results_paper"):
+        shutil.copytree(done / folder, out / folder)
     sets = [a for s in TINY for a in ("--set", s)]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(PLUGIN_DIR), str(SRC)])}
     run = subprocess.run([sys.executable, "-m", "eclipsebench", "run", "--epochs", "2",
