@@ -57,7 +57,7 @@ from ..instrument.prf import (
     warm_rescaling,
 )
 from ..photometry.clean import running_median
-from ..photometry.measure import measure_stack, read_radius_px
+from ..photometry.measure import measure_noise_pixels, measure_stack, read_radius_px
 from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
@@ -680,7 +680,7 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
             frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
                                       moments=moments(peak), noise_model="none", star=star,
                                       window=window)
-            npx = _measure_rows(frames, obs, options)
+            npx = _measure_rows(frames, options)
             medians.append(float(np.median(npx)))
             spreads.append(_cube_median_sd(npx, cube_of))
         return np.asarray(medians), np.asarray(spreads)
@@ -930,9 +930,10 @@ def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
                    "background_sd_twin_noise": float(np.sqrt(v_twin)), "share": share}
 
 
-def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
+def _measure_rows(frames: np.ndarray, options: PhotometrySection) -> np.ndarray:
+    """The noise pixels of ``frames`` as the twins' photometry measures them
+    (:func:`~eclipsebench.photometry.measure.measure_noise_pixels`: the same floats as
+    :func:`~eclipsebench.photometry.measure.measure_stack`, without the rest)."""
     sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
-    m = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
-                      fowler=obs.mode.fowler, wait=obs.mode.wait, read_noise_e=obs.read_noise_e)
-    return m["noise_pixels"]
+    return measure_noise_pixels(frames, guess_x=int(sx), guess_y=int(sy), options=options)
 
