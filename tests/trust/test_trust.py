@@ -140,10 +140,14 @@ def test_the_twins_of_one_star_share_its_taylor_bases(small_table, monkeypatch):
     options = PhotometrySection()
     alone = [twin_table(recipe, options, seed=3, twin=i) for i in (1, 2)]
     star = twin_star(recipe, options)
-    made = {"taylor_basis": [], "image": []}
-    for name, calls in made.items():
-        monkeypatch.setattr(StarImager, name, lambda *a, _f=getattr(StarImager, name),
-                            _c=calls: _c.append(1) or _f(*a))
+    made: dict[str, list] = {"taylor_basis": [], "image": []}
+
+    def counted(name):
+        method = getattr(StarImager, name)
+        return lambda *a: made[name].append(1) or method(*a)
+
+    for name in made:
+        monkeypatch.setattr(StarImager, name, counted(name))
     first = twin_table(recipe, options, seed=3, twin=1, star=star)
     cubes = len(made["taylor_basis"])
     assert cubes == sum(len(np.unique(obs.expid[rows])) for rows in obs.aors())
