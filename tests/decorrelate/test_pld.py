@@ -15,6 +15,7 @@ from eclipsebench.config.reduce import ReduceSection
 from eclipsebench.config.system import SystemSection
 from eclipsebench.decorrelate import get_method
 from eclipsebench.decorrelate.base import EpochData
+from eclipsebench.decorrelate.linear import LinearDesign, fit_residuals, solve_coefficients
 from eclipsebench.decorrelate.pld import time_averaging_error
 from eclipsebench.errors import InputError
 from eclipsebench.fit.reduce import reduce_epoch
@@ -104,6 +105,28 @@ def test_binning_follows_time_order():
     a = get_method("pld")(data, bin_frames=8).coefficients(astro)
     b = get_method("pld")(shuffled, bin_frames=8).coefficients(astro)
     np.testing.assert_allclose(a, b, rtol=1e-10)
+
+
+def test_binned_residuals_bin_the_design_once(monkeypatch):
+    """A binned fit's residuals bin ``astro D`` once per evaluation, for the solve and the
+    residuals both (issue 40: half the prayer bead's time), with the bytes of the two taken
+    apart; frames already in time order are binned without being reordered."""
+    data = _pixel_epoch(n=605)
+    astro = 1 + 1e-3 * np.cos(np.arange(len(data)) / 30.0)
+    model = get_method("pld")(data, bin_frames=10)
+    design = model.design
+    assert design.order is None
+    want = fit_residuals(design, astro, solve_coefficients(design, astro))
+    binned = LinearDesign._binned
+    calls = []
+
+    def counted(self, a):
+        calls.append(a.shape)
+        return binned(self, a)
+
+    monkeypatch.setattr(LinearDesign, "_binned", counted)
+    got = model.residuals(astro)
+    assert calls == [(605, 9)] and got.tobytes() == want.tobytes()
 
 
 def test_options_and_bad_stamps():

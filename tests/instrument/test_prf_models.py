@@ -95,3 +95,26 @@ def test_flux_scale_in_electrons_and_jansky(builtin):
         P.electrons_per_second_scale(builtin, -1.0, t_exp_s=1.92)
     with pytest.raises(InputError, match="finite"):
         builtin.render([np.nan], [15.0])
+
+
+def test_psf_fine_makes_the_airy_patterns_once_per_optics(monkeypatch):
+    """The blurs share one polychromatic Airy sum (issue 40: the twins' calibration tries nine
+    blurs), with the bytes of the sum made anew; the blur-free PSF is the caller's own."""
+    optics = {"obscuration": 0.3, "n_wavelengths": 3}
+    first = P.psf_fine(4, 3.0, blur_px=0.2, **optics)
+    j1 = P.special.j1
+    calls = []
+
+    def counted(v):
+        calls.append(v.shape)
+        return j1(v)
+
+    monkeypatch.setattr(P.special, "j1", counted)
+    again = [P.psf_fine(4, 3.0, blur_px=b, **optics) for b in (0.2, 0.0, 0.35)]
+    assert calls == [] and again[0].tobytes() == first.tobytes()
+    again[1][0, 0] = -1.0          # a caller may change the blur-free PSF it was given
+    P._airy_band.cache_clear()     # made anew, with the calls counted
+    fresh = [P.psf_fine(4, 3.0, blur_px=b, **optics) for b in (0.2, 0.0, 0.35)]
+    assert len(calls) == 2 * optics["n_wavelengths"]
+    assert fresh[1][0, 0] != -1.0
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(again[::2], fresh[::2], strict=True))

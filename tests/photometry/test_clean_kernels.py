@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 from scipy.ndimage import median_filter
 
-from eclipsebench.photometry.clean import _median_in_time, nanmedian0, reject_cosmic_rays
+from eclipsebench.photometry.clean import (
+    _median9_in_time,
+    _median_in_time,
+    nanmedian0,
+    reject_cosmic_rays,
+)
 
 
 @pytest.mark.parametrize("m, k, size", [(7800, 21, 9), (40, 3, 9), (9, 2, 9), (5, 4, 9),
@@ -20,6 +25,16 @@ def test_the_running_median_in_time_is_scipys(m, k, size, step):
         values = np.round(values / step) * step
     assert np.array_equal(_median_in_time(values, size),
                           median_filter(values, size=(size, 1), mode="nearest"))
+
+
+@pytest.mark.parametrize("m, k", [(7800, 21), (9, 2), (5, 4), (1, 3)])
+def test_the_nine_frame_network_is_scipys_running_median(m, k):
+    """The default window's branch-free network (issue 40) gives scipy's values, ties and
+    repeated ends included."""
+    values = np.random.default_rng(m + k).normal(100.0, 10.0, (m, k))
+    for data in (values, np.round(values / 5.0) * 5.0):
+        assert np.array_equal(_median9_in_time(data),
+                              median_filter(data, size=(9, 1), mode="nearest"))
 
 
 def test_the_running_median_in_time_keeps_a_step_and_a_spike():

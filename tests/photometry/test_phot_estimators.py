@@ -8,7 +8,7 @@ from photutils.aperture import CircularAperture
 
 from eclipsebench.config.photometry import PhotometrySection
 from eclipsebench.photometry import estimators as E
-from eclipsebench.photometry.measure import measure_stack
+from eclipsebench.photometry.measure import measure_noise_pixels, measure_stack
 
 
 @pytest.fixture
@@ -74,6 +74,27 @@ def test_single_estimators_are_the_measurement_set(frames, centroid):
     sums, areas = E.aperture_sums(frames, m["x"], m["y"], [opt.radius_px])
     assert np.array_equal(sums[:, 0], m["flux_raw"])
     assert np.array_equal(sums[:, 0] - m["background"] * areas[:, 0], m["flux"])
+
+
+@pytest.mark.parametrize("options", [PhotometrySection(),
+                                     PhotometrySection(box_px=5, search_px=2,
+                                                       annulus_px=(2.5, 6.0))])
+def test_noise_pixels_alone_are_the_measurement_sets(frames, options):
+    """measure_noise_pixels (the twins' calibration) gives measure_stack's noise pixels, byte
+    for byte, NaN included: a non-finite pixel in the box, none near the guess, a box
+    leaving the image, a float32 stack."""
+    stack = frames.copy()
+    stack[1, 15, 15] = np.nan       # in the box: NaN
+    stack[2, 8, 8] = np.nan         # in the annulus only: skipped there
+    stack[3, 12:19, 12:19] = np.nan     # nothing finite near the guess
+    stack[4] = np.roll(stack[4], (-14, -14), axis=(0, 1))    # the star at (1, 1): the box
+    guess = np.full(len(stack), 15)                               # about it leaves the image
+    guess[4] = 1
+    for data in (stack, stack.astype(np.float32)):
+        want = measure_stack(data, guess_x=guess, guess_y=guess, options=options)["noise_pixels"]
+        got = measure_noise_pixels(data, guess_x=guess, guess_y=guess, options=options)
+        assert np.isnan(want[[1, 3, 4]]).all() and np.isfinite(want[[0, 2, 5]]).all()
+        assert got.tobytes() == want.tobytes()
 
 
 def test_aperture_flux_matches_photutils_exact(frames):

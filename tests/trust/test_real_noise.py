@@ -236,7 +236,7 @@ def test_the_calibration_renders_the_photometry_window_with_each_peak_s_moments_
             whole = twin_module.render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
                                                  motion=(peak * unit_x, peak * unit_y),
                                                  noise_model="none", star=star)
-            npx = twin_module._measure_rows(whole, obs, options)
+            npx = twin_module._measure_rows(whole, options)
             assert median == pytest.approx(np.median(npx), rel=1e-13, abs=0)
             assert spread == pytest.approx(twin_module._cube_median_sd(npx, cube_of), rel=1e-11,
                                            abs=0)

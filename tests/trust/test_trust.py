@@ -128,6 +128,38 @@ def test_a_twin_shares_times_flags_and_track_but_not_the_noise(small_table):
     assert a.meta["TWIN"] == 1 and a.meta["SYSTEM"] == table.meta["SYSTEM"]
 
 
+def test_the_twins_of_one_star_share_its_taylor_bases(small_table, monkeypatch):
+    """Issue 40: the twins of a batch render their cubes with the Taylor bases and wings the
+    first twin made (every twin's positions are the track's floats), and give the bytes of
+    twins rendered each with a star of its own."""
+    from eclipsebench.simulation.star import StarImager
+    from eclipsebench.trust.twin import twin_star
+
+    obs = observation_from_table(read_table(small_table))
+    recipe = make_recipe(obs, np.ones(obs.n_frames), radius_px=2.25, motion_peak_px=0.3)
+    options = PhotometrySection()
+    alone = [twin_table(recipe, options, seed=3, twin=i) for i in (1, 2)]
+    star = twin_star(recipe, options)
+    made: dict[str, list] = {"taylor_basis": [], "image": []}
+
+    def counted(name):
+        method = getattr(StarImager, name)
+        return lambda *a: made[name].append(1) or method(*a)
+
+    for name in made:
+        monkeypatch.setattr(StarImager, name, counted(name))
+    first = twin_table(recipe, options, seed=3, twin=1, star=star)
+    cubes = len(made["taylor_basis"])
+    assert cubes == sum(len(np.unique(obs.expid[rows])) for rows in obs.aors())
+    assert len(made["image"]) == cubes
+    second = twin_table(recipe, options, seed=3, twin=2, star=star)
+    assert len(made["taylor_basis"]) == cubes and len(made["image"]) == cubes
+    for shared, own in zip((first, second), alone, strict=True):
+        assert shared.colnames == own.colnames
+        for name in own.colnames:
+            assert np.asarray(shared[name]).tobytes() == np.asarray(own[name]).tobytes(), name
+
+
 def test_a_twin_rendered_where_its_photometry_reads_measures_as_the_whole_frame(small_table,
                                                                                monkeypatch):
     """Noise-free (the noise draws differ with the pixels drawn), the twin rendered only in

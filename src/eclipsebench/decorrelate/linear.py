@@ -24,9 +24,9 @@ import numpy as np
 
 from .base import OptionsT, Systematics
 
-__all__ = ["LinearDesign", "solve_coefficients", "fit_residuals", "fit_log_likelihood",
-           "fit_log_likelihood_batch", "binned_design_batch", "weighted_lstsq", "gram_lstsq",
-           "LinearSystematics"]
+__all__ = ["LinearDesign", "weighted_binned_design", "solve_coefficients", "fit_residuals",
+           "fit_log_likelihood", "fit_log_likelihood_batch", "binned_design_batch",
+           "weighted_lstsq", "gram_lstsq", "LinearSystematics"]
 
 
 _OUTER_BYTES_MAX = 64 * 2**20
@@ -71,6 +71,8 @@ class LinearDesign:
                 self.outer = self.design[:, self.iu[0]] * self.design[:, self.iu[1]]
         else:
             self.order = None if time is None else np.argsort(np.asarray(time), kind="stable")
+            if self.order is not None and np.array_equal(self.order, np.arange(n)):
+                self.order = None   # already in time order: no copy per binning (issue 40)
             self.starts = np.arange(0, n, self.bin_frames)
             counts = np.diff(np.append(self.starts, n)).astype(float)
             self.counts = counts
@@ -95,11 +97,23 @@ class LinearDesign:
         return s / (self.counts[:, None] if s.ndim == 2 else self.counts)
 
 
-def solve_coefficients(design: LinearDesign, astro: np.ndarray) -> np.ndarray:
+def weighted_binned_design(design: LinearDesign, astro: np.ndarray) -> np.ndarray | None:
+    """``(astro D)_b / sigma_b``, the binned design times ``astro``, weighted: what
+    :func:`solve_coefficients` and :func:`fit_residuals` both take on a binned fit without the
+    per-frame products (None otherwise), made once when both are called (issue 40)."""
+    if design.outer is not None or design.starts is None:
+        return None
+    astro = np.asarray(astro, float)
+    return design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
+
+
+def solve_coefficients(design: LinearDesign, astro: np.ndarray,
+                       gw: np.ndarray | None = None) -> np.ndarray:
     """Weighted least-squares coefficients (of the scaled columns) for ``astro``.
 
     Minimises ``sum_b ((F_b - (astro D)_b c) / sigma_b)^2`` over bins ``b``
-    (frames when unbinned) through the p x p normal equations.
+    (frames when unbinned) through the p x p normal equations. ``gw``:
+    :func:`weighted_binned_design` of ``astro``, when the caller has it.
     """
     astro = np.asarray(astro, float)
     if design.outer is not None:
@@ -110,7 +124,8 @@ def solve_coefficients(design: LinearDesign, astro: np.ndarray) -> np.ndarray:
         a.T[design.iu] = tri
         b = np.einsum("n,nk->k", s * design.b_target, design.design)
     else:
-        gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
+        if gw is None:
+            gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
         a = np.einsum("bi,bj->ij", gw, gw)
         b = np.einsum("bi,b->i", gw, design.b_target)
     try:
@@ -119,17 +134,20 @@ def solve_coefficients(design: LinearDesign, astro: np.ndarray) -> np.ndarray:
         return np.linalg.lstsq(a, b, rcond=None)[0]
 
 
-def fit_residuals(design: LinearDesign, astro: np.ndarray, coef: np.ndarray) -> np.ndarray:
+def fit_residuals(design: LinearDesign, astro: np.ndarray, coef: np.ndarray,
+                  gw: np.ndarray | None = None) -> np.ndarray:
     """Normalised residuals of the fitted points (bins, or frames when unbinned).
 
     ``(F_b - (astro D)_b c) / sigma_b``: the quantity whose sum of squares
-    :func:`solve_coefficients` minimises over ``c``.
+    :func:`solve_coefficients` minimises over ``c``. ``gw``:
+    :func:`weighted_binned_design` of ``astro``, when the caller has it.
     """
     astro = np.asarray(astro, float)
     if design.starts is None:
         model = astro * np.einsum("nk,k->n", design.design, coef)
         return (design.b_flux - model) * design.b_ivar_sqrt
-    gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
+    if gw is None:
+        gw = design._binned(design.design * astro[:, None]) * design.b_ivar_sqrt[:, None]
     return design.b_target - gw @ coef
 
 
@@ -299,7 +317,8 @@ class LinearSystematics(Systematics[OptionsT]):
     def residuals(self, astro: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """Normalised residuals of the fitted points (one per bin; per frame when unbinned)."""
         a = self.regressed_curve(astro, theta)
-        return fit_residuals(self.design, a, solve_coefficients(self.design, a))
+        gw = weighted_binned_design(self.design, a)   # the solve's and the residuals' (issue 40)
+        return fit_residuals(self.design, a, solve_coefficients(self.design, a, gw), gw)
 
     def log_likelihood(self, astro: np.ndarray, theta: np.ndarray | None = None,
                        noise_scale: float = 1.0) -> float:

@@ -160,6 +160,8 @@ def _median_in_time(values, size):
     repeated beyond the ends. A median of an odd count is one of the values, so this gives
     scipy's bytes; it keeps each window sorted and moves it one sample at a time (a few
     comparisons per sample, where scipy's 2-d filter costs 20 times more: issue 40)."""
+    if size == 9:
+        return _median9_in_time(values)
     m, k = values.shape
     h = size // 2
     out = np.empty((m, k))
@@ -186,6 +188,39 @@ def _median_in_time(values, size):
                         p -= 1
                 win[p] = new
             out[i, c] = win[h]
+    return out
+
+
+#: The compare-exchanges of a median of 9 (Paeth's network, "opt_med9" in Devillard 1998):
+#: after them the fifth value is the median.
+_MEDIAN9_PAIRS = ((1, 2), (4, 5), (7, 8), (0, 1), (3, 4), (6, 7), (1, 2), (4, 5), (7, 8),
+                  (0, 3), (5, 8), (4, 7), (3, 6), (1, 4), (2, 5), (4, 7), (4, 2), (6, 4), (4, 2))
+
+
+@njit(cache=True)
+def _median9_in_time(values):
+    """:func:`_median_in_time` of the default 9-frame window (the same values: the median of
+    nine values is one of them): the 19 compare-exchanges of :data:`_MEDIAN9_PAIRS` on the
+    window of every column at once, without branches, where keeping the window sorted
+    mispredicts a branch or two per sample (three times faster on a twin's frames, issue 40)."""
+    m, k = values.shape
+    out = np.empty((m, k))
+    p = np.empty((9, k))
+    for i in range(m):
+        for t in range(9):
+            row = values[min(max(i - 4 + t, 0), m - 1)]
+            for c in range(k):
+                p[t, c] = row[c]
+        for a, b in _MEDIAN9_PAIRS:
+            pa = p[a]
+            pb = p[b]
+            for c in range(k):
+                x = pa[c]
+                y = pb[c]
+                pa[c] = min(x, y)
+                pb[c] = max(x, y)
+        for c in range(k):
+            out[i, c] = p[4, c]
     return out
 
 

@@ -57,7 +57,7 @@ from ..instrument.prf import (
     warm_rescaling,
 )
 from ..photometry.clean import running_median
-from ..photometry.measure import measure_stack, read_radius_px
+from ..photometry.measure import measure_noise_pixels, measure_stack, read_radius_px
 from ..photometry.pipeline import AorStack, brightest_of_median, measure_aor
 from ..photometry.table import make_table
 from ..seeding import rng
@@ -236,24 +236,50 @@ def _star(obs: Observation, x_ref_px: float, y_ref_px: float, radius_px: float,
     return kind(prf, x_ref_px=x_ref_px, y_ref_px=y_ref_px, radius_px=radius_px)
 
 
-class _KeptBasisStar(StarImager):
-    """A :class:`~eclipsebench.simulation.star.StarImager` that keeps its last Taylor basis
-    (read-only, so no caller changes what it shares): the calibration renders the same frames
-    at every peak of the motion, whose positions (the track plus the motion's Fowler-weighted
-    mean offset, zero to rounding) are the same floats, and the basis is most of the
-    rendering (issue 40)."""
+#: The most bytes of Taylor bases a :class:`_KeptBasisStar` keeps (real epoch 1's 244 cubes
+#: of 64 frames take 127 MB: 8 KB a frame); the cubes beyond it are rendered as before.
+KEPT_BASIS_BYTES = 256 * 2**20
 
-    _kept: tuple[tuple, np.ndarray] | None = None
+
+class _KeptBasisStar(StarImager):
+    """A :class:`~eclipsebench.simulation.star.StarImager` that keeps the Taylor bases and the
+    wings it made (read-only, so no caller changes what it shares), keyed by the positions'
+    bytes, up to :data:`KEPT_BASIS_BYTES`: the calibration renders the same frames at every
+    peak of the motion, and every twin of a recipe the same cubes, whose positions (the track
+    plus the motion's Fowler-weighted mean offset, zero to rounding) are the same floats; the
+    basis is most of the rendering (issue 40). A position that differs in its last bit is
+    another key: its basis is made anew."""
+
+    _kept: dict[tuple, np.ndarray] | None = None
+    _kept_wings: dict[tuple, np.ndarray] | None = None
+    _kept_bytes: int = 0
 
     def taylor_basis(self, x_px: np.ndarray, y_px: np.ndarray, sx0: int, sy0: int, size: int
                      ) -> np.ndarray:
         key = (np.asarray(x_px, float).tobytes(), np.asarray(y_px, float).tobytes(), int(sx0),
                int(sy0), int(size))
-        if self._kept is None or self._kept[0] != key:
+        if self._kept is None:
+            self._kept = {}
+        basis = self._kept.get(key)
+        if basis is None:
             basis = super().taylor_basis(x_px, y_px, sx0, sy0, size)
             basis.setflags(write=False)
-            self._kept = (key, basis)
-        return self._kept[1]
+            if self._kept_bytes + basis.nbytes <= KEPT_BASIS_BYTES:
+                self._kept[key] = basis
+                self._kept_bytes += basis.nbytes
+        return basis
+
+    def image(self, x_px: float, y_px: float, shape: tuple[int, int]) -> np.ndarray:
+        key = (float(x_px), float(y_px), int(shape[0]), int(shape[1]))
+        if self._kept_wings is None:
+            self._kept_wings = {}
+        wings = self._kept_wings.get(key)
+        if wings is None:
+            wings = super().image(x_px, y_px, shape)
+            wings.setflags(write=False)
+            if len(self._kept_wings) < 4096:
+                self._kept_wings[key] = wings
+        return wings
 
 
 def _frame_model(obs: Observation, noise_model: str = "physical",
@@ -556,9 +582,10 @@ def _measure_aor(recipe: TwinRecipe, rows: np.ndarray, frames: np.ndarray,
 
 def twin_star(recipe: TwinRecipe, options: PhotometrySection) -> StarImager:
     """The star every twin of ``recipe`` is rendered with (its PRF tables and gain), built
-    once and shared by the twins of a batch."""
+    once and shared by the twins of a batch, which keeps each cube's Taylor basis and wings
+    for the next twin (:class:`_KeptBasisStar`)."""
     return _star(recipe.obs, recipe.x_ref_px, recipe.y_ref_px, options.radius_px, recipe.gain,
-                 recipe.blur_px)
+                 recipe.blur_px, kind=_KeptBasisStar)
 
 
 def twin_table(recipe: TwinRecipe, options: PhotometrySection, *, seed: int, twin: int,
@@ -680,7 +707,7 @@ def _noise_pixel_curves(recipe: TwinRecipe, options: PhotometrySection, frames_p
             frames = render_frames_of(recipe, rows, seed=0, key=("trust", "calibrate"),
                                       moments=moments(peak), noise_model="none", star=star,
                                       window=window)
-            npx = _measure_rows(frames, obs, options)
+            npx = _measure_rows(frames, options)
             medians.append(float(np.median(npx)))
             spreads.append(_cube_median_sd(npx, cube_of))
         return np.asarray(medians), np.asarray(spreads)
@@ -930,9 +957,10 @@ def background_scatter_share(recipe: TwinRecipe, options: PhotometrySection, *,
                    "background_sd_twin_noise": float(np.sqrt(v_twin)), "share": share}
 
 
-def _measure_rows(frames: np.ndarray, obs: Observation, options: PhotometrySection) -> np.ndarray:
+def _measure_rows(frames: np.ndarray, options: PhotometrySection) -> np.ndarray:
+    """The noise pixels of ``frames`` as the twins' photometry measures them
+    (:func:`~eclipsebench.photometry.measure.measure_noise_pixels`: the same floats as
+    :func:`~eclipsebench.photometry.measure.measure_stack`, without the rest)."""
     sx, sy = brightest_of_median(frames, np.ones(len(frames), bool)) or (15, 15)
-    m = measure_stack(frames, guess_x=int(sx), guess_y=int(sy), options=options,
-                      fowler=obs.mode.fowler, wait=obs.mode.wait, read_noise_e=obs.read_noise_e)
-    return m["noise_pixels"]
+    return measure_noise_pixels(frames, guess_x=int(sx), guess_y=int(sy), options=options)
 
