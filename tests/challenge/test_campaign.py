@@ -343,6 +343,43 @@ def test_a_table_replaced_at_the_same_path_is_refused(tiny, tmp_path, capsys):
     assert (tmp_path / "c" / "summary.json").read_bytes() == summary
 
 
+def test_a_table_is_standardised_once_per_process_and_again_when_its_bytes_change(
+        tmp_path, monkeypatch):
+    """The campaign's check and its photometry task read a table once between them (in one
+    process), and a copy: a caller's change never reaches the next; other bytes, another
+    table."""
+    from eclipsebench.astro.catalogue import get_system
+    from eclipsebench.challenge import campaign as camp
+
+    path = tmp_path / "lc.csv"
+    t = 57000.0 + np.arange(200) * 2e-4
+    columns = {"time_bmjd": t, "flux": np.full(200, 1.0e5), "flux_err": np.full(200, 100.0),
+               "x": np.full(200, 15.0), "y": np.full(200, 15.0)}
+    Table(columns).write(path, format="ascii.csv")
+    made = []
+    standardise = camp._standard_table
+    monkeypatch.setattr(camp, "_standard_table", lambda *a: made.append(a) or standardise(*a))
+    monkeypatch.setattr(camp, "_KEPT_TABLES", {})
+    epoch = camp.epochs_from_inputs([path])[0]
+    system = get_system("XO-3b")
+    first = camp.standard_table(epoch, system)
+    first["flux"][0] = -1.0
+    second = camp.standard_table(epoch, system)
+    assert len(made) == 1
+    fresh = standardise(epoch, system, None)
+    assert second.colnames == fresh.colnames and second.meta == fresh.meta
+    assert all(np.array_equal(second[c], fresh[c]) for c in fresh.colnames)
+    Table({**columns, "flux": np.full(200, 2.0e5)}).write(path, format="ascii.csv",
+                                                         overwrite=True)
+    third = camp.standard_table(epoch, system)
+    assert len(made) == 2 and np.all(np.asarray(third["flux"]) == 2.0e5)
+    monkeypatch.setattr(camp, "_KEPT_TABLES", {})
+    monkeypatch.setattr(camp, "KEPT_TABLE_BYTES", 0)   # too large to keep: made each time
+    camp.standard_table(epoch, system)
+    camp.standard_table(epoch, system)
+    assert len(made) == 4
+
+
 def _refused(capsys, tmp_path, *argv):
     out = tmp_path / "out"
     code = main(["campaign", *argv, "--out", str(out), "--quiet"])

@@ -331,12 +331,40 @@ def campaign_planet(epochs: Sequence[EpochInput], section: Any) -> PlanetSystem:
 
 
 # ----------------------------------------------------------------------------- the tasks
+#: The tables :func:`standard_table` made last in this process, by the file's path and
+#: SHA-256, the epoch's table options and the planet, at most :data:`KEPT_TABLE_BYTES`: a
+#: campaign checks every table before it writes anything, and its photometry task, in the
+#: same process with one worker, made the same table again (each frame's barycentric delay:
+#: about 1.4 s of a K2-141b visit; issue 40).
+_KEPT_TABLES: dict[str, Table] = {}
+KEPT_TABLE_BYTES = 256 * 2**20
+
+
+def _table_bytes(table: Table) -> int:
+    return sum(np.asarray(c).nbytes for c in table.itercols())
+
+
 def standard_table(epoch: EpochInput, system: PlanetSystem,
                    labels: Mapping[str, str] | None = None) -> Table:
     """An epoch's table with the package's columns and BMJD_TDB times (``reduce``'s reading,
     :func:`eclipsebench.fit.data.standardise_table` and
     :func:`~eclipsebench.fit.data.check_columns`); ``labels`` name the options in errors
-    (the command line's ``--time-scale`` ...), which name the table."""
+    (the command line's ``--time-scale`` ...), which name the table. A copy of the one this
+    process made last from the same bytes, options and planet, if it is kept."""
+    path = epoch.paths[0]
+    key = value_sha256([str(path), file_sha256(path), repr(epoch.table), repr(system)])
+    kept = _KEPT_TABLES.get(key)
+    if kept is None:
+        kept = _standard_table(epoch, system, labels)
+        if _table_bytes(kept) + sum(map(_table_bytes, _KEPT_TABLES.values())) > KEPT_TABLE_BYTES:
+            _KEPT_TABLES.clear()
+        if _table_bytes(kept) <= KEPT_TABLE_BYTES:
+            _KEPT_TABLES[key] = kept
+    return kept.copy()
+
+
+def _standard_table(epoch: EpochInput, system: PlanetSystem,
+                    labels: Mapping[str, str] | None) -> Table:
     from ..fit.data import check_columns, standardise_table
 
     path = epoch.paths[0]
