@@ -183,6 +183,36 @@ def test_astro_batch_is_the_model_of_each_row(xo3_epoch, shape, phase, ramp):
     assert np.array_equal(batch, np.stack([model(th) for th in thetas]))
 
 
+@pytest.mark.parametrize("phase", ["flat", "quadratic"])
+@pytest.mark.parametrize("ramp", ["none", "linear"])
+@pytest.mark.parametrize("order", ["sorted", "shuffled"])
+def test_astro_batch_at_the_tables_ends_and_in_any_order(xo3_epoch, phase, ramp, order):
+    """The compiled batch's two-pass form (times in order: bisection for the table's
+    frames) and its one-loop form (times in any order) give each row's model exactly,
+    with the eclipse's table ending on a frame, beyond the data or at no finite time."""
+    from eclipsebench.fit.model import AstroModel
+
+    time = np.array(xo3_epoch["time"][::4], dtype=float)
+    if order == "shuffled":
+        time = np.random.default_rng(3).permutation(time)
+    model = AstroModel(time, xo3_epoch["system"], phase=phase, ramp=ramp)
+    thetas = np.tile(model.initial(t_event_bmjd=xo3_epoch["t_true"]), (6, 1))
+    thetas[:, 2:] += 1e-3
+    xp = model.shape._offset
+    t_sorted = np.sort(time)
+    thetas[0, 1] = t_sorted[0] - xp[0]     # the table starts on the first frame
+    thetas[1, 1] = t_sorted[-1] - xp[-1]   # and ends on the last one
+    thetas[2, 1] = t_sorted[40] - xp[7]    # a frame on a table point
+    thetas[3, 1] = t_sorted[0] - 0.2       # the eclipse before the data
+    thetas[4, 1] = t_sorted[-1] + 0.2      # and after them
+    batch = model.batch(thetas)
+    assert model._eclipse.time_ordered is (order == "sorted")
+    assert np.array_equal(batch, np.stack([model(th) for th in thetas]))
+    thetas[5, 1] = np.nan                  # the one-loop form: NaN wherever the shape is asked
+    rows = model.batch(thetas)
+    assert np.array_equal(rows[:5], batch[:5]) and np.all(np.isnan(rows[5]))
+
+
 def test_chain_is_fifty_tau_long_after_burn_in(polygain, small_table):
     res = reduce_epoch(small_table, polygain.name, options=MCMC, seed=7)
     mc = res.mcmc

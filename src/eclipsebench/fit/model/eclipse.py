@@ -59,7 +59,7 @@ class _BoxEclipse:
 
     def kernel_arguments(self, t_ecl: np.ndarray) -> tuple:
         """The shape's arguments of :func:`_astro_rows` (``box`` and its half-duration)."""
-        return (True, 0.5 * self.duration_d, self.exposure_d, *_NO_TABLE)
+        return (True, 0.5 * self.duration_d, self.exposure_d, *_NO_TABLE, False)
 
 
 class _PhysicalEclipse:
@@ -72,6 +72,8 @@ class _PhysicalEclipse:
         self.t_stop_bmjd = float(time_bmjd.max())
         self.shape = shape
         self._table_cache: tuple | None = None
+        #: times in non-decreasing order: :func:`_astro_rows` bisects for the table's frames
+        self.time_ordered = bool(np.all(time_bmjd[1:] >= time_bmjd[:-1]))
 
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
         return np.asarray(self.shape.visible_fraction(t_ecl_bmjd), dtype=float)
@@ -112,7 +114,7 @@ class _PhysicalEclipse:
         if (table is None or self.t_start_bmjd - t_ecl.max() < -half
                 or self.t_stop_bmjd - t_ecl.min() >= half):
             return None
-        return (False, 0.0, 1.0, *table[:3], *table[3:])
+        return (False, 0.0, 1.0, *table[:3], *table[3:], self.time_ordered)
 
     def _table(self, shape: EclipseShape):
         """The eclipse shape's table and an O(1) search index for :func:`_interp_table` (cached).
