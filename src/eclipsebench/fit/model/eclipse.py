@@ -109,13 +109,14 @@ class _PhysicalEclipse:
         data that the shape would fold the offsets by a period."""
         if self._kernel_table is None:   # once: the shape and the times do not change
             shape = self.shape
-            same_times = (isinstance(shape, EclipseShape)
-                          and shape.time_bmjd.shape == self.time_bmjd.shape
-                          and np.array_equal(shape.time_bmjd, self.time_bmjd))
-            table = self._table(shape) if same_times else None
-            self._kernel_table = (None if table is None else
-                                  (False, 0.0, 1.0, *table[:3], *table[3:], self.time_ordered),
-                                  0.5 * shape.period if table is not None else 0.0)
+            arguments, half = None, 0.0
+            if (isinstance(shape, EclipseShape) and shape.time_bmjd.shape == self.time_bmjd.shape
+                    and np.array_equal(shape.time_bmjd, self.time_bmjd)):
+                table = self._table(shape)
+                if table is not None:
+                    arguments = (False, 0.0, 1.0, *table[:3], *table[3:], self.time_ordered)
+                    half = 0.5 * shape.period
+            self._kernel_table = (arguments, half)
         arguments, half = self._kernel_table
         if (arguments is None or self.t_start_bmjd - t_ecl.max() < -half
                 or self.t_stop_bmjd - t_ecl.min() >= half):
