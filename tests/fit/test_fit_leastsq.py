@@ -108,6 +108,29 @@ def test_prayer_bead_shapes_and_spread(fitted):
     assert np.array_equal(sys.data.flux, fitted[0].data.flux)
 
 
+def test_the_jacobian_rows_are_the_compiled_batch_once_numba_is_loaded(monkeypatch, kit,
+                                                                        xo3_epoch):
+    """With numba loaded (a run's worker), the Jacobian's rows are ``AstroModel.batch``, the
+    same values as a row at a time (issue 40: KR/Data's prayer bead, 0.8 s of its rows);
+    without it, a row at a time, so that a least-squares fit does not load numba."""
+    import sys
+
+    import numba  # noqa: F401  (loaded, as in a worker after an MCMC)
+
+    data = epoch_data_from_table(xo3_epoch["table"]())
+    model = AstroModel(data.time_bmjd, xo3_epoch["system"], phase="linear")
+    problem = _Problem(kit.PolyGain(data), model)
+    theta = model.initial(t_event_bmjd=xo3_epoch["t_true"])
+    calls = []
+    batch = model.batch
+    monkeypatch.setattr(model, "batch", lambda rows: calls.append(len(rows)) or batch(rows))
+    fast = problem.jacobian(theta, central=True)
+    assert calls == [2 * len(theta)]
+    monkeypatch.delitem(sys.modules, "numba")
+    slow = problem.jacobian(theta, central=True)
+    assert calls == [2 * len(theta)] and np.array_equal(fast, slow)
+
+
 def test_inputs_are_not_modified(kit, trapezoid_epoch):
     data = epoch_data_from_table(trapezoid_epoch["table"])
     before = data.flux.copy()

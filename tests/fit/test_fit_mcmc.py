@@ -47,6 +47,32 @@ def test_same_seed_same_chain_different_seed_different(polygain, small_table):
     assert not a.mcmc["converged"]  # 100 steps cannot be 50 tau
 
 
+def test_the_chain_is_emcees_own_without_the_state_copies(monkeypatch, polygain, small_table):
+    """The sampler that keeps no copy of its generator's state in each step's State draws
+    what emcee's own does, over several blocks (issue 40: 39 us a step saved)."""
+    import emcee
+
+    from eclipsebench.fit import mcmc
+
+    steps = []
+    original = mcmc._sampler_class()
+
+    class Counting(original):
+        def run_mcmc(self, state, n, **kw):
+            out = super().run_mcmc(state, n, **kw)
+            steps.append(out.random_state)
+            return out
+
+    opts = ReduceSection(phase="flat", sampler="mcmc", mcmc_walkers=8, mcmc_steps=300,
+                         mcmc_block_steps=50, prayer_bead_shifts=0)
+    monkeypatch.setattr(mcmc, "_sampler_class", lambda: Counting)
+    ours = reduce_epoch(small_table, polygain.name, options=opts, seed=3)
+    assert len(steps) == 6 and all(s is None for s in steps)   # no state carried
+    monkeypatch.setattr(mcmc, "_sampler_class", lambda: emcee.EnsembleSampler)
+    theirs = reduce_epoch(small_table, polygain.name, options=opts, seed=3)
+    assert ours.to_dict() == theirs.to_dict()
+
+
 def test_stretch_move_when_the_method_prefers_it(monkeypatch, polygain, small_table):
     class DePoly(polygain):
         name: ClassVar[str] = "test-polygain-stretch"
@@ -181,6 +207,36 @@ def test_astro_batch_is_the_model_of_each_row(xo3_epoch, shape, phase, ramp):
     thetas[1, 1] = time[len(time) // 2]  # centre exactly on a frame
     batch = model.batch(thetas)
     assert np.array_equal(batch, np.stack([model(th) for th in thetas]))
+
+
+@pytest.mark.parametrize("phase", ["flat", "quadratic"])
+@pytest.mark.parametrize("ramp", ["none", "linear"])
+@pytest.mark.parametrize("order", ["sorted", "shuffled"])
+def test_astro_batch_at_the_tables_ends_and_in_any_order(xo3_epoch, phase, ramp, order):
+    """The compiled batch's two-pass form (times in order: bisection for the table's
+    frames) and its one-loop form (times in any order) give each row's model exactly,
+    with the eclipse's table ending on a frame, beyond the data or at no finite time."""
+    from eclipsebench.fit.model import AstroModel
+
+    time = np.array(xo3_epoch["time"][::4], dtype=float)
+    if order == "shuffled":
+        time = np.random.default_rng(3).permutation(time)
+    model = AstroModel(time, xo3_epoch["system"], phase=phase, ramp=ramp)
+    thetas = np.tile(model.initial(t_event_bmjd=xo3_epoch["t_true"]), (6, 1))
+    thetas[:, 2:] += 1e-3
+    xp = model.shape._offset
+    t_sorted = np.sort(time)
+    thetas[0, 1] = t_sorted[0] - xp[0]     # the table starts on the first frame
+    thetas[1, 1] = t_sorted[-1] - xp[-1]   # and ends on the last one
+    thetas[2, 1] = t_sorted[40] - xp[7]    # a frame on a table point
+    thetas[3, 1] = t_sorted[0] - 0.2       # the eclipse before the data
+    thetas[4, 1] = t_sorted[-1] + 0.2      # and after them
+    batch = model.batch(thetas)
+    assert model._eclipse.time_ordered is (order == "sorted")
+    assert np.array_equal(batch, np.stack([model(th) for th in thetas]))
+    thetas[5, 1] = np.nan                  # the one-loop form: NaN wherever the shape is asked
+    rows = model.batch(thetas)
+    assert np.array_equal(rows[:5], batch[:5]) and np.all(np.isnan(rows[5]))
 
 
 def test_chain_is_fifty_tau_long_after_burn_in(polygain, small_table):

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from astropy.io import fits
@@ -75,3 +78,36 @@ def test_utc_times_are_barycentric_minus_a_plausible_delay():
     assert iso[0].startswith("2012-12-09T")
     # the real header of this cube says MJD_OBS = 56270.4731344 (as seen from Spitzer)
     assert abs(mjd[0] - 56270.4731344) * 86400 < 400.0
+
+
+@pytest.mark.parametrize("ra_deg, dec_deg", [(65.4694522, 57.8173337), (297.4, -47.5),
+                                             (0.0, 89.99), (181.0, -89.99)])
+def test_the_geocentric_light_travel_time_is_astropys_to_the_bit(ra_deg, dec_deg):
+    """The delay without astropy's ITRS -> GCRS rotation of the geocentre (issue 40: it read
+    the IERS-A table, 1.4 s a process) is astropy's own, bit for bit, from 2004 to 2020."""
+    from astropy import units as u
+    from astropy.coordinates import EarthLocation, SkyCoord
+    from astropy.time import Time
+
+    from eclipsebench.io.bcd_write import geocentric_light_travel_time
+
+    bmjd = np.random.default_rng(7).uniform(53000.0, 59000.0, 1500)
+    geocentre = EarthLocation.from_geocentric(0.0, 0.0, 0.0, unit=u.m)
+    time = Time(bmjd, format="mjd", scale="tdb", location=geocentre)
+    star = SkyCoord(ra_deg * u.deg, dec_deg * u.deg, frame="icrs")
+    theirs = time.light_travel_time(star, kind="barycentric")
+    ours = geocentric_light_travel_time(time, star)
+    assert ours.scale == "tdb"
+    assert np.array_equal(ours.jd1, theirs.jd1) and np.array_equal(ours.jd2, theirs.jd2)
+
+
+def test_utc_times_read_no_earth_rotation_table():
+    """A process that simulates converts its times without loading the IERS tables."""
+    code = ("import numpy as np\n"
+            "from eclipsebench.io.bcd_write import bmjd_to_utc\n"
+            "bmjd_to_utc(np.array([57208.8]), 65.4694522, 57.8173337)\n"
+            "from astropy.utils import iers\n"
+            "print(iers.IERS_Auto.iers_table is None, iers.IERS_B.iers_table is None)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.split() == ["True", "True"], out.stdout + out.stderr

@@ -13,9 +13,16 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from astropy import constants as const
 from astropy import units as u
-from astropy.coordinates import EarthLocation, SkyCoord
-from astropy.time import Time
+from astropy.coordinates import (
+    EarthLocation,
+    SkyCoord,
+    SphericalRepresentation,
+    UnitSphericalRepresentation,
+    get_body_barycentric,
+)
+from astropy.time import Time, TimeDelta
 
 from .atomic import write_bytes
 from .header_template import (
@@ -29,7 +36,8 @@ from .header_template import (
     sim_cards,
 )
 
-__all__ = ["bcd_path", "bunc_path", "AorWriter", "bmjd_to_utc", "cube_bytes"]
+__all__ = ["bcd_path", "bunc_path", "AorWriter", "bmjd_to_utc", "geocentric_light_travel_time",
+           "cube_bytes"]
 
 
 def bcd_path(root: str | Path, aorkey: int, expid: int, channel: int = 2) -> Path:
@@ -54,10 +62,11 @@ def bunc_path(root: str | Path, aorkey: int, expid: int, channel: int = 2) -> Pa
 def bmjd_to_utc(bmjd: np.ndarray, ra_deg: float, dec_deg: float) -> tuple[np.ndarray, list[str]]:
     """MJD (UTC) and ISO ``DATE_OBS`` strings of barycentric times ``bmjd`` (TDB).
 
-    Removes the Roemer delay of a geocentric observer toward (RA, Dec) and
-    TDB - UTC (astropy, built-in ephemeris). Spitzer trailed the Earth by up
-    to ~0.6 AU, so the real ``MJD_OBS`` differs by up to a few minutes from
-    this geocentric value; nothing downstream uses ``MJD_OBS`` for timing.
+    Removes the Roemer delay of a geocentric observer toward (RA, Dec)
+    (:func:`geocentric_light_travel_time`) and TDB - UTC (astropy, built-in
+    ephemeris). Spitzer trailed the Earth by up to ~0.6 AU, so the real
+    ``MJD_OBS`` differs by up to a few minutes from this geocentric value;
+    nothing downstream uses ``MJD_OBS`` for timing.
     """
 
     bmjd = np.atleast_1d(np.asarray(bmjd, dtype=float))
@@ -65,11 +74,46 @@ def bmjd_to_utc(bmjd: np.ndarray, ra_deg: float, dec_deg: float) -> tuple[np.nda
     geocentre = EarthLocation.from_geocentric(0.0, 0.0, 0.0, unit=u.m)
     guess = Time(bmjd, format="mjd", scale="tdb", location=geocentre)
     for _ in range(2):
-        ltt = guess.light_travel_time(star, kind="barycentric")
+        ltt = geocentric_light_travel_time(guess, star)
         guess = Time(bmjd, format="mjd", scale="tdb", location=geocentre) - ltt
     utc = guess.utc
     utc.precision = 3
     return np.asarray(utc.mjd, dtype=float), [str(s) for s in np.atleast_1d(utc.isot)]
+
+
+def geocentric_light_travel_time(time: Time, star: SkyCoord) -> TimeDelta:
+    """``time.light_travel_time(star, kind="barycentric")`` of an observer at the geocentre.
+
+    The same arithmetic as astropy's, without its rotation of the observer
+    from ITRS to GCRS (which reads the IERS-A table: 0.7 s of CPU in each
+    process that simulates): the geocentre is the origin in every frame, so
+    astropy's barycentric position of the observer is the Earth's (the
+    built-in ephemeris, ``erfa.epv00`` at ``time`` in TDB, in au, as its GCRS
+    -> ICRS transform takes it) plus a geocentric offset of 0 m, and the
+    correction is its dot product with the star's unit vector over c. That
+    sum is taken as astropy takes it (the zero offset in spherical
+    coordinates, the sum turned back into them), so the values are the same,
+    to the bit (``tests/simulation/test_sim_bcd_write.py``).
+
+    Parameters
+    ----------
+    time : astropy.time.Time
+        The times (any scale; the Earth is placed at their TDB).
+    star : astropy.coordinates.SkyCoord
+        The target.
+
+    Returns
+    -------
+    astropy.time.TimeDelta
+        The barycentric minus the geocentric arrival time, TDB.
+    """
+    earth = get_body_barycentric("earth", time.tdb)   # erfa.epv00, au, as astropy's GCRS -> ICRS
+    zero = np.zeros(earth.shape)
+    origin = SphericalRepresentation(lon=zero * u.rad, lat=zero * u.rad, distance=zero * u.m)
+    # astropy's sum: a spherical geocentric offset plus the Earth, spherical again, in metres
+    observer = (origin + earth).to_cartesian()
+    towards = star.icrs.represent_as(UnitSphericalRepresentation).to_cartesian()
+    return TimeDelta(observer.dot(towards) / const.c, scale="tdb")
 
 
 def cube_bytes(cube: np.ndarray) -> bytes:

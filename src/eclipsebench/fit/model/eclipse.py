@@ -59,7 +59,7 @@ class _BoxEclipse:
 
     def kernel_arguments(self, t_ecl: np.ndarray) -> tuple:
         """The shape's arguments of :func:`_astro_rows` (``box`` and its half-duration)."""
-        return (True, 0.5 * self.duration_d, self.exposure_d, *_NO_TABLE)
+        return (True, 0.5 * self.duration_d, self.exposure_d, *_NO_TABLE, False)
 
 
 class _PhysicalEclipse:
@@ -72,6 +72,10 @@ class _PhysicalEclipse:
         self.t_stop_bmjd = float(time_bmjd.max())
         self.shape = shape
         self._table_cache: tuple | None = None
+        #: times in non-decreasing order: :func:`_astro_rows` bisects for the table's frames
+        self.time_ordered = bool(np.all(time_bmjd[1:] >= time_bmjd[:-1]))
+        #: (:meth:`kernel_arguments` but for the eclipse times, half a period), made once
+        self._kernel_table: tuple | None = None
 
     def visible_fraction(self, t_ecl_bmjd: float) -> np.ndarray:
         return np.asarray(self.shape.visible_fraction(t_ecl_bmjd), dtype=float)
@@ -103,16 +107,21 @@ class _PhysicalEclipse:
         """The shape's arguments of :func:`_astro_rows` (its table), or None: a shape other
         than :class:`EclipseShape`'s table at these times, or eclipse times so far from the
         data that the shape would fold the offsets by a period."""
-        shape = self.shape
-        if not (isinstance(shape, EclipseShape) and shape.time_bmjd.shape == self.time_bmjd.shape
-                and np.array_equal(shape.time_bmjd, self.time_bmjd)):
-            return None
-        table = self._table(shape)
-        half = 0.5 * shape.period
-        if (table is None or self.t_start_bmjd - t_ecl.max() < -half
+        if self._kernel_table is None:   # once: the shape and the times do not change
+            shape = self.shape
+            arguments, half = None, 0.0
+            if (isinstance(shape, EclipseShape) and shape.time_bmjd.shape == self.time_bmjd.shape
+                    and np.array_equal(shape.time_bmjd, self.time_bmjd)):
+                table = self._table(shape)
+                if table is not None:
+                    arguments = (False, 0.0, 1.0, *table[:3], *table[3:], self.time_ordered)
+                    half = 0.5 * shape.period
+            self._kernel_table = (arguments, half)
+        arguments, half = self._kernel_table
+        if (arguments is None or self.t_start_bmjd - t_ecl.max() < -half
                 or self.t_stop_bmjd - t_ecl.min() >= half):
             return None
-        return (False, 0.0, 1.0, *table[:3], *table[3:])
+        return arguments
 
     def _table(self, shape: EclipseShape):
         """The eclipse shape's table and an O(1) search index for :func:`_interp_table` (cached).

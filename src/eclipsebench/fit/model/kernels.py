@@ -36,7 +36,7 @@ _NO_TABLE = (np.zeros(2), np.ones(2), np.zeros(1), 0.0, 1.0, np.zeros(1, dtype=n
 
 @lazy_njit(cache=True)
 def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, exposure,
-                xp, fp, slopes, start, step, index):  # pragma: no cover - compiled
+                xp, fp, slopes, start, step, index, ordered):  # pragma: no cover - compiled
     """``AstroModel.__call__`` of every row of ``thetas``, one compiled pass per row.
 
     A compiled copy of :mod:`eclipsebench.astro.phase_curves` (flat, linear,
@@ -44,6 +44,20 @@ def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, expos
     :func:`box_visible_fraction` (``box``) or :func:`_interp_table` (the
     physical shape's table), and :meth:`AstroModel.ramp_factor` (linear ramp
     when ``ramp_at >= 0``), in the same order, so each value is the same.
+
+    With the physical shape, times in order (``ordered``: non-decreasing, so
+    the offsets ``time - t_ecl`` are too) and a finite eclipse time, a row is
+    two passes: ``1 + p`` (the planet wholly visible, ``1.0 * p`` is ``p``) at
+    every frame, a loop without branches that the compiler vectorises, then
+    the frames inside the table, found by bisection, get the table's value.
+    There the first guess of ``j`` is the offset times the table's mean
+    density of points (the shape's table is a uniform grid in geometric time,
+    so nearly uniform in ``dt``: the guess is right or one point off) and the
+    search that follows corrects it, so each ``j``, and each value, is the
+    same: 0.27 ms instead of 0.45 ms for 8 rows of 15,600 frames, a third of
+    them inside the 2.8-hour table (the MCMC's step in ``eclipsebench run``).
+    Other times, the box or a non-finite eclipse time take one loop with the
+    table's test at every frame.
     """
     m, n = thetas.shape[0], len(time)
     out = np.empty((m, n))
@@ -54,6 +68,54 @@ def _astro_rows(time, thetas, phase_code, ramp_at, t_start, box, box_half, expos
         c0 = thetas[i, 2] if phase_code >= 1 else 0.0
         c1 = thetas[i, 3] if phase_code == 2 else 0.0
         slope = thetas[i, ramp_at] if ramp_at >= 0 else 0.0
+        if ordered and not box and abs(t_ecl) < np.inf:
+            per_point = last / (xp[last] - xp[0])   # table points per day, on average
+            for k in range(n):   # 1 + p everywhere, then the table's frames
+                dt = time[k] - t_ecl
+                if phase_code == 0:
+                    p = depth
+                elif phase_code == 1:
+                    p = depth + c0 * dt
+                else:
+                    p = depth + dt * (c0 + c1 * dt)
+                out[i, k] = 1.0 + p
+            lo, hi = 0, n   # k0: the first frame with time - t_ecl >= xp[0]
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if time[mid] - t_ecl < xp[0]:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k0 = lo
+            hi = n          # k1: the first frame with time - t_ecl > xp[last]
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if time[mid] - t_ecl <= xp[last]:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            for k in range(k0, lo):
+                dt = time[k] - t_ecl
+                if phase_code == 0:
+                    p = depth
+                elif phase_code == 1:
+                    p = depth + c0 * dt
+                else:
+                    p = depth + dt * (c0 + c1 * dt)
+                if dt == xp[last]:
+                    v = fp[last]
+                else:
+                    j = min(max(int((dt - xp[0]) * per_point), 0), last - 1)
+                    while j > 0 and xp[j] > dt:
+                        j -= 1
+                    while j < last - 1 and xp[j + 1] <= dt:
+                        j += 1
+                    v = fp[j] if xp[j] == dt else slopes[j] * (dt - xp[j]) + fp[j]
+                out[i, k] = 1.0 + v * p
+            if ramp_at >= 0:   # the same product, stored and multiplied
+                for k in range(n):
+                    out[i, k] = out[i, k] * (1.0 + slope * (time[k] - t_start))
+            continue
         for k in range(n):
             dt = time[k] - t_ecl
             if phase_code == 0:
