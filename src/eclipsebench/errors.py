@@ -112,8 +112,9 @@ def raise_pending_interrupt() -> None:
     """Raise :class:`Interrupted` again if an interrupt was received and swallowed.
 
     A signal handler raises where the main thread happens to be; code that
-    catches everything (emcee's ``random_state`` setter has a bare
-    ``except: pass``; an exception in ``__del__`` is only printed) can swallow
+    catches everything (emcee's own ``random_state`` setter, which
+    :mod:`eclipsebench.fit.mcmc`'s sampler replaces, has a bare ``except: pass``;
+    an exception in ``__del__`` is only printed) can swallow
     it, and the run would go on to the end. The engine calls this between
     tasks, so such a run still stops at the next task boundary.
     """
